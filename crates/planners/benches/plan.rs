@@ -1,0 +1,58 @@
+//! One `plan` call per planner with 64 sensed bodies.
+use criterion::{Criterion, criterion_group, criterion_main};
+use mrsim_planners::{BodyKind, Observation, PLANNERS, Params, SelfState, Sensed, Vec2, build};
+
+fn scene(n: usize) -> Vec<Sensed> {
+    (0..n)
+        .map(|i| {
+            let a = i as f64 * 0.7;
+            Sensed {
+                id: i as u32 + 1,
+                kind: if i % 2 == 0 {
+                    BodyKind::Robot
+                } else {
+                    BodyKind::Obstacle
+                },
+                position: Vec2::new(5.0 + 3.0 * a.cos() * (1.0 + i as f64 * 0.1), 3.0 * a.sin()),
+                velocity: Vec2::new(-(a.sin()), a.cos()),
+                acceleration: Vec2::zeros(),
+                radius: 0.3,
+            }
+        })
+        .collect()
+}
+
+fn bench(c: &mut Criterion) {
+    let others = scene(64);
+    let obs = Observation {
+        tick: 10,
+        time: 1.0,
+        dt: 0.1,
+        me: SelfState {
+            id: 0,
+            position: Vec2::new(0.0, 0.0),
+            velocity: Vec2::new(0.5, 0.1),
+            radius: 0.3,
+            mass: 1.0,
+            damping: 0.5,
+            max_speed: 2.0,
+            max_accel: 5.0,
+        },
+        goal: Vec2::new(20.0, 1.0),
+        goal_tolerance: 0.2,
+        others: &others,
+        walls: &[],
+        path: None,
+    };
+    let mut g = c.benchmark_group("plan_64_bodies");
+    for info in PLANNERS {
+        let Ok(mut p) = build(info.name, &Params::new()) else {
+            continue;
+        };
+        g.bench_function(info.name, |b| b.iter(|| p.plan(std::hint::black_box(&obs))));
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

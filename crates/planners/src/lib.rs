@@ -1,0 +1,174 @@
+//! Pure motion planners for mrsim.
+//!
+//! Every planner is a function of an [`Observation`]: the robot's own state,
+//! its goal, the bodies it senses and the static geometry. It returns a
+//! [`Command`] (a force or a velocity). No planner sees IPC, a clock or the
+//! physics engine, so each one can be unit-tested, benchmarked and compared
+//! on its own, and the same code runs in an agent process or in a thread.
+//!
+//! The crate is shaped as one file per method, named after it, whose `//!`
+//! cites the paper and equations it implements. [`build`] turns a planner's
+//! scenario name and parameters into a boxed [`Planner`]; [`PLANNERS`] lists
+//! what is available.
+#![warn(missing_docs)]
+
+pub mod params;
+mod registry;
+
+pub mod homing;
+pub mod testkit;
+
+pub use params::{ParamError, ParamReader, ParamValue, Params};
+pub use registry::{BuildError, PLANNERS, PlannerInfo, build};
+
+/// 2-D vector, f64, in the scenario's units.
+pub type Vec2 = nalgebra::Vector2<f64>;
+
+/// What a sensed body is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BodyKind {
+    /// Another robot, driven by its own agent.
+    Robot,
+    /// A scripted obstacle moved by the world.
+    Obstacle,
+}
+
+/// Another body as the robot senses it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sensed {
+    /// The body's id in the world (stable for the run).
+    pub id: u32,
+    /// Robot or obstacle.
+    pub kind: BodyKind,
+    /// Position.
+    pub position: Vec2,
+    /// Velocity: the true one, or estimated from successive positions,
+    /// depending on the robot's `velocity_source`.
+    pub velocity: Vec2,
+    /// Acceleration estimated from successive positions; zero when the
+    /// velocity source is the truth.
+    pub acceleration: Vec2,
+    /// Disc radius (0 for a point).
+    pub radius: f64,
+}
+
+/// The robot's own state and physical limits.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SelfState {
+    /// The robot's id in the world.
+    pub id: u32,
+    /// Position.
+    pub position: Vec2,
+    /// Velocity.
+    pub velocity: Vec2,
+    /// Disc radius (0 for a point robot).
+    pub radius: f64,
+    /// Mass m of m r'' + b r' = f.
+    pub mass: f64,
+    /// Damping b of m r'' + b r' = f.
+    pub damping: f64,
+    /// Speed limit the world enforces.
+    pub max_speed: f64,
+    /// Acceleration limit the world enforces.
+    pub max_accel: f64,
+}
+
+/// A static wall segment.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Segment {
+    /// One end.
+    pub a: Vec2,
+    /// The other end.
+    pub b: Vec2,
+}
+
+impl Segment {
+    /// The point of the segment closest to `p`.
+    pub fn closest_point(&self, p: Vec2) -> Vec2 {
+        let ab = self.b - self.a;
+        let len2 = ab.norm_squared();
+        if len2 <= f64::EPSILON {
+            return self.a;
+        }
+        let t = ((p - self.a).dot(&ab) / len2).clamp(0.0, 1.0);
+        self.a + ab * t
+    }
+}
+
+/// A designated path (Yamada et al.): waypoints and the half-width of the
+/// corridor the robot must stay in.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DesignatedPath {
+    /// Waypoints, first to last.
+    pub points: Vec<Vec2>,
+    /// Half-width of the allowed corridor around the path.
+    pub boundary: f64,
+}
+
+/// Everything a planner may know at one control step.
+#[derive(Debug, Clone, Copy)]
+pub struct Observation<'a> {
+    /// Tick number.
+    pub tick: u64,
+    /// Simulated time, s.
+    pub time: f64,
+    /// Control period, s.
+    pub dt: f64,
+    /// The robot itself.
+    pub me: SelfState,
+    /// The robot's goal.
+    pub goal: Vec2,
+    /// Distance to the goal that counts as reached.
+    pub goal_tolerance: f64,
+    /// Bodies within sensing range and field of view, robots and obstacles
+    /// alike (every other robot is a moving obstacle).
+    pub others: &'a [Sensed],
+    /// Static wall segments (including the arena's, if any).
+    pub walls: &'a [Segment],
+    /// The robot's designated path, if its scenario entry has one.
+    pub path: Option<&'a DesignatedPath>,
+}
+
+/// A planner's output for one tick.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Command {
+    /// A force applied for the whole tick (m r'' + b r' = f).
+    Force(Vec2),
+    /// A velocity set-point, tracked by the world's first-order lag.
+    Velocity(Vec2),
+}
+
+impl Command {
+    /// The command's vector, whatever its kind.
+    pub fn vector(&self) -> Vec2 {
+        match *self {
+            Command::Force(v) | Command::Velocity(v) => v,
+        }
+    }
+}
+
+/// A named per-tick value a planner reports for plots (for example the
+/// virtual distance to each obstacle for `vdf`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Diagnostic {
+    /// Name, e.g. `vd_3` (virtual distance to body 3).
+    pub name: String,
+    /// Value at this tick.
+    pub value: f64,
+}
+
+/// One control step of a motion planner.
+///
+/// `plan` must be deterministic: the same observation and internal state
+/// give the same command. Stateful planners (subgoal index, inherited
+/// trajectory, carried-over terms) keep that state in `self`.
+pub trait Planner: Send {
+    /// One control step.
+    fn plan(&mut self, obs: &Observation) -> Command;
+
+    /// Named values from the last `plan` call, for diagnostics.csv.
+    /// Planners with nothing to report keep the default.
+    fn diagnostics(&self) -> Vec<Diagnostic> {
+        Vec::new()
+    }
+}

@@ -1,0 +1,234 @@
+//! Wire types shared by the mrsim world and its agents.
+//!
+//! Everything that crosses a process boundary is defined here, once, so that
+//! the world and every agent agree on layout and iceoryx2 type names: each
+//! type is `#[repr(C)]`, fixed size, free of heap pointers and derives
+//! `ZeroCopySend`. The crate has no logic beyond small constructors; the
+//! transport decides how the types travel.
+#![warn(missing_docs)]
+
+use iceoryx2::prelude::ZeroCopySend;
+
+/// Bumped whenever a wire type changes shape or meaning. An agent whose
+/// version differs from the world's is refused at join time.
+pub const PROTOCOL_VERSION: u32 = 1;
+
+/// Longest robot name, in bytes, that fits a [`JoinRequest`].
+pub const MAX_NAME_LEN: usize = 64;
+
+/// Longest human-readable reason in a [`JoinReply`].
+pub const MAX_REASON_LEN: usize = 160;
+
+/// What kind of body a [`BodyState`] describes.
+#[repr(u32)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ZeroCopySend, Default)]
+pub enum BodyKind {
+    /// A robot driven by an agent.
+    #[default]
+    Robot = 0,
+    /// A scripted obstacle moved by the world.
+    Obstacle = 1,
+}
+
+/// Per-body flags in a snapshot.
+pub mod flags {
+    /// The robot's agent has been lost (died or stalled); the world brakes it.
+    pub const LOST: u32 = 1;
+    /// The robot has reached its goal and held it for `goal_hold_ticks`.
+    pub const AT_GOAL: u32 = 2;
+}
+
+/// The state of one body at the end of a tick, as published by the world.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Default)]
+pub struct BodyState {
+    /// Index of the body in the scenario: robots first, then obstacles.
+    pub id: u32,
+    /// Robot or obstacle.
+    pub kind: BodyKind,
+    /// Bit set of [`flags`].
+    pub flags: u32,
+    /// Explicit padding, always zero.
+    pub _pad: u32,
+    /// Position, scenario units.
+    pub position: [f64; 2],
+    /// Velocity, scenario units per second.
+    pub velocity: [f64; 2],
+    /// Disc radius (0 for a point robot).
+    pub radius: f64,
+}
+
+/// Header of every snapshot: one per tick, followed by a slice of
+/// [`BodyState`] for every body.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Default)]
+pub struct SnapshotHeader {
+    /// Tick number, starting at 0. A command must answer the current tick.
+    pub tick: u64,
+    /// Simulated time at this snapshot, s.
+    pub sim_time: f64,
+    /// The world's wall clock when it published this snapshot
+    /// (CLOCK_MONOTONIC, ns): the start of every latency measurement.
+    pub published_ns: u64,
+    /// Deadline for commands answering this tick (CLOCK_MONOTONIC, ns);
+    /// 0 in lockstep mode, where the world waits.
+    pub deadline_ns: u64,
+    /// 1 once the run is over: agents exit when they see it.
+    pub finished: u32,
+    /// Number of bodies in the slice that follows.
+    pub body_count: u32,
+}
+
+/// How the world interprets a [`CommandMsg`]'s vector.
+#[repr(u32)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ZeroCopySend, Default)]
+pub enum CommandKind {
+    /// Force, applied for the whole tick.
+    #[default]
+    Force = 0,
+    /// Velocity set-point, tracked by a first-order lag.
+    Velocity = 1,
+}
+
+/// One agent's answer to one tick.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Default)]
+pub struct CommandMsg {
+    /// The robot this command drives.
+    pub robot_id: u32,
+    /// Force or velocity.
+    pub kind: CommandKind,
+    /// The token the world handed this agent when it joined; commands
+    /// without the robot's current token are rejected.
+    pub token: u64,
+    /// The tick this command answers.
+    pub tick: u64,
+    /// Force (N in scenario units) or velocity.
+    pub value: [f64; 2],
+    /// Time the agent spent in its planner, ns.
+    pub compute_ns: u64,
+    /// When the agent woke for this tick (CLOCK_MONOTONIC, ns).
+    pub woke_ns: u64,
+    /// When the agent sent this command (CLOCK_MONOTONIC, ns).
+    pub sent_ns: u64,
+}
+
+/// A fixed-size, NUL-padded UTF-8 string.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ZeroCopySend)]
+pub struct FixedStr<const N: usize> {
+    len: u32,
+    bytes: [u8; N],
+}
+
+impl<const N: usize> Default for FixedStr<N> {
+    fn default() -> Self {
+        Self {
+            len: 0,
+            bytes: [0; N],
+        }
+    }
+}
+
+impl<const N: usize> FixedStr<N> {
+    /// Copies `s`, truncated at a character boundary to fit `N` bytes.
+    pub fn new(s: &str) -> Self {
+        let mut end = s.len().min(N);
+        while !s.is_char_boundary(end) {
+            end -= 1;
+        }
+        let mut bytes = [0; N];
+        bytes[..end].copy_from_slice(&s.as_bytes()[..end]);
+        Self {
+            len: end as u32,
+            bytes,
+        }
+    }
+
+    /// The string, or `""` if the bytes are not valid UTF-8.
+    pub fn as_str(&self) -> &str {
+        let len = (self.len as usize).min(N);
+        std::str::from_utf8(&self.bytes[..len]).unwrap_or("")
+    }
+}
+
+/// An agent asks to drive a robot.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Default)]
+pub struct JoinRequest {
+    /// The agent's [`PROTOCOL_VERSION`].
+    pub protocol_version: u32,
+    /// The agent's process id.
+    pub pid: u32,
+    /// Random number chosen by the agent to find its reply.
+    pub nonce: u64,
+    /// The robot's name from the scenario.
+    pub robot: FixedStr<MAX_NAME_LEN>,
+}
+
+/// The world's answer to a [`JoinRequest`].
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Default)]
+pub struct JoinReply {
+    /// The request's nonce.
+    pub nonce: u64,
+    /// 1 if accepted.
+    pub accepted: u32,
+    /// The robot's id when accepted.
+    pub robot_id: u32,
+    /// The token to put in every command when accepted.
+    pub token: u64,
+    /// The world's protocol version.
+    pub protocol_version: u32,
+    /// Explicit padding, always zero.
+    pub _pad: u32,
+    /// Why the request was refused, empty when accepted.
+    pub reason: FixedStr<MAX_REASON_LEN>,
+}
+
+/// Event ids on the world's tick event service.
+pub mod events {
+    /// A new snapshot is published.
+    pub const SNAPSHOT: usize = 1;
+    /// A join reply is published.
+    pub const JOIN_REPLY: usize = 2;
+    /// An agent sent a command.
+    pub const COMMAND: usize = 3;
+    /// An agent sent a join request.
+    pub const JOIN_REQUEST: usize = 4;
+    /// A notifier's process died (iceoryx2 dead-notifier event).
+    pub const NOTIFIER_DEAD: usize = 5;
+}
+
+/// Monotonic clock in ns (CLOCK_MONOTONIC), comparable across processes
+/// on one machine.
+pub fn now_ns() -> u64 {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: clock_gettime only writes into the timespec we own; with
+    // CLOCK_MONOTONIC it cannot fail on Linux.
+    unsafe { libc::clock_gettime(libc::CLOCK_MONOTONIC, &mut ts) };
+    ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fixed_str_round_trips_and_truncates_on_char_boundary() {
+        assert_eq!(FixedStr::<8>::new("r0").as_str(), "r0");
+        assert_eq!(FixedStr::<4>::new("abcdef").as_str(), "abcd");
+        assert_eq!(FixedStr::<3>::new("aé").as_str(), "aé");
+        assert_eq!(FixedStr::<2>::new("aé").as_str(), "a");
+    }
+
+    #[test]
+    fn monotonic_clock_does_not_go_back() {
+        let a = now_ns();
+        let b = now_ns();
+        assert!(b >= a);
+    }
+}

@@ -1,0 +1,5 @@
+//! mrsim scenario files.
+#![warn(missing_docs)]
+
+mod types;
+pub use types::*;

@@ -1,0 +1,285 @@
+//! The resolved scenario: what the world and the agents use after loading,
+//! defaults applied, `[generate]` expanded and everything validated.
+//!
+//! These types are also the start-up message the world sends every agent
+//! (as JSON), so they derive both `Serialize` and `Deserialize`.
+
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// The unit of every length in a scenario file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum LengthUnit {
+    /// Metres (default).
+    #[default]
+    M,
+    /// Centimetres (Ko & Choi's cases).
+    Cm,
+    /// Millimetres.
+    Mm,
+}
+
+impl LengthUnit {
+    /// How many of this unit make a metre (rapier's `length_unit`).
+    pub fn per_metre(self) -> f64 {
+        match self {
+            LengthUnit::M => 1.0,
+            LengthUnit::Cm => 100.0,
+            LengthUnit::Mm => 1000.0,
+        }
+    }
+}
+
+/// How the world keeps time.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Mode {
+    /// Wait for every live agent each tick: deterministic.
+    #[default]
+    Lockstep,
+    /// Tick on the wall clock; late commands are deadline misses.
+    Realtime,
+}
+
+impl std::fmt::Display for Mode {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Mode::Lockstep => "lockstep",
+            Mode::Realtime => "realtime",
+        })
+    }
+}
+
+/// What a robot does when its command misses the deadline (realtime).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum MissPolicy {
+    /// Keep applying the last command.
+    #[default]
+    Hold,
+    /// Brake: force/velocity set to stop the robot.
+    Brake,
+}
+
+/// An axis-aligned arena with walls all round.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Arena {
+    /// Lower-left corner.
+    pub min: [f64; 2],
+    /// Upper-right corner.
+    pub max: [f64; 2],
+}
+
+/// The `[world]` table.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct WorldConfig {
+    /// Tick = control period, s (default 0.1).
+    pub dt: f64,
+    /// Physics steps per tick (default 10).
+    pub substeps: u32,
+    /// Simulated time at most, s (default 60).
+    pub duration: f64,
+    /// Lockstep or realtime (default lockstep).
+    pub mode: Mode,
+    /// Policy on a deadline miss (default hold).
+    pub on_deadline_miss: MissPolicy,
+    /// Seed of every random process (default 1).
+    pub seed: u64,
+    /// Optional walls all round.
+    pub arena: Option<Arena>,
+    /// Deadline as a fraction of the tick, (0, 1] (default 1.0).
+    pub deadline: f64,
+    /// Lockstep: how long the world waits for an agent before it is lost,
+    /// s (default 2.0).
+    pub stall_timeout: f64,
+}
+
+/// One planner parameter value (see `mrsim_planners::ParamValue`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum ParamValue {
+    /// A boolean.
+    Bool(bool),
+    /// A number (integers included).
+    Number(f64),
+    /// A string.
+    Text(String),
+    /// A list of numbers.
+    Numbers(Vec<f64>),
+    /// A list of points.
+    Points(Vec<[f64; 2]>),
+}
+
+/// Where a robot's sensed velocities come from (Zhu & Loh eqs 2.9-2.12).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum VelocitySource {
+    /// The true velocity from the snapshot.
+    #[default]
+    Truth,
+    /// Differenced from the last observed positions, as a camera gives it.
+    Differenced,
+}
+
+/// One robot, all defaults applied.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RobotSpec {
+    /// Unique name; `mrsim agent --robot NAME` drives it.
+    pub name: String,
+    /// Start position.
+    pub start: [f64; 2],
+    /// Goal position.
+    pub goal: [f64; 2],
+    /// Planner name (checked against the planners crate by the launcher).
+    pub planner: String,
+    /// Planner parameters.
+    pub params: BTreeMap<String, ParamValue>,
+    /// Disc radius, >= 0 (0 = point robot).
+    pub radius: f64,
+    /// Mass, > 0.
+    pub mass: f64,
+    /// Linear damping b, >= 0.
+    pub damping: f64,
+    /// Speed limit enforced by the world, > 0.
+    pub max_speed: f64,
+    /// Acceleration limit enforced by the world, > 0.
+    pub max_accel: f64,
+    /// Time constant T of the velocity-command lag, s, >= 0 (0 = ideal).
+    pub velocity_lag: f64,
+    /// Sensing range, > 0.
+    pub sensing_range: f64,
+    /// Field of view, degrees in (0, 360], centred on the heading.
+    pub field_of_view_deg: f64,
+    /// Distance to the goal that counts as reached, > 0.
+    pub goal_tolerance: f64,
+    /// Ticks the robot must stay within tolerance (Ko & Choi eq 22's N).
+    pub goal_hold_ticks: u32,
+    /// True or differenced velocities of sensed bodies.
+    pub velocity_source: VelocitySource,
+    /// Standard deviation of Gaussian noise on sensed positions (0 = none).
+    pub position_noise: f64,
+    /// Designated path waypoints (Yamada), empty if none.
+    pub path: Vec<[f64; 2]>,
+    /// Half-width of the corridor around `path`.
+    pub boundary: Option<f64>,
+}
+
+/// How a scripted obstacle moves.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "model", rename_all = "kebab-case")]
+pub enum Motion {
+    /// Never moves.
+    Static,
+    /// Constant velocity (Zhu & Loh 2.13-2.15).
+    ConstantVelocity {
+        /// Velocity.
+        velocity: [f64; 2],
+    },
+    /// Straight lines through `points` at `speed`.
+    Waypoints {
+        /// Points to visit in order (the start is not repeated).
+        points: Vec<[f64; 2]>,
+        /// Speed along the path.
+        speed: f64,
+        /// Start over from the first point after the last.
+        #[serde(default)]
+        r#loop: bool,
+    },
+    /// Random acceleration (Zhu & Loh 2.16-2.20).
+    Random {
+        /// `gaussian` or `uniform`.
+        distribution: String,
+        /// Standard deviation of the acceleration noise.
+        accel_sigma: f64,
+        /// AR coefficient on the previous acceleration.
+        alpha1: f64,
+        /// Gain on the fresh noise.
+        beta1: f64,
+        /// Speed cap.
+        max_speed: f64,
+    },
+    /// Intentional motion (Zhu & Loh 2.21-2.23).
+    Intentional {
+        /// `pursue`, `avoid` or `goal`.
+        behavior: String,
+        /// Body pursued (for `pursue`).
+        target: Option<String>,
+        /// Goal (for `goal`).
+        goal: Option<[f64; 2]>,
+        /// Route (for `goal`).
+        points: Vec<[f64; 2]>,
+        /// Speed cap.
+        max_speed: f64,
+        /// Acceleration cap.
+        max_accel: f64,
+        /// Eq 2.23's alpha2.
+        alpha2: f64,
+        /// Eq 2.23's beta2.
+        beta2: f64,
+    },
+}
+
+/// One scripted obstacle.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ObstacleSpec {
+    /// Unique name (shared namespace with robots).
+    pub name: String,
+    /// Start position.
+    pub start: [f64; 2],
+    /// Disc radius, >= 0.
+    pub radius: f64,
+    /// How it moves.
+    pub motion: Motion,
+}
+
+/// A static wall segment.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct WallSpec {
+    /// The segment's two ends.
+    pub segment: [[f64; 2]; 2],
+}
+
+/// A fully resolved, validated scenario.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Scenario {
+    /// Scenario name.
+    pub name: String,
+    /// Free text: where it comes from, what it shows.
+    pub description: String,
+    /// Unit of every length.
+    pub length_unit: LengthUnit,
+    /// The `[world]` table.
+    pub world: WorldConfig,
+    /// Robots, in file order, then generated ones.
+    pub robots: Vec<RobotSpec>,
+    /// Scripted obstacles, in file order.
+    pub obstacles: Vec<ObstacleSpec>,
+    /// Walls (not including the arena's).
+    pub walls: Vec<WallSpec>,
+}
+
+impl Scenario {
+    /// Every wall segment, the arena's four sides included.
+    pub fn all_walls(&self) -> Vec<[[f64; 2]; 2]> {
+        let mut out: Vec<[[f64; 2]; 2]> = self.walls.iter().map(|w| w.segment).collect();
+        if let Some(a) = self.world.arena {
+            let (x0, y0, x1, y1) = (a.min[0], a.min[1], a.max[0], a.max[1]);
+            out.push([[x0, y0], [x1, y0]]);
+            out.push([[x1, y0], [x1, y1]]);
+            out.push([[x1, y1], [x0, y1]]);
+            out.push([[x0, y1], [x0, y0]]);
+        }
+        out
+    }
+
+    /// Number of ticks the run lasts at most.
+    pub fn max_ticks(&self) -> u64 {
+        (self.world.duration / self.world.dt).round() as u64
+    }
+
+    /// Index of a robot by name.
+    pub fn robot_index(&self, name: &str) -> Option<usize> {
+        self.robots.iter().position(|r| r.name == name)
+    }
+}
