@@ -19,15 +19,12 @@ pub const MAX_NAME_LEN: usize = 64;
 /// Longest human-readable reason in a [`JoinReply`].
 pub const MAX_REASON_LEN: usize = 160;
 
-/// What kind of body a [`BodyState`] describes.
-#[repr(u32)]
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ZeroCopySend, Default)]
-pub enum BodyKind {
+/// Body kinds, the `kind` field of a [`BodyState`].
+pub mod body_kind {
     /// A robot driven by an agent.
-    #[default]
-    Robot = 0,
+    pub const ROBOT: u32 = 0;
     /// A scripted obstacle moved by the world.
-    Obstacle = 1,
+    pub const OBSTACLE: u32 = 1;
 }
 
 /// Per-body flags in a snapshot.
@@ -44,8 +41,8 @@ pub mod flags {
 pub struct BodyState {
     /// Index of the body in the scenario: robots first, then obstacles.
     pub id: u32,
-    /// Robot or obstacle.
-    pub kind: BodyKind,
+    /// Robot or obstacle, one of [`body_kind`].
+    pub kind: u32,
     /// Bit set of [`flags`].
     pub flags: u32,
     /// Explicit padding, always zero.
@@ -79,15 +76,12 @@ pub struct SnapshotHeader {
     pub body_count: u32,
 }
 
-/// How the world interprets a [`CommandMsg`]'s vector.
-#[repr(u32)]
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ZeroCopySend, Default)]
-pub enum CommandKind {
+/// Command kinds, the `kind` field of a [`CommandMsg`].
+pub mod command_kind {
     /// Force, applied for the whole tick.
-    #[default]
-    Force = 0,
+    pub const FORCE: u32 = 0;
     /// Velocity set-point, tracked by a first-order lag.
-    Velocity = 1,
+    pub const VELOCITY: u32 = 1;
 }
 
 /// One agent's answer to one tick.
@@ -96,8 +90,8 @@ pub enum CommandKind {
 pub struct CommandMsg {
     /// The robot this command drives.
     pub robot_id: u32,
-    /// Force or velocity.
-    pub kind: CommandKind,
+    /// Force or velocity, one of [`command_kind`].
+    pub kind: u32,
     /// The token the world handed this agent when it joined; commands
     /// without the robot's current token are rejected.
     pub token: u64,
