@@ -1,0 +1,249 @@
+//! One robot's agent: join the run, get the robot's setup from the world,
+//! then each tick turn the snapshot into the planner's [`Observation`]
+//! (sensing range and field of view applied), call the planner, and send
+//! the command back before the deadline.
+//!
+//! The transport is injected ([`AgentTransport`]), so the same loop runs in
+//! an agent process over iceoryx2, in a thread over crossbeam channels, or
+//! in a test against a scripted fake world. The planner is pure and never
+//! sees the transport or a clock; the agent measures its compute time.
+#![warn(missing_docs)]
+
+pub mod observe;
+
+use mrsim_planners::{Command, DesignatedPath, Planner, Segment, Vec2};
+use mrsim_proto::{
+    BodyState, CommandMsg, FixedStr, JoinRequest, PROTOCOL_VERSION, SnapshotHeader, command_kind,
+    now_ns,
+};
+use mrsim_scenario::{RobotSpec, Scenario};
+use mrsim_transport::{AgentTransport, TransportError};
+use std::time::{Duration, Instant};
+
+/// Why an agent stopped with an error.
+#[derive(Debug, thiserror::Error)]
+pub enum AgentError {
+    /// The transport failed.
+    #[error(transparent)]
+    Transport(#[from] TransportError),
+    /// The world refused to let this agent drive the robot.
+    #[error("the world refused robot `{robot}`: {reason}")]
+    Refused {
+        /// The robot asked for.
+        robot: String,
+        /// The world's reason.
+        reason: String,
+    },
+    /// No answer from the world in time.
+    #[error(
+        "no {what} from the world within {secs:.0} s (is `mrsim world` running with this run id?)"
+    )]
+    Timeout {
+        /// What was awaited.
+        what: &'static str,
+        /// The timeout.
+        secs: f64,
+    },
+    /// The world's setup could not be read.
+    #[error("bad setup from the world: {0}")]
+    BadSetup(String),
+    /// The robot's planner could not be built.
+    #[error("robot `{robot}`: {source}")]
+    Planner {
+        /// The robot.
+        robot: String,
+        /// Why.
+        source: mrsim_planners::BuildError,
+    },
+    /// The world process is gone.
+    #[error("the world is gone (its process died or left without ending the run)")]
+    WorldGone,
+}
+
+/// How an agent ended without error.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AgentExit {
+    /// The world ended the run.
+    Finished,
+    /// The process was asked to terminate.
+    Interrupted,
+}
+
+/// Options of one agent.
+#[derive(Debug, Clone)]
+pub struct AgentOptions {
+    /// The robot to drive.
+    pub robot: String,
+    /// How long to wait for the join reply and the setup.
+    pub join_timeout: Duration,
+    /// Silence after which the agent checks that the world still lives.
+    pub world_check_after: Duration,
+    /// Deliberately claim this robot id in commands instead of the one the
+    /// world assigned (for fault-injection tests of ownership checks).
+    pub impersonate: Option<u32>,
+}
+
+impl AgentOptions {
+    /// Defaults for driving `robot`.
+    pub fn new(robot: &str) -> Self {
+        Self {
+            robot: robot.to_string(),
+            join_timeout: Duration::from_secs(30),
+            world_check_after: Duration::from_millis(300),
+            impersonate: None,
+        }
+    }
+}
+
+/// Converts a scenario parameter table into the planners' form.
+pub fn planner_params(spec: &RobotSpec) -> mrsim_planners::Params {
+    use mrsim_planners::ParamValue as P;
+    use mrsim_scenario::ParamValue as S;
+    spec.params
+        .iter()
+        .map(|(k, v)| {
+            let v = match v {
+                S::Bool(b) => P::Bool(*b),
+                S::Number(x) => P::Number(*x),
+                S::Text(s) => P::Text(s.clone()),
+                S::Numbers(xs) => P::Numbers(xs.clone()),
+                S::Points(ps) => P::Points(ps.clone()),
+            };
+            (k.clone(), v)
+        })
+        .collect()
+}
+
+/// Builds the planner a robot's scenario entry asks for.
+pub fn build_planner(spec: &RobotSpec) -> Result<Box<dyn Planner>, mrsim_planners::BuildError> {
+    mrsim_planners::build(&spec.planner, &planner_params(spec))
+}
+
+/// Joins the run as `opts.robot` and drives it until the world ends the
+/// run, the process is asked to stop, or something fails.
+pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentExit, AgentError> {
+    // Join: ask for the robot, re-asking until the world answers.
+    let nonce = now_ns() ^ ((std::process::id() as u64) << 20) ^ 0x6d72_7369_6d00_0000;
+    let req = JoinRequest {
+        protocol_version: PROTOCOL_VERSION,
+        pid: std::process::id(),
+        nonce,
+        robot: FixedStr::new(&opts.robot),
+    };
+    let start = Instant::now();
+    let mut last_ask: Option<Instant> = None;
+    let reply = loop {
+        if link.termination_requested() {
+            return Ok(AgentExit::Interrupted);
+        }
+        if last_ask.is_none_or(|t| t.elapsed() > Duration::from_millis(500)) {
+            link.request_join(&req)?;
+            last_ask = Some(Instant::now());
+        }
+        if let Some(r) = link.poll_join_reply(nonce)? {
+            break r;
+        }
+        if start.elapsed() > opts.join_timeout {
+            return Err(AgentError::Timeout {
+                what: "join reply",
+                secs: opts.join_timeout.as_secs_f64(),
+            });
+        }
+        link.wait(Duration::from_millis(50))?;
+    };
+    if reply.accepted == 0 {
+        return Err(AgentError::Refused {
+            robot: opts.robot.clone(),
+            reason: reply.reason.as_str().to_string(),
+        });
+    }
+
+    // Setup: the resolved scenario, from the world.
+    let setup = loop {
+        if let Some(s) = link.setup()? {
+            break s;
+        }
+        if start.elapsed() > opts.join_timeout {
+            return Err(AgentError::Timeout {
+                what: "setup",
+                secs: opts.join_timeout.as_secs_f64(),
+            });
+        }
+        link.wait(Duration::from_millis(20))?;
+    };
+    let value: serde_json::Value =
+        serde_json::from_slice(&setup).map_err(|e| AgentError::BadSetup(e.to_string()))?;
+    let scenario: Scenario =
+        serde_json::from_value(value.get("scenario").cloned().unwrap_or_default())
+            .map_err(|e| AgentError::BadSetup(e.to_string()))?;
+    let me = reply.robot_id as usize;
+    let spec = scenario
+        .robots
+        .get(me)
+        .ok_or_else(|| AgentError::BadSetup(format!("no robot with id {me}")))?
+        .clone();
+    let mut planner = build_planner(&spec).map_err(|source| AgentError::Planner {
+        robot: spec.name.clone(),
+        source,
+    })?;
+    let walls: Vec<Segment> = scenario
+        .all_walls()
+        .iter()
+        .map(|w| Segment {
+            a: Vec2::new(w[0][0], w[0][1]),
+            b: Vec2::new(w[1][0], w[1][1]),
+        })
+        .collect();
+    let path = (!spec.path.is_empty()).then(|| DesignatedPath {
+        points: spec.path.iter().map(|p| Vec2::new(p[0], p[1])).collect(),
+        boundary: spec.boundary.unwrap_or(f64::INFINITY),
+    });
+    let mut observer = observe::Observer::new(&scenario, me);
+
+    // Control loop.
+    let mut header = SnapshotHeader::default();
+    let mut bodies: Vec<BodyState> =
+        Vec::with_capacity(scenario.robots.len() + scenario.obstacles.len());
+    let mut answered: Option<u64> = None;
+    let mut last_heard = Instant::now();
+    loop {
+        if link.termination_requested() {
+            return Ok(AgentExit::Interrupted);
+        }
+        link.wait(Duration::from_millis(100))?;
+        let woke = now_ns();
+        if !link.latest_snapshot(&mut header, &mut bodies)? {
+            if last_heard.elapsed() > opts.world_check_after && !link.world_alive() {
+                return Err(AgentError::WorldGone);
+            }
+            continue;
+        }
+        last_heard = Instant::now();
+        if header.finished != 0 {
+            return Ok(AgentExit::Finished);
+        }
+        if answered.is_some_and(|t| t >= header.tick) || me >= bodies.len() {
+            continue;
+        }
+        let t0 = now_ns();
+        let obs = observer.observe(&header, &bodies, &spec, &walls, path.as_ref());
+        let cmd = planner.plan(&obs);
+        let compute_ns = now_ns().saturating_sub(t0);
+        let (kind, v) = match cmd {
+            Command::Force(f) => (command_kind::FORCE, f),
+            Command::Velocity(v) => (command_kind::VELOCITY, v),
+        };
+        let msg = CommandMsg {
+            robot_id: opts.impersonate.unwrap_or(me as u32),
+            kind,
+            token: reply.token,
+            tick: header.tick,
+            value: [v.x, v.y],
+            compute_ns,
+            woke_ns: woke,
+            sent_ns: now_ns(),
+        };
+        link.send_command(&msg)?;
+        answered = Some(header.tick);
+    }
+}

@@ -1,0 +1,99 @@
+//! From a snapshot to a planner's observation: the robot's own state, and
+//! the other bodies it can sense (within `sensing_range`, measured surface
+//! to surface, and within `field_of_view_deg` centred on its heading: the
+//! direction of its velocity, or towards its goal while it stands still).
+
+use mrsim_planners::{BodyKind, DesignatedPath, Observation, Segment, SelfState, Sensed, Vec2};
+use mrsim_proto::{BodyState, SnapshotHeader, body_kind};
+use mrsim_scenario::{RobotSpec, Scenario};
+
+/// Turns snapshots into observations for one robot; keeps the buffers.
+pub struct Observer {
+    me: usize,
+    dt: f64,
+    others: Vec<Sensed>,
+}
+
+impl Observer {
+    /// An observer for robot `me` of `scenario`.
+    pub fn new(scenario: &Scenario, me: usize) -> Self {
+        Self {
+            me,
+            dt: scenario.world.dt,
+            others: Vec::with_capacity(scenario.robots.len() + scenario.obstacles.len()),
+        }
+    }
+
+    /// The observation of this tick.
+    pub fn observe<'a>(
+        &'a mut self,
+        header: &SnapshotHeader,
+        bodies: &[BodyState],
+        spec: &RobotSpec,
+        walls: &'a [Segment],
+        path: Option<&'a DesignatedPath>,
+    ) -> Observation<'a> {
+        let s = &bodies[self.me];
+        let position = Vec2::new(s.position[0], s.position[1]);
+        let velocity = Vec2::new(s.velocity[0], s.velocity[1]);
+        let goal = Vec2::new(spec.goal[0], spec.goal[1]);
+        let heading = if velocity.norm() > 1e-9 {
+            velocity.normalize()
+        } else if (goal - position).norm() > 1e-12 {
+            (goal - position).normalize()
+        } else {
+            Vec2::new(1.0, 0.0)
+        };
+        let half_fov = (spec.field_of_view_deg.min(360.0) / 2.0).to_radians();
+        let cos_half = half_fov.cos();
+        self.others.clear();
+        for b in bodies.iter() {
+            if b.id as usize == self.me {
+                continue;
+            }
+            let p = Vec2::new(b.position[0], b.position[1]);
+            let d = p - position;
+            let dist = d.norm();
+            // Sensing range, surface to surface.
+            if dist - b.radius - spec.radius > spec.sensing_range {
+                continue;
+            }
+            // Field of view around the heading (360 degrees sees all).
+            if spec.field_of_view_deg < 360.0 && dist > 1e-12 && d.dot(&heading) / dist < cos_half {
+                continue;
+            }
+            self.others.push(Sensed {
+                id: b.id,
+                kind: if b.kind == body_kind::ROBOT {
+                    BodyKind::Robot
+                } else {
+                    BodyKind::Obstacle
+                },
+                position: p,
+                velocity: Vec2::new(b.velocity[0], b.velocity[1]),
+                acceleration: Vec2::zeros(),
+                radius: b.radius,
+            });
+        }
+        Observation {
+            tick: header.tick,
+            time: header.sim_time,
+            dt: self.dt,
+            me: SelfState {
+                id: self.me as u32,
+                position,
+                velocity,
+                radius: spec.radius,
+                mass: spec.mass,
+                damping: spec.damping,
+                max_speed: spec.max_speed,
+                max_accel: spec.max_accel,
+            },
+            goal,
+            goal_tolerance: spec.goal_tolerance,
+            others: &self.others,
+            walls,
+            path,
+        }
+    }
+}

@@ -1,0 +1,131 @@
+//! The channels between the mrsim world and its agents.
+//!
+//! The world and the agents talk through two small traits,
+//! [`WorldTransport`] and [`AgentTransport`], that carry only the plain wire
+//! types of `mrsim-proto`. No iceoryx2 type crosses this interface, so the
+//! agent loop and the world loop can be driven over shared memory between
+//! processes ([`shm`]), over crossbeam channels between threads
+//! ([`inproc`]), or (later) over a network transport, without change.
+//!
+//! Per tick the world publishes one snapshot (a header plus a slice of
+//! bodies) and wakes the agents; each agent answers with one command and
+//! wakes the world. At start-up an agent sends a join request naming its
+//! robot and gets back a token it must put in every command; the world also
+//! publishes the run's setup (the resolved scenario as JSON) once, kept for
+//! late joiners.
+#![warn(missing_docs)]
+
+use mrsim_proto::{BodyState, CommandMsg, JoinReply, JoinRequest, SnapshotHeader};
+use std::time::Duration;
+
+pub mod inproc;
+pub mod namespace;
+pub mod shm;
+
+pub use namespace::{Namespace, NamespaceError};
+
+/// What went wrong in a transport operation.
+#[derive(Debug, thiserror::Error)]
+pub enum TransportError {
+    /// A channel or port could not be created or opened; `what` names it.
+    #[error("cannot set up {what}: {detail}")]
+    Setup {
+        /// The channel or port.
+        what: String,
+        /// The underlying error.
+        detail: String,
+    },
+    /// Sending a message failed.
+    #[error("cannot send {what}: {detail}")]
+    Send {
+        /// What was being sent.
+        what: &'static str,
+        /// The underlying error.
+        detail: String,
+    },
+    /// Receiving a message failed.
+    #[error("cannot receive {what}: {detail}")]
+    Receive {
+        /// What was being received.
+        what: &'static str,
+        /// The underlying error.
+        detail: String,
+    },
+    /// Waiting for a wake-up failed.
+    #[error("cannot wait for a wake-up: {0}")]
+    Wait(String),
+    /// The other side is gone (in-process channels disconnected).
+    #[error("the other side has disconnected")]
+    Disconnected,
+}
+
+/// The world's side of the channels.
+pub trait WorldTransport {
+    /// Publishes the run's setup (the resolved scenario as JSON); kept for
+    /// agents that join later.
+    fn publish_setup(&mut self, setup: &[u8]) -> Result<(), TransportError>;
+    /// Publishes one snapshot and wakes every agent.
+    fn publish_snapshot(
+        &mut self,
+        header: &SnapshotHeader,
+        bodies: &[BodyState],
+    ) -> Result<(), TransportError>;
+    /// Blocks until an agent wakes the world or `timeout` passes (may return
+    /// early, spuriously: callers check the clock).
+    fn wait(&mut self, timeout: Duration) -> Result<(), TransportError>;
+    /// Hands every command received since the last call to `f`, with the
+    /// time it was taken in (CLOCK_MONOTONIC ns).
+    fn drain_commands(&mut self, f: &mut dyn FnMut(CommandMsg, u64)) -> Result<(), TransportError>;
+    /// Hands every join request received since the last call to `f`.
+    fn drain_joins(&mut self, f: &mut dyn FnMut(JoinRequest)) -> Result<(), TransportError>;
+    /// Answers a join request.
+    fn reply_join(&mut self, reply: &JoinReply) -> Result<(), TransportError>;
+    /// True once the process was asked to terminate (SIGINT, SIGTERM).
+    fn termination_requested(&self) -> bool;
+    /// Frees what dead agent processes left behind, so a restarted agent can
+    /// join again. Cheap when nothing died.
+    fn cleanup_dead(&mut self) {}
+}
+
+/// An agent's side of the channels.
+pub trait AgentTransport {
+    /// Sends a join request.
+    fn request_join(&mut self, req: &JoinRequest) -> Result<(), TransportError>;
+    /// The reply to the request with this nonce, if it has arrived.
+    fn poll_join_reply(&mut self, nonce: u64) -> Result<Option<JoinReply>, TransportError>;
+    /// The run's setup, once the world has published it.
+    fn setup(&mut self) -> Result<Option<Vec<u8>>, TransportError>;
+    /// Blocks until the world wakes this agent or `timeout` passes (may
+    /// return early, spuriously).
+    fn wait(&mut self, timeout: Duration) -> Result<(), TransportError>;
+    /// Copies the newest snapshot received since the last call into
+    /// `header` and `bodies`; false if none arrived.
+    fn latest_snapshot(
+        &mut self,
+        header: &mut SnapshotHeader,
+        bodies: &mut Vec<BodyState>,
+    ) -> Result<bool, TransportError>;
+    /// Sends a command and wakes the world.
+    fn send_command(&mut self, cmd: &CommandMsg) -> Result<(), TransportError>;
+    /// False once the world is known to be gone.
+    fn world_alive(&mut self) -> bool;
+    /// True once the process was asked to terminate (SIGINT, SIGTERM).
+    fn termination_requested(&self) -> bool;
+}
+
+/// How many participants the channels must hold.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Capacity {
+    /// Robots in the scenario (one agent each).
+    pub robots: usize,
+}
+
+impl Capacity {
+    /// Room for strangers, restarted agents and observers beyond the robots.
+    pub const SPARE: usize = 16;
+
+    /// Maximum number of agent-side ports of one kind.
+    pub fn agents(&self) -> usize {
+        self.robots + Self::SPARE
+    }
+}

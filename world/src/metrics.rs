@@ -1,0 +1,171 @@
+//! Per-robot and per-run metrics, accumulated tick by tick and written as
+//! metrics.json (field names as in the design).
+
+use hdrhistogram::Histogram;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// Percentiles of a latency histogram, µs.
+#[derive(Debug, Clone, Copy, Default, Serialize, PartialEq)]
+pub struct Percentiles {
+    /// Median.
+    pub p50: f64,
+    /// 99th percentile.
+    pub p99: f64,
+    /// 99.9th percentile.
+    pub p999: f64,
+    /// Largest sample.
+    pub max: f64,
+    /// Number of samples.
+    pub count: u64,
+}
+
+/// A histogram of durations recorded in ns, reported in µs.
+#[derive(Debug, Clone)]
+pub struct DurationHistogram(Histogram<u64>);
+
+impl Default for DurationHistogram {
+    fn default() -> Self {
+        // 1 ns .. 60 s at 3 significant digits; construction cannot fail
+        // for these constants, but fall back to an auto-resizing one anyway.
+        Self(
+            Histogram::new_with_bounds(1, 60_000_000_000, 3).unwrap_or_else(|_| {
+                let mut h =
+                    Histogram::new(3).unwrap_or_else(|_| unreachable!("3 sigfigs is valid"));
+                h.auto(true);
+                h
+            }),
+        )
+    }
+}
+
+impl DurationHistogram {
+    /// Records one duration, ns (clamped into range).
+    pub fn record_ns(&mut self, ns: u64) {
+        let _ = self.0.record(ns.clamp(1, 60_000_000_000));
+    }
+
+    /// p50/p99/p99.9/max in µs (zeros when empty).
+    pub fn percentiles(&self) -> Percentiles {
+        if self.0.is_empty() {
+            return Percentiles::default();
+        }
+        let us = |ns: u64| ns as f64 / 1000.0;
+        Percentiles {
+            p50: us(self.0.value_at_quantile(0.5)),
+            p99: us(self.0.value_at_quantile(0.99)),
+            p999: us(self.0.value_at_quantile(0.999)),
+            max: us(self.0.max()),
+            count: self.0.len(),
+        }
+    }
+}
+
+/// Everything measured about one robot.
+#[derive(Debug, Clone, Default)]
+pub struct RobotAccumulator {
+    /// Reached its goal (held for goal_hold_ticks).
+    pub reached_goal: bool,
+    /// Time it arrived (start of the successful hold), s.
+    pub time_to_goal: Option<f64>,
+    /// Consecutive ticks within tolerance so far.
+    pub hold: u32,
+    /// Time the current hold started.
+    pub hold_start: f64,
+    /// Distance travelled.
+    pub path_length: f64,
+    /// Contacts started with anything.
+    pub collisions: u64,
+    /// Smallest surface distance to any other body or wall.
+    pub min_clearance: f64,
+    /// Largest speed.
+    pub max_speed: f64,
+    /// Realtime: ticks whose command came late or never.
+    pub deadline_misses: u64,
+    /// Snapshot published -> command received.
+    pub latency: DurationHistogram,
+    /// Snapshot published -> agent awake.
+    pub wake: DurationHistogram,
+    /// Planner compute time.
+    pub compute: DurationHistogram,
+    /// Process id of the agent that last drove it.
+    pub agent_pid: Option<u32>,
+    /// Times lost.
+    pub lost: u32,
+    /// Commands rejected that named this robot.
+    pub rejected: u64,
+    /// Commands that came after their tick's deadline.
+    pub late: u64,
+}
+
+/// One robot's row of metrics.json.
+#[derive(Debug, Clone, Serialize)]
+pub struct RobotMetrics {
+    /// Planner name.
+    pub planner: String,
+    /// Reached its goal.
+    pub reached_goal: bool,
+    /// Arrival time, s (null if never).
+    pub time_to_goal: Option<f64>,
+    /// Distance travelled.
+    pub path_length: f64,
+    /// Contacts started.
+    pub collisions: u64,
+    /// Smallest surface distance to any body or wall (null if nothing else).
+    pub min_clearance: Option<f64>,
+    /// Largest speed.
+    pub max_speed: f64,
+    /// Deadline misses.
+    pub deadline_misses: u64,
+    /// Snapshot published -> command received, µs.
+    pub latency_us: Percentiles,
+    /// Snapshot published -> agent awake, µs.
+    pub wake_us: Percentiles,
+    /// Planner compute time, µs.
+    pub compute_us: Percentiles,
+    /// The agent process's id.
+    pub agent_pid: Option<u32>,
+    /// Times the agent was lost.
+    pub lost: u32,
+    /// Commands rejected that named this robot.
+    pub commands_rejected: u64,
+    /// Commands that arrived after their deadline.
+    pub commands_late: u64,
+}
+
+/// metrics.json.
+#[derive(Debug, Clone, Serialize)]
+pub struct RunMetrics {
+    /// Scenario name.
+    pub scenario: String,
+    /// Per robot, keyed by name.
+    pub robots: BTreeMap<String, RobotMetrics>,
+    /// Contacts started, all robots (a robot-robot contact counts once).
+    pub collisions_total: u64,
+    /// Fraction of robots that reached their goal.
+    pub success_rate: f64,
+    /// Ticks simulated.
+    pub ticks: u64,
+    /// Simulated time, s.
+    pub sim_time: f64,
+    /// lockstep or realtime.
+    pub mode: String,
+    /// Simulated seconds per wall-clock second.
+    pub realtime_factor: f64,
+    /// Agents lost (died or stalled) during the run.
+    pub agents_lost: u64,
+    /// Commands rejected (wrong robot, wrong tick, garbage, duplicates).
+    pub commands_rejected: u64,
+    /// Commands that came after their tick's deadline.
+    pub commands_late: u64,
+    /// Commands rejected that named no robot of the scenario.
+    pub commands_rejected_unknown: u64,
+    /// The world process's id.
+    pub world_pid: u32,
+    /// The run id (iceoryx2 namespace).
+    pub run_id: String,
+    /// The transport: shm or inproc.
+    pub transport: String,
+    /// True if the run was stopped early by a signal.
+    pub interrupted: bool,
+}

@@ -1,0 +1,330 @@
+//! The world as data plus a step: rapier2d bodies for robots, obstacles and
+//! walls, the robots' actuator model, and collision detection.
+//!
+//! Robot dynamics are m r'' + b r' = f (Chung eq 1), integrated by
+//! semi-implicit Euler with `substeps` steps per tick: each substep the
+//! world turns the robot's command into an acceleration (force: f/m - b v/m;
+//! velocity: first-order lag (v_cmd - v)/T, or ideal tracking when T = 0),
+//! clamps it to `max_accel`, updates the velocity, clamps it to `max_speed`,
+//! and lets rapier move the disc and resolve contacts. Doing the actuator
+//! model ourselves (rather than with rapier's damping) keeps the limits
+//! exact and the same as the planners' reference testkit.
+
+use crate::motion::{MotionError, MotionState};
+use mrsim_proto::{BodyState, body_kind};
+use mrsim_scenario::Scenario;
+use rapier2d::prelude::*;
+use std::collections::HashMap;
+use std::sync::mpsc;
+
+/// A command as the world applies it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Applied {
+    /// Force held for the tick.
+    Force([f64; 2]),
+    /// Velocity set-point.
+    Velocity([f64; 2]),
+}
+
+impl Applied {
+    /// Stop as fast as the limits allow.
+    pub const BRAKE: Applied = Applied::Velocity([0.0, 0.0]);
+}
+
+/// Why a world could not be built.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum WorldError {
+    /// An obstacle's motion model cannot be run.
+    #[error("obstacle `{name}`: {source}")]
+    Motion {
+        /// The obstacle.
+        name: String,
+        /// Why.
+        source: MotionError,
+    },
+}
+
+/// What a body's collider belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Owner {
+    /// Robot index.
+    Robot(usize),
+    /// Obstacle index.
+    Obstacle(usize),
+    /// Wall index (arena walls included).
+    Wall(usize),
+}
+
+/// A contact that started during a tick.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Contact {
+    /// One side.
+    pub a: Owner,
+    /// The other side.
+    pub b: Owner,
+    /// Midpoint of the two bodies' positions (walls: the body's position).
+    pub at: [f64; 2],
+}
+
+/// The simulated world.
+pub struct World {
+    /// The scenario it was built from.
+    pub scenario: Scenario,
+    phys: PhysicsWorld,
+    robots: Vec<RigidBodyHandle>,
+    obstacles: Vec<RigidBodyHandle>,
+    motions: Vec<MotionState>,
+    owners: HashMap<ColliderHandle, Owner>,
+    commands: Vec<Applied>,
+    states: Vec<BodyState>,
+    collisions: mpsc::Receiver<CollisionEvent>,
+    collector: ChannelEventCollector,
+    walls: Vec<[[f64; 2]; 2]>,
+    tick: u64,
+}
+
+fn v2(p: [f64; 2]) -> Vector {
+    Vector::new(p[0] as f32, p[1] as f32)
+}
+
+impl World {
+    /// Builds the world of a validated scenario, robots at their starts.
+    pub fn new(scenario: &Scenario) -> Result<Self, WorldError> {
+        let mut phys = PhysicsWorld::new();
+        phys.gravity = Vector::ZERO;
+        let sub = scenario.world.substeps.max(1);
+        phys.integration_parameters.dt = (scenario.world.dt / sub as f64) as f32;
+        phys.integration_parameters.length_unit = scenario.length_unit.per_metre() as f32;
+        let min_radius = 1e-3 * scenario.length_unit.per_metre();
+
+        let mut owners = HashMap::new();
+        let mut robots = Vec::with_capacity(scenario.robots.len());
+        for (i, r) in scenario.robots.iter().enumerate() {
+            let body = RigidBodyBuilder::dynamic()
+                .translation(v2(r.start))
+                .lock_rotations()
+                .linear_damping(0.0)
+                .can_sleep(false)
+                .ccd_enabled(true);
+            let h = phys.insert_body(body);
+            let collider = ColliderBuilder::ball(r.radius.max(min_radius) as f32)
+                .mass(r.mass as f32)
+                .friction(0.0)
+                .active_events(ActiveEvents::COLLISION_EVENTS);
+            let c = phys.insert_collider(collider, Some(h));
+            owners.insert(c, Owner::Robot(i));
+            robots.push(h);
+        }
+
+        let mut obstacles = Vec::with_capacity(scenario.obstacles.len());
+        let mut motions = Vec::with_capacity(scenario.obstacles.len());
+        for (i, o) in scenario.obstacles.iter().enumerate() {
+            let motion =
+                MotionState::new(&o.motion, o.start).map_err(|source| WorldError::Motion {
+                    name: o.name.clone(),
+                    source,
+                })?;
+            let builder = if motion.is_static() {
+                RigidBodyBuilder::fixed()
+            } else {
+                RigidBodyBuilder::kinematic_position_based()
+            };
+            let h = phys.insert_body(builder.translation(v2(o.start)));
+            let collider = ColliderBuilder::ball(o.radius.max(min_radius) as f32)
+                .active_events(ActiveEvents::COLLISION_EVENTS);
+            let c = phys.insert_collider(collider, Some(h));
+            owners.insert(c, Owner::Obstacle(i));
+            obstacles.push(h);
+            motions.push(motion);
+        }
+
+        let walls = scenario.all_walls();
+        for (i, w) in walls.iter().enumerate() {
+            let h = phys.insert_body(RigidBodyBuilder::fixed());
+            let collider = ColliderBuilder::segment(v2(w[0]), v2(w[1]))
+                .active_events(ActiveEvents::COLLISION_EVENTS);
+            let c = phys.insert_collider(collider, Some(h));
+            owners.insert(c, Owner::Wall(i));
+        }
+
+        let (tx, collisions) = mpsc::channel();
+        let (ftx, _) = mpsc::channel();
+        let (stx, _) = mpsc::channel();
+        let collector = ChannelEventCollector::new(tx, ftx, stx);
+
+        let mut world = Self {
+            scenario: scenario.clone(),
+            phys,
+            robots,
+            obstacles,
+            motions,
+            owners,
+            commands: vec![Applied::BRAKE; scenario.robots.len()],
+            states: Vec::with_capacity(scenario.robots.len() + scenario.obstacles.len()),
+            collisions,
+            collector,
+            walls,
+            tick: 0,
+        };
+        world.refresh_states();
+        Ok(world)
+    }
+
+    /// Ticks done so far.
+    pub fn tick(&self) -> u64 {
+        self.tick
+    }
+
+    /// Simulated time, s.
+    pub fn time(&self) -> f64 {
+        self.tick as f64 * self.scenario.world.dt
+    }
+
+    /// Every body's state: robots first (ids 0..n), then obstacles.
+    pub fn states(&self) -> &[BodyState] {
+        &self.states
+    }
+
+    /// Mutable access to the per-body flags (lost, at goal).
+    pub fn set_flags(&mut self, body: usize, flags: u32) {
+        if let Some(s) = self.states.get_mut(body) {
+            s.flags = flags;
+        }
+    }
+
+    /// Every wall segment, the arena's included.
+    pub fn walls(&self) -> &[[[f64; 2]; 2]] {
+        &self.walls
+    }
+
+    /// Sets the command robot `i` follows from now on.
+    pub fn set_command(&mut self, i: usize, cmd: Applied) {
+        if let Some(c) = self.commands.get_mut(i) {
+            *c = cmd;
+        }
+    }
+
+    /// The command robot `i` is following.
+    pub fn command(&self, i: usize) -> Applied {
+        self.commands.get(i).copied().unwrap_or(Applied::BRAKE)
+    }
+
+    /// One tick: `substeps` physics steps. Returns the contacts that started.
+    pub fn step(&mut self, contacts: &mut Vec<Contact>) {
+        contacts.clear();
+        let sub = self.scenario.world.substeps.max(1);
+        let h = self.scenario.world.dt / sub as f64;
+        for _ in 0..sub {
+            for (i, handle) in self.robots.iter().enumerate() {
+                let spec = &self.scenario.robots[i];
+                let Some(body) = self.phys.bodies.get_mut(*handle) else {
+                    continue;
+                };
+                let lv = body.linvel();
+                let v = [lv.x as f64, lv.y as f64];
+                // The actuator model: acceleration from the command.
+                let mut a = match self.commands[i] {
+                    // Force: m r'' + b r' = f.
+                    Applied::Force(f) => [
+                        (f[0] - spec.damping * v[0]) / spec.mass,
+                        (f[1] - spec.damping * v[1]) / spec.mass,
+                    ],
+                    // Velocity: first-order lag of time constant T, or
+                    // ideal tracking (T = 0) within the limits.
+                    Applied::Velocity(vc) => {
+                        let t = if spec.velocity_lag > 0.0 {
+                            spec.velocity_lag
+                        } else {
+                            h
+                        };
+                        [(vc[0] - v[0]) / t, (vc[1] - v[1]) / t]
+                    }
+                };
+                let an = a[0].hypot(a[1]);
+                if an > spec.max_accel {
+                    a = [a[0] * spec.max_accel / an, a[1] * spec.max_accel / an];
+                }
+                let mut nv = [v[0] + a[0] * h, v[1] + a[1] * h];
+                let sn = nv[0].hypot(nv[1]);
+                if sn > spec.max_speed {
+                    nv = [nv[0] * spec.max_speed / sn, nv[1] * spec.max_speed / sn];
+                }
+                body.set_linvel(v2(nv), true);
+            }
+            for (k, handle) in self.obstacles.iter().enumerate() {
+                let m = &mut self.motions[k];
+                if m.is_static() {
+                    continue;
+                }
+                m.advance(h);
+                if let Some(body) = self.phys.bodies.get_mut(*handle) {
+                    body.set_next_kinematic_translation(v2(m.position));
+                }
+            }
+            self.phys.step_with_events(&(), &self.collector);
+            while let Ok(ev) = self.collisions.try_recv() {
+                if let CollisionEvent::Started(c1, c2, _) = ev {
+                    let (Some(a), Some(b)) = (self.owners.get(&c1), self.owners.get(&c2)) else {
+                        continue;
+                    };
+                    let pa = self.owner_position(*a);
+                    let pb = self.owner_position(*b);
+                    let at = match (pa, pb) {
+                        (Some(p), Some(q)) => [(p[0] + q[0]) / 2.0, (p[1] + q[1]) / 2.0],
+                        (Some(p), None) | (None, Some(p)) => p,
+                        (None, None) => [0.0, 0.0],
+                    };
+                    contacts.push(Contact { a: *a, b: *b, at });
+                }
+            }
+        }
+        self.tick += 1;
+        self.refresh_states();
+    }
+
+    fn owner_position(&self, o: Owner) -> Option<[f64; 2]> {
+        let h = match o {
+            Owner::Robot(i) => self.robots[i],
+            Owner::Obstacle(i) => self.obstacles[i],
+            Owner::Wall(_) => return None,
+        };
+        self.phys.bodies.get(h).map(|b| {
+            let t = b.translation();
+            [t.x as f64, t.y as f64]
+        })
+    }
+
+    fn refresh_states(&mut self) {
+        let flags: Vec<u32> = self.states.iter().map(|s| s.flags).collect();
+        self.states.clear();
+        for (i, h) in self.robots.iter().enumerate() {
+            let (p, v) = self
+                .phys
+                .bodies
+                .get(*h)
+                .map(|b| (b.translation(), b.linvel()))
+                .unwrap_or((Vector::ZERO, Vector::ZERO));
+            self.states.push(BodyState {
+                id: i as u32,
+                kind: body_kind::ROBOT,
+                flags: flags.get(i).copied().unwrap_or(0),
+                _pad: 0,
+                position: [p.x as f64, p.y as f64],
+                velocity: [v.x as f64, v.y as f64],
+                radius: self.scenario.robots[i].radius,
+            });
+        }
+        let n = self.robots.len();
+        for (k, m) in self.motions.iter().enumerate() {
+            self.states.push(BodyState {
+                id: (n + k) as u32,
+                kind: body_kind::OBSTACLE,
+                flags: 0,
+                _pad: 0,
+                position: m.position,
+                velocity: m.velocity,
+                radius: self.scenario.obstacles[k].radius,
+            });
+        }
+    }
+}

@@ -1,0 +1,721 @@
+//! The tick loop: join, then each tick publish, collect, step, record.
+//!
+//! Lockstep waits for every live agent's command (or `stall_timeout`, after
+//! which the agent is lost); realtime ticks on the wall clock and counts a
+//! command that is not in by the deadline as a miss, after which the robot
+//! holds its last command or brakes. Agents are identified by the token the
+//! world hands out at join time: a command without the robot's current
+//! token, for another tick, with non-finite values, or a second one in a
+//! tick, is rejected, counted and logged, and never drives a robot.
+
+use crate::metrics::{RobotAccumulator, RobotMetrics, RunMetrics};
+use crate::physics::{Applied, Contact, Owner, World};
+use crate::record::Recorder;
+use mrsim_proto::{
+    CommandMsg, FixedStr, JoinReply, JoinRequest, PROTOCOL_VERSION, SnapshotHeader, command_kind,
+    flags, now_ns,
+};
+use mrsim_scenario::{MissPolicy, Mode};
+use mrsim_transport::{TransportError, WorldTransport};
+use serde_json::json;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+/// How a run is carried out.
+#[derive(Debug, Clone)]
+pub struct RunOptions {
+    /// Folder for the outputs (must exist).
+    pub out_dir: PathBuf,
+    /// The run id, written into metrics.json.
+    pub run_id: String,
+    /// Transport name for metrics.json (`shm` or `inproc`).
+    pub transport: String,
+    /// How long to wait for every agent to join; None = forever.
+    pub start_timeout: Option<Duration>,
+    /// Print progress lines (joins, losses) to stderr.
+    pub verbose: bool,
+}
+
+/// What a finished run returns.
+#[derive(Debug, Clone)]
+pub struct RunOutcome {
+    /// Everything written to metrics.json.
+    pub metrics: RunMetrics,
+}
+
+/// Why a run could not be carried out.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// The transport failed.
+    #[error(transparent)]
+    Transport(#[from] TransportError),
+    /// An output could not be written.
+    #[error("cannot write {what} in {dir}: {source}")]
+    Output {
+        /// Which file.
+        what: &'static str,
+        /// The output folder.
+        dir: String,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// Not every agent joined in time.
+    #[error("agents for {missing} did not join within {secs:.0} s")]
+    StartTimeout {
+        /// Comma-separated robot names.
+        missing: String,
+        /// The timeout.
+        secs: f64,
+    },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Agent {
+    Waiting,
+    Live { pid: u32, token: u64 },
+    Lost { pid: u32, token: u64 },
+}
+
+/// True if process `pid` exists and is not a zombie.
+pub fn pid_alive(pid: u32) -> bool {
+    if pid == 0 {
+        return false;
+    }
+    // SAFETY: kill with signal 0 only checks for existence and permission.
+    let r = unsafe { libc::kill(pid as libc::pid_t, 0) };
+    if r != 0 && std::io::Error::last_os_error().raw_os_error() != Some(libc::EPERM) {
+        return false;
+    }
+    match std::fs::read_to_string(format!("/proc/{pid}/stat")) {
+        Ok(stat) => stat
+            .rsplit_once(") ")
+            .and_then(|(_, rest)| rest.chars().next())
+            .is_none_or(|state| state != 'Z' && state != 'X'),
+        Err(_) => false,
+    }
+}
+
+fn splitmix(mut x: u64) -> u64 {
+    x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    x ^ (x >> 31)
+}
+
+struct Loop<'a> {
+    world: World,
+    link: &'a mut dyn WorldTransport,
+    rec: Recorder,
+    opts: RunOptions,
+    names: Vec<String>,
+    agents: Vec<Agent>,
+    acc: Vec<RobotAccumulator>,
+    got: Vec<Option<CommandMsg>>,
+    garbage: Vec<bool>,
+    collisions_total: u64,
+    agents_lost: u64,
+    rejected: u64,
+    rejected_unknown: u64,
+    late: u64,
+    tick: u64,
+    published_ns: u64,
+    last_pid_check: Instant,
+}
+
+impl Loop<'_> {
+    fn time(&self) -> f64 {
+        self.world.time()
+    }
+
+    fn event(&self, mut v: serde_json::Value) {
+        if let Some(o) = v.as_object_mut() {
+            o.insert("tick".into(), json!(self.tick));
+            o.insert("time".into(), json!(self.time()));
+        }
+        self.rec.event(v);
+    }
+
+    fn log(&self, msg: &str) {
+        if self.opts.verbose {
+            eprintln!("world: {msg}");
+        }
+    }
+
+    fn handle_join(&mut self, req: JoinRequest) -> Result<(), TransportError> {
+        let name = req.robot.as_str().to_string();
+        let refuse = |reason: String| JoinReply {
+            nonce: req.nonce,
+            accepted: 0,
+            robot_id: u32::MAX,
+            token: 0,
+            protocol_version: PROTOCOL_VERSION,
+            _pad: 0,
+            reason: FixedStr::new(&reason),
+        };
+        let idx = self.world.scenario.robot_index(&name);
+        let reply = if req.protocol_version != PROTOCOL_VERSION {
+            refuse(format!(
+                "protocol version {} refused: this world speaks version {PROTOCOL_VERSION}",
+                req.protocol_version
+            ))
+        } else if let Some(i) = idx {
+            match self.agents[i] {
+                Agent::Live { pid, .. } if pid != req.pid && pid_alive(pid) => {
+                    refuse(format!("robot `{name}` is already driven by process {pid}"))
+                }
+                previous => {
+                    let token =
+                        splitmix(now_ns() ^ ((req.pid as u64) << 32) ^ i as u64 ^ req.nonce) | 1;
+                    self.agents[i] = Agent::Live {
+                        pid: req.pid,
+                        token,
+                    };
+                    self.acc[i].agent_pid = Some(req.pid);
+                    let flags = self.world.states()[i].flags & !flags::LOST;
+                    self.world.set_flags(i, flags);
+                    if matches!(previous, Agent::Lost { .. }) {
+                        self.event(
+                            json!({"type": "agent_rejoined", "robot": name, "pid": req.pid}),
+                        );
+                        self.log(&format!("agent for {name} rejoined (pid {})", req.pid));
+                    } else {
+                        self.event(json!({"type": "agent_joined", "robot": name, "pid": req.pid}));
+                    }
+                    JoinReply {
+                        nonce: req.nonce,
+                        accepted: 1,
+                        robot_id: i as u32,
+                        token,
+                        protocol_version: PROTOCOL_VERSION,
+                        _pad: 0,
+                        reason: FixedStr::default(),
+                    }
+                }
+            }
+        } else {
+            let known: Vec<&str> = self
+                .names
+                .iter()
+                .take(self.agents.len())
+                .map(String::as_str)
+                .collect();
+            let list = if known.len() > 12 {
+                format!("{}, ... ({} robots)", known[..12].join(", "), known.len())
+            } else {
+                known.join(", ")
+            };
+            refuse(format!(
+                "no robot named `{name}` in this run (robots: {list})"
+            ))
+        };
+        if reply.accepted == 0 {
+            self.event(
+                json!({"type": "join_refused", "robot": name, "pid": req.pid,
+                              "reason": reply.reason.as_str()}),
+            );
+            self.log(&format!("refused a join: {}", reply.reason.as_str()));
+        }
+        self.link.reply_join(&reply)
+    }
+
+    fn reject(&mut self, cmd: &CommandMsg, reason: &str) {
+        self.rejected += 1;
+        let robot = match self.names.get(cmd.robot_id as usize) {
+            Some(n) if (cmd.robot_id as usize) < self.agents.len() => {
+                self.acc[cmd.robot_id as usize].rejected += 1;
+                n.clone()
+            }
+            _ => {
+                self.rejected_unknown += 1;
+                format!("#{}", cmd.robot_id)
+            }
+        };
+        self.event(
+            json!({"type": "command_rejected", "robot": robot, "reason": reason,
+                          "for_tick": cmd.tick}),
+        );
+    }
+
+    fn handle_command(&mut self, cmd: CommandMsg, received_ns: u64, realtime: bool) {
+        let i = cmd.robot_id as usize;
+        if i >= self.agents.len() {
+            return self.reject(&cmd, "no robot with this id");
+        }
+        let (owner_ok, was_lost, pid) = match self.agents[i] {
+            Agent::Live { token, pid } => (token == cmd.token, false, pid),
+            Agent::Lost { token, pid } => (token == cmd.token, true, pid),
+            Agent::Waiting => (false, false, 0),
+        };
+        if !owner_ok {
+            return self.reject(&cmd, "not sent by the agent that owns this robot");
+        }
+        if cmd.tick > self.tick {
+            return self.reject(&cmd, "command for a future tick");
+        }
+        if cmd.tick < self.tick {
+            if realtime && cmd.tick + 1 == self.tick {
+                // Answered the previous tick after its deadline: already a miss.
+                self.late += 1;
+                self.acc[i].late += 1;
+                return;
+            }
+            return self.reject(&cmd, "command for a past tick");
+        }
+        if self.got[i].is_some() {
+            return self.reject(&cmd, "second command in one tick");
+        }
+        if cmd.kind != command_kind::FORCE && cmd.kind != command_kind::VELOCITY {
+            self.garbage[i] = true;
+            return self.reject(&cmd, "unknown command kind");
+        }
+        if !cmd.value.iter().all(|v| v.is_finite()) {
+            self.garbage[i] = true;
+            return self.reject(&cmd, "non-finite command value (robot brakes)");
+        }
+        if was_lost {
+            self.agents[i] = Agent::Live {
+                pid,
+                token: cmd.token,
+            };
+            let flags = self.world.states()[i].flags & !flags::LOST;
+            self.world.set_flags(i, flags);
+            let name = self.names[i].clone();
+            self.event(json!({"type": "agent_rejoined", "robot": name, "pid": pid}));
+            self.log(&format!("agent for {name} answered again and rejoined"));
+        }
+        let acc = &mut self.acc[i];
+        acc.latency
+            .record_ns(received_ns.saturating_sub(self.published_ns));
+        acc.wake
+            .record_ns(cmd.woke_ns.saturating_sub(self.published_ns));
+        acc.compute.record_ns(cmd.compute_ns);
+        self.got[i] = Some(cmd);
+    }
+
+    fn lose(&mut self, i: usize, reason: String) {
+        if let Agent::Live { pid, token } = self.agents[i] {
+            self.agents[i] = Agent::Lost { pid, token };
+            self.agents_lost += 1;
+            self.acc[i].lost += 1;
+            self.world.set_command(i, Applied::BRAKE);
+            let flags = self.world.states()[i].flags | flags::LOST;
+            self.world.set_flags(i, flags);
+            let name = self.names[i].clone();
+            self.log(&format!("lost the agent for {name}: {reason}"));
+            self.event(json!({"type": "agent_lost", "robot": name, "pid": pid, "reason": reason}));
+        }
+    }
+
+    fn check_pids(&mut self) {
+        if self.last_pid_check.elapsed() < Duration::from_millis(100) {
+            return;
+        }
+        self.last_pid_check = Instant::now();
+        let mut died = false;
+        for i in 0..self.agents.len() {
+            if let Agent::Live { pid, .. } = self.agents[i]
+                && !pid_alive(pid)
+            {
+                self.lose(i, format!("agent process {pid} died"));
+                died = true;
+            }
+        }
+        if died {
+            self.link.cleanup_dead();
+        }
+    }
+
+    fn drain(&mut self, realtime: bool) -> Result<(), TransportError> {
+        let mut joins = Vec::new();
+        self.link.drain_joins(&mut |j| joins.push(j))?;
+        for j in joins {
+            self.handle_join(j)?;
+        }
+        let mut cmds = Vec::new();
+        self.link.drain_commands(&mut |c, t| cmds.push((c, t)))?;
+        for (c, t) in cmds {
+            self.handle_command(c, t, realtime);
+        }
+        Ok(())
+    }
+
+    fn all_answered(&self) -> bool {
+        self.agents
+            .iter()
+            .zip(&self.got)
+            .all(|(a, g)| !matches!(a, Agent::Live { .. }) || g.is_some())
+    }
+
+    fn record_contacts(&mut self, contacts: &[Contact]) {
+        for c in contacts {
+            let robots: Vec<usize> = [c.a, c.b]
+                .iter()
+                .filter_map(|o| {
+                    if let Owner::Robot(i) = o {
+                        Some(*i)
+                    } else {
+                        None
+                    }
+                })
+                .collect();
+            if robots.is_empty() {
+                continue;
+            }
+            self.collisions_total += 1;
+            for &i in &robots {
+                self.acc[i].collisions += 1;
+            }
+            let n = self.agents.len();
+            let name = |o: Owner| match o {
+                Owner::Robot(i) => self.names[i].clone(),
+                Owner::Obstacle(k) => self.names[n + k].clone(),
+                Owner::Wall(w) => format!("wall{w}"),
+            };
+            self.event(json!({"type": "collision", "a": name(c.a), "b": name(c.b),
+                              "x": c.at[0], "y": c.at[1]}));
+        }
+    }
+
+    fn update_metrics(&mut self, prev: &[[f64; 2]]) {
+        let states = self.world.states();
+        let n = self.agents.len();
+        let time = self.time();
+        let walls = self.world.walls();
+        let mut reached = Vec::new();
+        for i in 0..n {
+            let s = &states[i];
+            let spec = &self.world.scenario.robots[i];
+            let acc = &mut self.acc[i];
+            acc.path_length += (s.position[0] - prev[i][0]).hypot(s.position[1] - prev[i][1]);
+            acc.max_speed = acc.max_speed.max(s.velocity[0].hypot(s.velocity[1]));
+            let mut clear = f64::INFINITY;
+            for (j, o) in states.iter().enumerate() {
+                if j != i {
+                    let d = (o.position[0] - s.position[0]).hypot(o.position[1] - s.position[1]);
+                    clear = clear.min(d - o.radius - s.radius);
+                }
+            }
+            for w in walls {
+                clear = clear.min(segment_distance(*w, s.position) - s.radius);
+            }
+            acc.min_clearance = acc.min_clearance.min(clear);
+            // Goal test (Ko & Choi eq 22): within tolerance N ticks running.
+            let d = (spec.goal[0] - s.position[0]).hypot(spec.goal[1] - s.position[1]);
+            if d <= spec.goal_tolerance {
+                if acc.hold == 0 {
+                    acc.hold_start = time;
+                }
+                acc.hold += 1;
+                if !acc.reached_goal && acc.hold >= spec.goal_hold_ticks.max(1) {
+                    acc.reached_goal = true;
+                    acc.time_to_goal = Some(acc.hold_start);
+                    reached.push(i);
+                }
+            } else {
+                acc.hold = 0;
+            }
+        }
+        for i in reached {
+            let flags = self.world.states()[i].flags | flags::AT_GOAL;
+            self.world.set_flags(i, flags);
+            let name = self.names[i].clone();
+            let t = self.acc[i].time_to_goal;
+            self.event(json!({"type": "goal_reached", "robot": name, "time_to_goal": t}));
+        }
+    }
+
+    fn done(&self) -> bool {
+        self.acc
+            .iter()
+            .zip(&self.agents)
+            .all(|(a, g)| a.reached_goal || matches!(g, Agent::Lost { .. }))
+    }
+}
+
+fn segment_distance(w: [[f64; 2]; 2], p: [f64; 2]) -> f64 {
+    let (a, b) = (w[0], w[1]);
+    let ab = [b[0] - a[0], b[1] - a[1]];
+    let len2 = ab[0] * ab[0] + ab[1] * ab[1];
+    let t = if len2 > 0.0 {
+        (((p[0] - a[0]) * ab[0] + (p[1] - a[1]) * ab[1]) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p[0] - a[0] - ab[0] * t).hypot(p[1] - a[1] - ab[1] * t)
+}
+
+/// Runs `world` to the end over `link`, writing the outputs into
+/// `opts.out_dir`.
+pub fn run(
+    world: World,
+    link: &mut dyn WorldTransport,
+    opts: RunOptions,
+) -> Result<RunOutcome, RunError> {
+    let dir = opts.out_dir.clone();
+    let out_err = |what: &'static str| {
+        let dir = dir.display().to_string();
+        move |source: std::io::Error| RunError::Output { what, dir, source }
+    };
+    let scenario = world.scenario.clone();
+    let n = scenario.robots.len();
+    let names: Vec<String> = scenario
+        .robots
+        .iter()
+        .map(|r| r.name.clone())
+        .chain(scenario.obstacles.iter().map(|o| o.name.clone()))
+        .collect();
+    let scenario_json =
+        serde_json::to_vec_pretty(&scenario).map_err(|e| out_err("scenario.json")(e.into()))?;
+    std::fs::write(dir.join("scenario.json"), &scenario_json).map_err(out_err("scenario.json"))?;
+    let setup =
+        serde_json::to_vec(&json!({"run_id": opts.run_id, "out_dir": dir, "scenario": scenario}))
+            .map_err(|e| out_err("setup")(e.into()))?;
+    let rec = Recorder::start(&dir, names.clone()).map_err(out_err("trajectory.csv"))?;
+    link.publish_setup(&setup)?;
+
+    let realtime = scenario.world.mode == Mode::Realtime;
+    let mut lp = Loop {
+        world,
+        link,
+        rec,
+        opts,
+        names,
+        agents: vec![Agent::Waiting; n],
+        acc: (0..n)
+            .map(|_| RobotAccumulator {
+                min_clearance: f64::INFINITY,
+                ..Default::default()
+            })
+            .collect(),
+        got: vec![None; n],
+        garbage: vec![false; n],
+        collisions_total: 0,
+        agents_lost: 0,
+        rejected: 0,
+        rejected_unknown: 0,
+        late: 0,
+        tick: 0,
+        published_ns: 0,
+        last_pid_check: Instant::now(),
+    };
+
+    // Join: every robot's agent must be there before the clock starts.
+    let join_start = Instant::now();
+    let mut interrupted = false;
+    lp.log(&format!(
+        "waiting for {n} agents to join run {}",
+        lp.opts.run_id
+    ));
+    while lp.agents.iter().any(|a| *a == Agent::Waiting) {
+        if lp.link.termination_requested() {
+            interrupted = true;
+            break;
+        }
+        if let Some(t) = lp.opts.start_timeout
+            && join_start.elapsed() > t
+        {
+            let missing: Vec<&str> = lp
+                .agents
+                .iter()
+                .enumerate()
+                .filter(|(_, a)| **a == Agent::Waiting)
+                .map(|(i, _)| lp.names[i].as_str())
+                .collect();
+            // Tell the agents that did join to stop.
+            let header = SnapshotHeader {
+                finished: 1,
+                ..Default::default()
+            };
+            let _ = lp.link.publish_snapshot(&header, &[]);
+            return Err(RunError::StartTimeout {
+                missing: missing.join(", "),
+                secs: t.as_secs_f64(),
+            });
+        }
+        lp.link.wait(Duration::from_millis(50))?;
+        lp.drain(false)?;
+        // Commands before the first tick are from nobody we know yet.
+        lp.got.iter_mut().for_each(|g| *g = None);
+        lp.check_pids();
+    }
+    lp.log("all agents joined; running");
+
+    let dt = scenario.world.dt;
+    let max_ticks = scenario.max_ticks();
+    let deadline_after = Duration::from_secs_f64(dt * scenario.world.deadline);
+    let stall = Duration::from_secs_f64(scenario.world.stall_timeout);
+    let wall_start = Instant::now();
+    let mut contacts = Vec::new();
+    let mut prev: Vec<[f64; 2]> = lp.world.states()[..n].iter().map(|s| s.position).collect();
+    while !interrupted && lp.tick < max_ticks {
+        if lp.link.termination_requested() {
+            interrupted = true;
+            break;
+        }
+        if realtime {
+            let scheduled = wall_start + Duration::from_secs_f64(lp.tick as f64 * dt);
+            while Instant::now() < scheduled {
+                let left = scheduled.saturating_duration_since(Instant::now());
+                lp.link.wait(left.min(Duration::from_millis(20)))?;
+                lp.drain(true)?;
+            }
+        }
+        lp.got.iter_mut().for_each(|g| *g = None);
+        lp.garbage.iter_mut().for_each(|g| *g = false);
+        let pub_instant = Instant::now();
+        lp.published_ns = now_ns();
+        let header = SnapshotHeader {
+            tick: lp.tick,
+            sim_time: lp.time(),
+            published_ns: lp.published_ns,
+            deadline_ns: if realtime {
+                lp.published_ns + deadline_after.as_nanos() as u64
+            } else {
+                0
+            },
+            finished: 0,
+            body_count: lp.world.states().len() as u32,
+        };
+        lp.link.publish_snapshot(&header, lp.world.states())?;
+        lp.rec.tick(lp.tick, lp.time(), lp.world.states());
+
+        // Collect this tick's commands.
+        loop {
+            lp.drain(realtime)?;
+            lp.check_pids();
+            if lp.all_answered() || lp.link.termination_requested() {
+                break;
+            }
+            let waited = pub_instant.elapsed();
+            let limit = if realtime { deadline_after } else { stall };
+            if waited >= limit {
+                if !realtime {
+                    for i in 0..n {
+                        if matches!(lp.agents[i], Agent::Live { .. }) && lp.got[i].is_none() {
+                            lp.lose(
+                                i,
+                                format!(
+                                    "no command for {:.1} s (stall_timeout)",
+                                    stall.as_secs_f64()
+                                ),
+                            );
+                        }
+                    }
+                }
+                break;
+            }
+            lp.link
+                .wait((limit - waited).min(Duration::from_millis(20)))?;
+        }
+
+        // Apply: a valid command, or the policy for a miss, or brake.
+        for i in 0..n {
+            match (lp.agents[i], lp.got[i]) {
+                (Agent::Live { .. }, Some(c)) => {
+                    let applied = if c.kind == command_kind::VELOCITY {
+                        Applied::Velocity(c.value)
+                    } else {
+                        Applied::Force(c.value)
+                    };
+                    lp.world.set_command(i, applied);
+                }
+                (Agent::Live { .. }, None) if lp.garbage[i] => {
+                    lp.world.set_command(i, Applied::BRAKE)
+                }
+                (Agent::Live { .. }, None) => {
+                    lp.acc[i].deadline_misses += 1;
+                    let name = lp.names[i].clone();
+                    lp.event(json!({"type": "deadline_miss", "robot": name}));
+                    if scenario.world.on_deadline_miss == MissPolicy::Brake || lp.garbage[i] {
+                        lp.world.set_command(i, Applied::BRAKE);
+                    }
+                }
+                _ => lp.world.set_command(i, Applied::BRAKE),
+            }
+        }
+
+        lp.world.step(&mut contacts);
+        lp.tick += 1;
+        lp.record_contacts(&contacts);
+        lp.update_metrics(&prev);
+        for (p, s) in prev.iter_mut().zip(lp.world.states()) {
+            *p = s.position;
+        }
+        if lp.done() {
+            break;
+        }
+    }
+    lp.rec.tick(lp.tick, lp.time(), lp.world.states());
+    let wall = wall_start.elapsed().as_secs_f64();
+
+    // Tell every agent the run is over (twice, in case one is mid-read).
+    let header = SnapshotHeader {
+        tick: lp.tick,
+        sim_time: lp.time(),
+        published_ns: now_ns(),
+        deadline_ns: 0,
+        finished: 1,
+        body_count: lp.world.states().len() as u32,
+    };
+    lp.link.publish_snapshot(&header, lp.world.states())?;
+    lp.link.publish_snapshot(&header, lp.world.states())?;
+    if interrupted {
+        lp.event(json!({"type": "interrupted"}));
+    }
+
+    let robots = scenario
+        .robots
+        .iter()
+        .zip(&lp.acc)
+        .map(|(spec, a)| {
+            (
+                spec.name.clone(),
+                RobotMetrics {
+                    planner: spec.planner.clone(),
+                    reached_goal: a.reached_goal,
+                    time_to_goal: a.time_to_goal,
+                    path_length: a.path_length,
+                    collisions: a.collisions,
+                    min_clearance: a.min_clearance.is_finite().then_some(a.min_clearance),
+                    max_speed: a.max_speed,
+                    deadline_misses: a.deadline_misses,
+                    latency_us: a.latency.percentiles(),
+                    wake_us: a.wake.percentiles(),
+                    compute_us: a.compute.percentiles(),
+                    agent_pid: a.agent_pid,
+                    lost: a.lost,
+                    commands_rejected: a.rejected,
+                    commands_late: a.late,
+                },
+            )
+        })
+        .collect();
+    let reached = lp.acc.iter().filter(|a| a.reached_goal).count();
+    let metrics = RunMetrics {
+        scenario: scenario.name.clone(),
+        robots,
+        collisions_total: lp.collisions_total,
+        success_rate: if n > 0 {
+            reached as f64 / n as f64
+        } else {
+            0.0
+        },
+        ticks: lp.tick,
+        sim_time: lp.time(),
+        mode: scenario.world.mode.to_string(),
+        realtime_factor: if wall > 0.0 { lp.time() / wall } else { 0.0 },
+        agents_lost: lp.agents_lost,
+        commands_rejected: lp.rejected,
+        commands_late: lp.late,
+        commands_rejected_unknown: lp.rejected_unknown,
+        world_pid: std::process::id(),
+        run_id: lp.opts.run_id.clone(),
+        transport: lp.opts.transport.clone(),
+        interrupted,
+    };
+    lp.rec.finish().map_err(out_err("trajectory.csv"))?;
+    let text =
+        serde_json::to_string_pretty(&metrics).map_err(|e| out_err("metrics.json")(e.into()))?;
+    std::fs::write(dir.join("metrics.json"), text).map_err(out_err("metrics.json"))?;
+    Ok(RunOutcome { metrics })
+}
