@@ -47,6 +47,8 @@ pub(crate) struct Plan {
 }
 
 const WHAT: &str = "generate";
+/// Most robots `[generate]` makes (a sanity bound, far above 64 agents on 2 cores).
+const MAX_COUNT: usize = 10_000;
 
 /// Checks `[generate]` and names its robots.
 pub(crate) fn plan(g: &S<RawGenerate>, world: &WorldConfig) -> Result<Plan, Fail> {
@@ -75,11 +77,11 @@ pub(crate) fn plan(g: &S<RawGenerate>, world: &WorldConfig) -> Result<Plan, Fail
         return Err(Fail::new(Some(g.span()), WHAT, "missing `count`"));
     };
     let n = *count.get_ref() as usize;
-    if n == 0 {
+    if n == 0 || n > MAX_COUNT {
         return Err(Fail::new(
             Some(count.span()),
             WHAT,
-            "count must be >= 1, got 0",
+            format!("count must be in 1..={MAX_COUNT}, got {n}"),
         ));
     }
     let radius = raw
@@ -245,7 +247,7 @@ fn random(
     let gap = 2.0 * r * 1.1;
     let mut rng = Rng(world.seed);
     let mut draw = |taken: &[P], fixed: &[(P, f64)]| -> Option<P> {
-        for _ in 0..10_000 {
+        for _ in 0..2_000 {
             let p = [
                 lo[0] + rng.unit() * (hi[0] - lo[0]),
                 lo[1] + rng.unit() * (hi[1] - lo[1]),

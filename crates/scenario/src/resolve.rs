@@ -883,10 +883,9 @@ fn check_scene(
 
     for (i, (r, sp)) in s.robots.iter().zip(robot_spans).enumerate() {
         let what = format!("robot `{}`", r.name);
-        for (q, other) in s.robots[..i].iter().enumerate() {
+        for other in &s.robots[..i] {
             let d = dist(r.start, other.start);
             if d < r.radius + other.radius {
-                let _ = q;
                 return Err(Fail::new(
                     sp.start.clone(),
                     what,
