@@ -1,0 +1,296 @@
+//! `[generate]`: many robots at once.
+//!
+//! - `circle`: `count` robots evenly on a circle of `radius` around `center`,
+//!   robot k at angle 2πk/count, each going to the antipodal point.
+//! - `crossing`: two streams crossing at `center` at right angles. The first
+//!   ceil(count/2) robots queue along -x and go +x; the others queue along -y
+//!   and go +y. The stream's head starts `radius` before the centre and every
+//!   robot ends as far past it as it started before it (the queue, mirrored).
+//! - `corridor`: two groups on the line y = center.y entering from opposite
+//!   ends and swapping: the first ceil(count/2) queue left of
+//!   `center.x - radius` and go right, the others queue right of
+//!   `center.x + radius` and go left, each to the place the other group's
+//!   queue held. The walls are the file's `[[wall]]`s.
+//! - `random`: starts and goals drawn uniformly inside the world's arena if
+//!   there is one, else in the square of side 2·radius around `center`; no
+//!   two starts (and no two goals) closer than two robot radii plus a 10 %
+//!   margin, no start on a file robot or obstacle. Seeded by `world.seed`
+//!   (SplitMix64), so the same file gives the same robots.
+//!
+//! Queue spacing (crossing, corridor) is 3 robot radii centre to centre
+//! (one radius of gap), or radius/count for point robots.
+//! Names are `name_prefix` (default `g`) and the index, zero-padded to at
+//! least two digits (`g00`, `g01`, ..., `g100` for 101 robots).
+
+use crate::error::Fail;
+use crate::raw::{P, RawGenerate, S};
+use crate::resolve::{Rule, check, point};
+use crate::types::{Arena, ObstacleSpec, RobotSpec, WorldConfig};
+use std::f64::consts::PI;
+
+/// The kind of generation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Kind {
+    Circle,
+    Crossing,
+    Corridor,
+    Random,
+}
+
+/// What `[generate]` asks for, checked.
+#[derive(Debug, Clone)]
+pub(crate) struct Plan {
+    pub kind: Kind,
+    pub names: Vec<String>,
+    pub radius: Option<f64>,
+    pub center: P,
+}
+
+const WHAT: &str = "generate";
+/// Most robots `[generate]` makes (a sanity bound, far above 64 agents on 2 cores).
+const MAX_COUNT: usize = 10_000;
+
+/// Checks `[generate]` and names its robots.
+pub(crate) fn plan(g: &S<RawGenerate>, world: &WorldConfig) -> Result<Plan, Fail> {
+    let raw = g.get_ref();
+    let Some(kind) = &raw.kind else {
+        return Err(Fail::new(
+            Some(g.span()),
+            WHAT,
+            "missing `kind`: circle | crossing | corridor | random",
+        ));
+    };
+    let k = match kind.get_ref().as_str() {
+        "circle" => Kind::Circle,
+        "crossing" => Kind::Crossing,
+        "corridor" => Kind::Corridor,
+        "random" => Kind::Random,
+        other => {
+            return Err(Fail::new(
+                Some(kind.span()),
+                WHAT,
+                format!("unknown kind `{other}`; expected circle | crossing | corridor | random"),
+            ));
+        }
+    };
+    let Some(count) = &raw.count else {
+        return Err(Fail::new(Some(g.span()), WHAT, "missing `count`"));
+    };
+    let n = *count.get_ref() as usize;
+    if n == 0 || n > MAX_COUNT {
+        return Err(Fail::new(
+            Some(count.span()),
+            WHAT,
+            format!("count must be in 1..={MAX_COUNT}, got {n}"),
+        ));
+    }
+    let radius = raw
+        .radius
+        .as_ref()
+        .map(|r| check(r, "radius", Rule::Pos, WHAT))
+        .transpose()?;
+    if radius.is_none() && !(k == Kind::Random && world.arena.is_some()) {
+        let why = if k == Kind::Random {
+            "kind `random` needs `radius` (or an arena in [world])"
+        } else {
+            "missing `radius`"
+        };
+        return Err(Fail::new(Some(g.span()), WHAT, why));
+    }
+    if let Some(r) = &raw.robot_radius {
+        check(r, "robot_radius", Rule::NonNeg, WHAT)?;
+    }
+    let center = raw
+        .center
+        .as_ref()
+        .map(|c| point(c, "center", WHAT))
+        .transpose()?
+        .unwrap_or([0.0, 0.0]);
+    let prefix = match &raw.name_prefix {
+        Some(p) if p.get_ref().trim().is_empty() => {
+            return Err(Fail::new(
+                Some(p.span()),
+                WHAT,
+                "name_prefix must not be empty",
+            ));
+        }
+        Some(p) => p.get_ref().clone(),
+        None => "g".to_string(),
+    };
+    let digits = (n - 1).to_string().len().max(2);
+    let names = (0..n).map(|i| format!("{prefix}{i:0digits$}")).collect();
+    Ok(Plan {
+        kind: k,
+        names,
+        radius,
+        center,
+    })
+}
+
+/// Starts and goals of the generated robots, in name order.
+pub(crate) fn place(
+    plan: &Plan,
+    g: &S<RawGenerate>,
+    world: &WorldConfig,
+    robot_radius: f64,
+    robots: &[RobotSpec],
+    obstacles: &[ObstacleSpec],
+) -> Result<Vec<(P, P)>, Fail> {
+    let n = plan.names.len();
+    let [cx, cy] = plan.center;
+    let big_r = plan.radius.unwrap_or(1.0);
+    let na = n.div_ceil(2);
+    let nb = n - na;
+    let spacing = |group: usize| {
+        if robot_radius > 0.0 {
+            3.0 * robot_radius
+        } else {
+            big_r / group.max(1) as f64
+        }
+    };
+    Ok(match plan.kind {
+        Kind::Circle => (0..n)
+            .map(|k| {
+                let a = 2.0 * PI * k as f64 / n as f64;
+                let (s, c) = a.sin_cos();
+                (
+                    [cx + big_r * c, cy + big_r * s],
+                    [cx - big_r * c, cy - big_r * s],
+                )
+            })
+            .collect(),
+        Kind::Crossing => {
+            let sa = spacing(na);
+            let sb = spacing(nb);
+            let mut out = Vec::with_capacity(n);
+            for k in 0..na {
+                let back = big_r + k as f64 * sa;
+                let ahead = big_r + (na - 1 - k) as f64 * sa;
+                out.push(([cx - back, cy], [cx + ahead, cy]));
+            }
+            for k in 0..nb {
+                let back = big_r + k as f64 * sb;
+                let ahead = big_r + (nb - 1 - k) as f64 * sb;
+                out.push(([cx, cy - back], [cx, cy + ahead]));
+            }
+            out
+        }
+        Kind::Corridor => {
+            let s = spacing(na);
+            let mut out = Vec::with_capacity(n);
+            for k in 0..na {
+                let back = big_r + k as f64 * s;
+                let ahead = big_r + (na - 1 - k) as f64 * s;
+                out.push(([cx - back, cy], [cx + ahead, cy]));
+            }
+            for k in 0..nb {
+                let back = big_r + k as f64 * s;
+                let ahead = big_r + (nb - 1 - k) as f64 * s;
+                out.push(([cx + back, cy], [cx - ahead, cy]));
+            }
+            out
+        }
+        Kind::Random => random(plan, g, world, robot_radius, robots, obstacles)?,
+    })
+}
+
+/// SplitMix64: small, seeded, good enough to scatter robots.
+struct Rng(u64);
+
+impl Rng {
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    /// Uniform in [0, 1).
+    fn unit(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+fn random(
+    plan: &Plan,
+    g: &S<RawGenerate>,
+    world: &WorldConfig,
+    r: f64,
+    robots: &[RobotSpec],
+    obstacles: &[ObstacleSpec],
+) -> Result<Vec<(P, P)>, Fail> {
+    let area = match (world.arena, plan.radius) {
+        (Some(a), _) => a,
+        (None, Some(big_r)) => Arena {
+            min: [plan.center[0] - big_r, plan.center[1] - big_r],
+            max: [plan.center[0] + big_r, plan.center[1] + big_r],
+        },
+        (None, None) => {
+            return Err(Fail::new(
+                Some(g.span()),
+                WHAT,
+                "kind `random` needs `radius` or an arena",
+            ));
+        }
+    };
+    let (lo, hi) = (
+        [area.min[0] + r, area.min[1] + r],
+        [area.max[0] - r, area.max[1] - r],
+    );
+    if lo[0] > hi[0] || lo[1] > hi[1] {
+        return Err(Fail::new(
+            Some(g.span()),
+            WHAT,
+            format!("robots of radius {r} do not fit in the area"),
+        ));
+    }
+    let gap = 2.0 * r * 1.1;
+    let mut rng = Rng(world.seed);
+    let mut draw = |taken: &[P], fixed: &[(P, f64)]| -> Option<P> {
+        for _ in 0..2_000 {
+            let p = [
+                lo[0] + rng.unit() * (hi[0] - lo[0]),
+                lo[1] + rng.unit() * (hi[1] - lo[1]),
+            ];
+            let free = taken
+                .iter()
+                .all(|q| (p[0] - q[0]).hypot(p[1] - q[1]) >= gap)
+                && fixed
+                    .iter()
+                    .all(|(q, rq)| (p[0] - q[0]).hypot(p[1] - q[1]) >= (r + rq) * 1.1);
+            if free {
+                return Some(p);
+            }
+        }
+        None
+    };
+    let fixed: Vec<(P, f64)> = robots
+        .iter()
+        .map(|x| (x.start, x.radius))
+        .chain(obstacles.iter().map(|o| (o.start, o.radius)))
+        .collect();
+    let fixed_goals: Vec<(P, f64)> = robots.iter().map(|x| (x.goal, x.radius)).collect();
+    let mut starts = Vec::new();
+    let mut goals = Vec::new();
+    let full = || {
+        Fail::new(
+            Some(g.span()),
+            WHAT,
+            format!(
+                "could not place {} robots of radius {r} without overlap in [{}, {}]..[{}, {}]",
+                plan.names.len(),
+                area.min[0],
+                area.min[1],
+                area.max[0],
+                area.max[1]
+            ),
+        )
+    };
+    for _ in 0..plan.names.len() {
+        let s = draw(&starts, &fixed).ok_or_else(full)?;
+        starts.push(s);
+        let q = draw(&goals, &fixed_goals).ok_or_else(full)?;
+        goals.push(q);
+    }
+    Ok(starts.into_iter().zip(goals).collect())
+}

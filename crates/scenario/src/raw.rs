@@ -1,0 +1,147 @@
+//! The scenario file as written: every key optional and spanned, unknown
+//! keys refused. `resolve` turns it into the types of `types.rs`.
+
+use crate::types::{LengthUnit, MissPolicy, Mode, ParamValue, VelocitySource};
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use toml::Spanned;
+
+/// A value with the byte range it came from.
+pub(crate) type S<T> = Spanned<T>;
+/// A point.
+pub(crate) type P = [f64; 2];
+
+/// A point as written: exactly two numbers (serde's `[f64; 2]` would
+/// silently drop a third one).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Pt(pub P);
+
+impl<'de> Deserialize<'de> for Pt {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = Vec::<f64>::deserialize(d)?;
+        match v.as_slice() {
+            [x, y] => Ok(Pt([*x, *y])),
+            _ => Err(serde::de::Error::invalid_length(v.len(), &"a point [x, y]")),
+        }
+    }
+}
+/// A `params` table.
+pub(crate) type RawParams = BTreeMap<String, S<ParamValue>>;
+
+/// The whole file.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub(crate) struct RawDoc {
+    pub name: Option<S<String>>,
+    pub description: Option<S<String>>,
+    pub length_unit: Option<S<LengthUnit>>,
+    pub world: Option<S<RawWorld>>,
+    pub defaults: Option<S<RawRobot>>,
+    pub robot: Vec<S<RawRobot>>,
+    pub obstacle: Vec<S<RawObstacle>>,
+    pub wall: Vec<S<RawWall>>,
+    pub generate: Option<S<RawGenerate>>,
+}
+
+/// `[world]`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub(crate) struct RawWorld {
+    pub dt: Option<S<f64>>,
+    pub substeps: Option<S<u32>>,
+    pub duration: Option<S<f64>>,
+    pub mode: Option<S<Mode>>,
+    pub on_deadline_miss: Option<S<MissPolicy>>,
+    pub seed: Option<S<u64>>,
+    pub arena: Option<S<RawArena>>,
+    pub deadline: Option<S<f64>>,
+    pub stall_timeout: Option<S<f64>>,
+}
+
+/// `arena = { min, max }`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawArena {
+    pub min: S<Pt>,
+    pub max: S<Pt>,
+}
+
+/// One `[[robot]]`, and also `[defaults]` (without name, start, goal).
+#[derive(Debug, Default, Clone, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub(crate) struct RawRobot {
+    pub name: Option<S<String>>,
+    pub start: Option<S<Pt>>,
+    pub goal: Option<S<Pt>>,
+    pub planner: Option<S<String>>,
+    pub params: Option<S<RawParams>>,
+    pub radius: Option<S<f64>>,
+    pub mass: Option<S<f64>>,
+    pub damping: Option<S<f64>>,
+    pub max_speed: Option<S<f64>>,
+    pub max_accel: Option<S<f64>>,
+    pub velocity_lag: Option<S<f64>>,
+    pub sensing_range: Option<S<f64>>,
+    pub field_of_view_deg: Option<S<f64>>,
+    pub goal_tolerance: Option<S<f64>>,
+    pub goal_hold_ticks: Option<S<u32>>,
+    pub velocity_source: Option<S<VelocitySource>>,
+    pub position_noise: Option<S<f64>>,
+    pub path: Option<S<Vec<Pt>>>,
+    pub boundary: Option<S<f64>>,
+}
+
+/// One `[[obstacle]]`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub(crate) struct RawObstacle {
+    pub name: Option<S<String>>,
+    pub start: Option<S<Pt>>,
+    pub radius: Option<S<f64>>,
+    pub motion: Option<S<RawMotion>>,
+}
+
+/// `motion = { model = ..., ... }`: the union of every model's keys; which
+/// apply is checked per model.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub(crate) struct RawMotion {
+    pub model: Option<S<String>>,
+    pub velocity: Option<S<Pt>>,
+    pub points: Option<S<Vec<Pt>>>,
+    pub speed: Option<S<f64>>,
+    #[serde(rename = "loop")]
+    pub looped: Option<S<bool>>,
+    pub distribution: Option<S<String>>,
+    pub accel_sigma: Option<S<f64>>,
+    pub alpha1: Option<S<f64>>,
+    pub beta1: Option<S<f64>>,
+    pub max_speed: Option<S<f64>>,
+    pub behavior: Option<S<String>>,
+    pub target: Option<S<String>>,
+    pub goal: Option<S<Pt>>,
+    pub max_accel: Option<S<f64>>,
+    pub alpha2: Option<S<f64>>,
+    pub beta2: Option<S<f64>>,
+}
+
+/// One `[[wall]]`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub(crate) struct RawWall {
+    pub segment: Option<S<Vec<Pt>>>,
+}
+
+/// `[generate]`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub(crate) struct RawGenerate {
+    pub kind: Option<S<String>>,
+    pub count: Option<S<u32>>,
+    pub radius: Option<S<f64>>,
+    pub center: Option<S<Pt>>,
+    pub planner: Option<S<String>>,
+    pub params: Option<S<RawParams>>,
+    pub robot_radius: Option<S<f64>>,
+    pub name_prefix: Option<S<String>>,
+}
