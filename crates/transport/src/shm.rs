@@ -21,6 +21,7 @@ use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
+use iceoryx2::port::update_connections::UpdateConnections;
 use iceoryx2::prelude::*;
 use mrsim_proto::{BodyState, CommandMsg, JoinReply, JoinRequest, SnapshotHeader, events, now_ns};
 use std::os::unix::fs::PermissionsExt;
@@ -70,6 +71,17 @@ fn node(cfg: &Config, name: &str) -> Result<Node<S>, TransportError> {
         .config(cfg)
         .create::<S>()
         .map_err(|e| setup_err(format!("node {name}"), e))
+}
+
+/// Waits for events on `listener`; a signal interrupting the wait (EINTR)
+/// is a spurious wake-up, not an error: callers check termination and the
+/// clock themselves.
+fn wait_on(listener: &Listener<S>, timeout: Duration) -> Result<(), TransportError> {
+    use iceoryx2::port::listener::ListenerWaitError;
+    match listener.timed_wait(|_| {}, timeout) {
+        Ok(_) | Err(ListenerWaitError::InterruptSignal) => Ok(()),
+        Err(e) => Err(TransportError::Wait(format!("{e:?}"))),
+    }
 }
 
 fn terminated(node: &Node<S>) -> bool {
@@ -267,10 +279,7 @@ impl WorldTransport for ShmWorld {
     }
 
     fn wait(&mut self, timeout: Duration) -> Result<(), TransportError> {
-        self.wake
-            .timed_wait(|_| {}, timeout)
-            .map(|_| ())
-            .map_err(|e| TransportError::Wait(format!("{e:?}")))
+        wait_on(&self.wake, timeout)
     }
 
     fn drain_commands(&mut self, f: &mut dyn FnMut(CommandMsg, u64)) -> Result<(), TransportError> {
@@ -289,9 +298,19 @@ impl WorldTransport for ShmWorld {
     }
 
     fn drain_joins(&mut self, f: &mut dyn FnMut(JoinRequest)) -> Result<(), TransportError> {
+        let mut any = false;
         loop {
             match self.join_sub.receive() {
-                Ok(Some(sample)) => f(*sample.payload()),
+                Ok(Some(sample)) => {
+                    if !any {
+                        // iceoryx2 hands the setup's history to a new
+                        // subscriber only when the publisher updates its
+                        // connections: do it before answering the joins.
+                        any = true;
+                        let _ = self.setup_pub.update_connections();
+                    }
+                    f(*sample.payload())
+                }
                 Ok(None) => return Ok(()),
                 Err(e) => {
                     return Err(TransportError::Receive {
@@ -507,10 +526,7 @@ impl AgentTransport for ShmAgent {
     }
 
     fn wait(&mut self, timeout: Duration) -> Result<(), TransportError> {
-        self.tick
-            .timed_wait(|_| {}, timeout)
-            .map(|_| ())
-            .map_err(|e| TransportError::Wait(format!("{e:?}")))
+        wait_on(&self.tick, timeout)
     }
 
     fn latest_snapshot(

@@ -1,0 +1,160 @@
+//! Command-line interface.
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use std::path::PathBuf;
+
+/// Exit status for a refused scenario or command line.
+pub const EXIT_INVALID: i32 = 2;
+/// Exit status for a run that failed.
+pub const EXIT_FAILED: i32 = 1;
+
+/// mrsim: many robots, one world, one agent process per robot.
+#[derive(Debug, Parser)]
+#[command(name = "mrsim", version, about, long_about = None)]
+pub struct Cli {
+    /// What to do (default: run the built-in demo).
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+/// Time mode override.
+#[derive(Debug, Clone, Copy, ValueEnum, PartialEq, Eq)]
+pub enum ModeArg {
+    /// Wait for every agent each tick (deterministic).
+    Lockstep,
+    /// Tick on the wall clock; late commands are deadline misses.
+    Realtime,
+}
+
+/// Options shared by `run` and `world`: which scenario and how.
+#[derive(Debug, Clone, Args)]
+pub struct ScenarioArgs {
+    /// Scenario file (TOML). Without one, the built-in demo.
+    pub scenario: Option<PathBuf>,
+    /// Override the scenario's time mode.
+    #[arg(long, value_enum)]
+    pub mode: Option<ModeArg>,
+    /// Override a scenario value: KEY=VALUE, KEY a dotted path
+    /// (world.dt, robot.r0.max_speed, robot.*.params.alpha, planner).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Output folder (default: a fresh folder under runs/).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Run a scenario: start the world and one agent process per robot,
+    /// wait for the end, write the outputs, print a summary.
+    Run {
+        /// Scenario and overrides.
+        #[command(flatten)]
+        scenario: ScenarioArgs,
+        /// Run id (iceoryx2 namespace); default: a fresh one.
+        #[arg(long)]
+        run: Option<String>,
+        /// Print only the output folder, not the table.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Start a world by hand; agents join with `mrsim agent --robot NAME --run ID`.
+    World {
+        /// Scenario and overrides.
+        #[command(flatten)]
+        scenario: ScenarioArgs,
+        /// Run id agents use to find this world.
+        #[arg(long, default_value = "default")]
+        run: String,
+        /// Give up if not every agent has joined after this many seconds
+        /// (default: wait forever).
+        #[arg(long)]
+        start_timeout: Option<f64>,
+        /// Started by `mrsim run`: the launcher cleans up and prints.
+        #[arg(long, hide = true)]
+        launched: bool,
+    },
+    /// Drive one robot of a running world.
+    Agent {
+        /// The robot's name in the scenario.
+        #[arg(long)]
+        robot: String,
+        /// The run id of the world.
+        #[arg(long, default_value = "default")]
+        run: String,
+        /// Seconds to wait for the world.
+        #[arg(long, default_value_t = 30.0)]
+        timeout: f64,
+        /// Fault injection for tests: put this robot id in every command.
+        #[arg(long, hide = true)]
+        impersonate: Option<u32>,
+    },
+    /// List the planners.
+    Planners,
+    /// Check a scenario file without running it.
+    Check {
+        /// Scenario and overrides.
+        #[command(flatten)]
+        scenario: ScenarioArgs,
+    },
+}
+
+/// Runs the parsed command line; returns the process exit status.
+pub fn main(cli: Cli) -> i32 {
+    let command = cli.command.unwrap_or(Command::Run {
+        scenario: ScenarioArgs {
+            scenario: None,
+            mode: None,
+            set: Vec::new(),
+            out: None,
+        },
+        run: None,
+        quiet: false,
+    });
+    let result = match command {
+        Command::Run {
+            scenario,
+            run,
+            quiet,
+        } => crate::launch::run(&scenario, run, quiet),
+        Command::World {
+            scenario,
+            run,
+            start_timeout,
+            launched,
+        } => crate::launch::world(&scenario, &run, start_timeout, launched),
+        Command::Agent {
+            robot,
+            run,
+            timeout,
+            impersonate,
+        } => crate::launch::agent(&robot, &run, timeout, impersonate),
+        Command::Planners => {
+            for p in mrsim_planners::PLANNERS {
+                println!("{:<20} {}", p.name, p.summary);
+            }
+            Ok(0)
+        }
+        Command::Check { scenario } => crate::launch::load(&scenario).map(|l| {
+            println!(
+                "{}: ok ({} robots, {} obstacles)",
+                l.origin(),
+                l.scenario.robots.len(),
+                l.scenario.obstacles.len()
+            );
+            0
+        }),
+    };
+    match result {
+        Ok(code) => code,
+        Err(e) => {
+            if let Some(invalid) = e.downcast_ref::<crate::launch::Invalid>() {
+                eprintln!("error: {invalid}");
+                return EXIT_INVALID;
+            }
+            eprintln!("error: {e:#}");
+            EXIT_FAILED
+        }
+    }
+}

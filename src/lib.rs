@@ -1,0 +1,13 @@
+//! The `mrsim` launcher: `run` (a whole run: world process, one agent
+//! process per robot, outputs, summary), `world` and `agent` (the parts by
+//! hand), `planners` (what is available).
+//!
+//! The binary is thin: it parses the command line and calls [`cli::main`];
+//! everything else lives in libraries (`mrsim-world`, `mrsim-agents`,
+//! `mrsim-transport`, `mrsim-scenario`, `mrsim-planners`), so each part can
+//! be tested without processes.
+#![warn(missing_docs)]
+
+pub mod cli;
+pub mod launch;
+pub mod table;

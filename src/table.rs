@@ -1,0 +1,106 @@
+//! The summary table printed after a run, from metrics.json.
+
+use serde_json::Value;
+use std::fmt::Write;
+
+fn num(v: &Value, digits: usize) -> String {
+    v.as_f64()
+        .map(|x| format!("{x:.digits$}"))
+        .unwrap_or_else(|| "-".to_string())
+}
+
+/// One row per robot (planner, reached goal, time to goal, path length,
+/// collisions, min clearance, latency p99, deadline misses), then the run's
+/// totals.
+pub fn summary(m: &Value) -> String {
+    let mut out = String::new();
+    let header = [
+        "robot",
+        "planner",
+        "goal",
+        "t_goal s",
+        "path",
+        "coll",
+        "min clr",
+        "lat p99 us",
+        "misses",
+    ];
+    let mut rows: Vec<[String; 9]> = Vec::new();
+    if let Some(robots) = m["robots"].as_object() {
+        for (name, r) in robots {
+            rows.push([
+                name.clone(),
+                r["planner"].as_str().unwrap_or("-").to_string(),
+                if r["reached_goal"].as_bool() == Some(true) {
+                    "yes"
+                } else {
+                    "NO"
+                }
+                .to_string(),
+                num(&r["time_to_goal"], 2),
+                num(&r["path_length"], 2),
+                r["collisions"].as_u64().unwrap_or(0).to_string(),
+                num(&r["min_clearance"], 3),
+                num(&r["latency_us"]["p99"], 0),
+                r["deadline_misses"].as_u64().unwrap_or(0).to_string(),
+            ]);
+        }
+    }
+    let mut width = header.map(str::len);
+    for r in &rows {
+        for (w, c) in width.iter_mut().zip(r) {
+            *w = (*w).max(c.len());
+        }
+    }
+    let line = |cells: &[String]| {
+        let mut s = String::new();
+        for (i, (c, w)) in cells.iter().zip(width).enumerate() {
+            if i < 3 {
+                let _ = write!(s, "{c:<w$}  ");
+            } else {
+                let _ = write!(s, "{c:>w$}  ");
+            }
+        }
+        s.trim_end().to_string()
+    };
+    let _ = writeln!(out, "{}", line(&header.map(String::from)));
+    for r in &rows {
+        let _ = writeln!(out, "{}", line(r));
+    }
+    let _ = writeln!(
+        out,
+        "{} robots, success {:.0}%, collisions {}, {} ticks ({} s simulated, {} mode, {:.1}x real time), agents lost {}, commands rejected {}",
+        rows.len(),
+        m["success_rate"].as_f64().unwrap_or(0.0) * 100.0,
+        m["collisions_total"].as_u64().unwrap_or(0),
+        m["ticks"].as_u64().unwrap_or(0),
+        num(&m["sim_time"], 1),
+        m["mode"].as_str().unwrap_or("-"),
+        m["realtime_factor"].as_f64().unwrap_or(0.0),
+        m["agents_lost"].as_u64().unwrap_or(0),
+        m["commands_rejected"].as_u64().unwrap_or(0),
+    );
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn table_has_a_row_per_robot_and_a_totals_line() {
+        let m = serde_json::json!({
+            "robots": {"a": {"planner": "homing", "reached_goal": true, "time_to_goal": 1.5,
+                             "path_length": 3.0, "collisions": 0, "min_clearance": 0.5,
+                             "latency_us": {"p99": 42.0}, "deadline_misses": 0},
+                       "b": {"planner": "chung-1", "reached_goal": false}},
+            "success_rate": 0.5, "collisions_total": 0, "ticks": 10, "sim_time": 1.0,
+            "mode": "lockstep", "realtime_factor": 3.0, "agents_lost": 0, "commands_rejected": 0});
+        let t = summary(&m);
+        assert_eq!(t.lines().count(), 4, "{t}");
+        assert!(
+            t.contains("homing") && t.contains("NO") && t.contains("success 50%"),
+            "{t}"
+        );
+    }
+}
