@@ -6,7 +6,9 @@ use mrsim_scenario::{Mode, Scenario, demo, load};
 use std::path::Path;
 
 fn shipped(name: &str) -> mrsim_scenario::Loaded {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios").join(name);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenarios")
+        .join(name);
     match load(&path) {
         Ok(l) => l,
         Err(e) => panic!("{e}"),
@@ -31,7 +33,11 @@ fn the_demo_is_eight_robots_swapping_across_a_circle_in_realtime() {
     assert_eq!(s.world.dt, 0.05);
     assert!(!s.description.trim().is_empty());
     for r in &s.robots {
-        assert!((r.start[0].hypot(r.start[1]) - 4.0).abs() < 1e-5, "{}", r.name);
+        assert!(
+            (r.start[0].hypot(r.start[1]) - 4.0).abs() < 1e-5,
+            "{}",
+            r.name
+        );
         assert!((r.start[0] + r.goal[0]).abs() < 1e-9 && (r.start[1] + r.goal[1]).abs() < 1e-9);
         assert_eq!(r.radius, 0.2);
         assert_eq!(r.max_speed, 1.0);
@@ -45,8 +51,16 @@ fn crossing_is_two_streams_of_four_at_right_angles_in_lockstep() {
     let s = shipped("crossing.toml").scenario;
     assert_eq!(s.world.mode, Mode::Lockstep);
     assert_eq!(s.robots.len(), 8);
-    let along_x = s.robots.iter().filter(|r| r.start[1] == 0.0 && r.goal[1] == 0.0 && r.goal[0] > r.start[0]).count();
-    let along_y = s.robots.iter().filter(|r| r.start[0] == 0.0 && r.goal[0] == 0.0 && r.goal[1] > r.start[1]).count();
+    let along_x = s
+        .robots
+        .iter()
+        .filter(|r| r.start[1] == 0.0 && r.goal[1] == 0.0 && r.goal[0] > r.start[0])
+        .count();
+    let along_y = s
+        .robots
+        .iter()
+        .filter(|r| r.start[0] == 0.0 && r.goal[0] == 0.0 && r.goal[1] > r.start[1])
+        .count();
     assert_eq!((along_x, along_y), (4, 4));
     assert!(!s.description.trim().is_empty());
     overlap_free(&s);
@@ -74,7 +88,12 @@ fn a_resolved_scenario_survives_json_both_ways() {
             "motion = { model = \"intentional\", behavior = \"goal\", goal = [1, 1], points = [[0, 0]], max_speed = 1, max_accel = 2 }",
         )
     );
-    for l in [demo(), shipped("crossing.toml"), shipped("corridor.toml"), accept(&rich)] {
+    for l in [
+        demo(),
+        shipped("crossing.toml"),
+        shipped("corridor.toml"),
+        accept(&rich),
+    ] {
         let json = serde_json::to_string(&l.scenario).unwrap();
         let back: Scenario = serde_json::from_str(&json).unwrap();
         assert_eq!(back, l.scenario);

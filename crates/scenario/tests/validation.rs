@@ -48,25 +48,38 @@ fn an_unknown_defaults_key_is_refused_at_its_line() {
 
 #[test]
 fn an_unknown_motion_key_is_refused_at_its_line() {
-    let src = with(BASE, "velocity = [1.0, 0.0] }", "velocity = [1.0, 0.0], speed2 = 1 }");
+    let src = with(
+        BASE,
+        "velocity = [1.0, 0.0] }",
+        "velocity = [1.0, 0.0], speed2 = 1 }",
+    );
     refused_at(&src, "speed2", "unknown field `speed2`");
 }
 
 #[test]
 fn a_motion_key_of_another_model_is_refused() {
-    let src = with(BASE, "velocity = [1.0, 0.0] }", "velocity = [1.0, 0.0], speed = 7 }");
+    let src = with(
+        BASE,
+        "velocity = [1.0, 0.0] }",
+        "velocity = [1.0, 0.0], speed = 7 }",
+    );
     refused_at(&src, "speed = 7", "`speed` does not apply");
 }
 
 #[test]
 fn an_unknown_generate_key_is_refused_at_its_line() {
-    let src = format!("{BASE}\n[generate]\nkind = \"circle\"\ncount = 4\nradius = 5.0\nshape = 1\n");
+    let src =
+        format!("{BASE}\n[generate]\nkind = \"circle\"\ncount = 4\nradius = 5.0\nshape = 1\n");
     refused_at(&src, "shape", "unknown field `shape`");
 }
 
 #[test]
 fn an_unknown_wall_key_is_refused_at_its_line() {
-    let src = with(BASE, "segment = [[-8.0, 8.0], [8.0, 8.0]]", "segment = [[-8.0, 8.0], [8.0, 8.0]]\nthick = 1");
+    let src = with(
+        BASE,
+        "segment = [[-8.0, 8.0], [8.0, 8.0]]",
+        "segment = [[-8.0, 8.0], [8.0, 8.0]]\nthick = 1",
+    );
     refused_at(&src, "thick", "unknown field `thick`");
 }
 
@@ -110,7 +123,11 @@ fn infinity_is_refused_where_it_is_written() {
 
 #[test]
 fn a_nan_parameter_is_refused_where_it_is_written() {
-    let src = with(BASE, "radius = 0.3", "radius = 0.3\nparams = { gain = nan }");
+    let src = with(
+        BASE,
+        "radius = 0.3",
+        "radius = 0.3\nparams = { gain = nan }",
+    );
     refused_at(&src, "gain = nan", "finite");
 }
 
@@ -120,7 +137,10 @@ fn a_negative_robot_radius_is_refused() {
     let e = refused_at(&src, "radius = -1", "radius must be >= 0, got -1");
     assert_eq!(
         e.to_string(),
-        format!("t.toml:{}: robot `r1`: radius must be >= 0, got -1", line_of(&src, "radius = -1"))
+        format!(
+            "t.toml:{}: robot `r1`: radius must be >= 0, got -1",
+            line_of(&src, "radius = -1")
+        )
     );
 }
 
@@ -138,7 +158,9 @@ fn a_negative_radius_in_defaults_is_refused_at_defaults() {
 
 #[test]
 fn a_negative_generated_robot_radius_is_refused() {
-    let src = format!("{BASE}\n[generate]\nkind = \"circle\"\ncount = 4\nradius = 5.0\nrobot_radius = -0.1\n");
+    let src = format!(
+        "{BASE}\n[generate]\nkind = \"circle\"\ncount = 4\nradius = 5.0\nrobot_radius = -0.1\n"
+    );
     refused_at(&src, "robot_radius", "robot_radius must be >= 0");
 }
 
@@ -180,7 +202,11 @@ fn a_field_of_view_outside_0_360_is_refused() {
         let src = with(BASE, "field_of_view_deg = 360", bad);
         refused_at(&src, bad, "field_of_view_deg must be in (0, 360]");
     }
-    accept(&with(BASE, "field_of_view_deg = 360", "field_of_view_deg = 90"));
+    accept(&with(
+        BASE,
+        "field_of_view_deg = 360",
+        "field_of_view_deg = 90",
+    ));
 }
 
 #[test]
@@ -195,7 +221,11 @@ fn robots_starting_overlapped_are_refused_at_the_later_start() {
 #[test]
 fn a_robot_starting_on_an_obstacle_is_refused() {
     let src = with(BASE, "start = [0.0, 3.0]", "start = [-5.0, -4.5]");
-    refused_at(&src, "start = [-5.0, -4.5]", "starts overlapping obstacle `o1`");
+    refused_at(
+        &src,
+        "start = [-5.0, -4.5]",
+        "starts overlapping obstacle `o1`",
+    );
 }
 
 #[test]
@@ -213,7 +243,11 @@ fn duplicate_robot_names_are_refused() {
 #[test]
 fn a_robot_and_an_obstacle_share_one_namespace() {
     let src = with(BASE, "name = \"o1\"", "name = \"r1\"");
-    refused_at(&src, "[[obstacle]]", "duplicate name: there is already a robot `r1`");
+    refused_at(
+        &src,
+        "[[obstacle]]",
+        "duplicate name: there is already a robot `r1`",
+    );
 }
 
 #[test]
@@ -262,7 +296,11 @@ fn a_pursuit_without_a_target_is_refused() {
 fn a_boundary_without_a_path_is_refused() {
     let src = with(BASE, "radius = 0.3", "radius = 0.3\nboundary = 1.0");
     refused_at(&src, "boundary = 1.0", "boundary needs a path");
-    accept(&with(BASE, "radius = 0.3", "radius = 0.3\nboundary = 1.0\npath = [[0, 3], [5, 3]]"));
+    accept(&with(
+        BASE,
+        "radius = 0.3",
+        "radius = 0.3\nboundary = 1.0\npath = [[0, 3], [5, 3]]",
+    ));
 }
 
 #[test]
@@ -327,7 +365,11 @@ fn a_wrong_type_is_refused_at_its_line() {
 
 #[test]
 fn a_nested_table_as_a_parameter_is_refused() {
-    let src = with(BASE, "radius = 0.3", "radius = 0.3\nparams = { k = { a = 1 } }");
+    let src = with(
+        BASE,
+        "radius = 0.3",
+        "radius = 0.3\nparams = { k = { a = 1 } }",
+    );
     refused_at(&src, "params", "a parameter must be");
 }
 
@@ -339,7 +381,11 @@ fn name_start_and_goal_cannot_be_defaults() {
 
 #[test]
 fn a_degenerate_wall_is_refused() {
-    let src = with(BASE, "segment = [[-8.0, 8.0], [8.0, 8.0]]", "segment = [[1.0, 8.0], [1.0, 8.0]]");
+    let src = with(
+        BASE,
+        "segment = [[-8.0, 8.0], [8.0, 8.0]]",
+        "segment = [[1.0, 8.0], [1.0, 8.0]]",
+    );
     refused_at(&src, "segment", "ends must differ");
 }
 
@@ -352,7 +398,9 @@ fn an_unknown_generate_kind_is_refused() {
 #[test]
 fn generated_robots_overlapping_are_refused_at_the_generate_table() {
     // 40 robots of radius 0.25 on a circle of radius 1 cannot fit.
-    let src = format!("{BASE}\n[generate]\nkind = \"circle\"\ncount = 40\nradius = 1.0\ncenter = [0, -6]\n");
+    let src = format!(
+        "{BASE}\n[generate]\nkind = \"circle\"\ncount = 40\nradius = 1.0\ncenter = [0, -6]\n"
+    );
     refused_at(&src, "[generate]", "starts overlapping");
 }
 
