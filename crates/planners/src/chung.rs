@@ -337,4 +337,88 @@ mod tests {
         let end = sim.robots[r0].state.position;
         assert!((end - Vec2::new(10.0, 0.0)).norm() < 0.3, "{end}");
     }
+
+    /// The chung-strategy-{2,3} scenarios: returns the robot's largest
+    /// distance to its goal from 200 s to 300 s, the number of sign changes
+    /// of x - 10 in that window, and its smallest clearance.
+    fn crossing_scenario(strategy: Strategy, f_v: f64) -> (f64, usize, f64) {
+        let mut sim = Sim::new(0.1, 10);
+        let goal = Vec2::new(10.0, 0.0);
+        let mut planner = chung(strategy);
+        planner.f_m = 10.0;
+        planner.f_v = f_v;
+        let r0 = sim.add_robot(
+            Box::new(planner),
+            Vec2::zeros(),
+            goal,
+            0.2,
+            10.0,
+            0.5,
+            2.0,
+            1.0,
+        );
+        for (start, end) in [((4.0, -5.0), (4.0, 5.0)), ((7.0, 6.0), (7.0, -4.0))] {
+            let h = crate::homing::Homing {
+                f_g: 1.0,
+                alpha: 0.8,
+            };
+            sim.add_robot(
+                Box::new(h),
+                Vec2::new(start.0, start.1),
+                Vec2::new(end.0, end.1),
+                0.2,
+                10.0,
+                0.5,
+                2.0,
+                1.0,
+            );
+        }
+        let (mut dev, mut changes, mut min_clear, mut last) = (0.0f64, 0, f64::INFINITY, 0.0);
+        for tick in 1..=3000 {
+            sim.step();
+            min_clear = min_clear.min(sim.clearance(r0));
+            if tick > 2000 {
+                let p = sim.robots[r0].state.position;
+                dev = dev.max((p - goal).norm());
+                let e = p.x - goal.x;
+                if e * last < 0.0 {
+                    changes += 1;
+                }
+                if e != 0.0 {
+                    last = e;
+                }
+            }
+        }
+        (dev, changes, min_clear)
+    }
+
+    #[test]
+    fn scenario_files_carry_the_numbers_these_tests_use() {
+        let two = include_str!("../../../scenarios/papers/chung-strategy-2.toml");
+        let three = include_str!("../../../scenarios/papers/chung-strategy-3.toml");
+        for (text, f_v) in [(two, "0.1"), (three, "20.0")] {
+            assert!(text.contains(&format!("f_g = 1.0, alpha = 0.8, f_m = 10.0, f_v = {f_v}")));
+            assert!(text.contains("mass = 10.0") && text.contains("damping = 0.5"));
+            assert!(text.contains("max_speed = 2.0") && text.contains("max_accel = 1.0"));
+            assert!(text.contains("radius = 0.2") && text.contains("goal = [10.0, 0.0]"));
+            assert!(text.contains("start = [4.0, -5.0]") && text.contains("goal = [4.0, 5.0]"));
+            assert!(text.contains("start = [7.0, 6.0]") && text.contains("goal = [7.0, -4.0]"));
+            assert!(text.contains("params = { f_g = 1.0, alpha = 0.8 }"));
+        }
+    }
+
+    #[test]
+    fn strategy_two_keeps_oscillating_around_the_goal() {
+        let (dev, changes, min_clear) = crossing_scenario(Strategy::II, 0.1);
+        assert!(dev > 1.0, "{dev}");
+        assert!(changes >= 3, "{changes}");
+        assert!(min_clear > 0.0);
+    }
+
+    #[test]
+    fn strategy_three_settles_at_the_goal() {
+        let (dev, _, min_clear) = crossing_scenario(Strategy::III, 20.0);
+        assert!(dev < 0.1, "{dev}");
+        assert!(min_clear > 0.0);
+    }
 }
