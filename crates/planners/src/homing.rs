@@ -7,8 +7,13 @@
 //! prints <r', g(r')> < 0, which would make -alpha g accelerate the robot;
 //! the prose ("the oscillatory behaviour depends on alpha") and Fig. 1 need
 //! a damping term, so we take g(v) = v, for which <v, g(v)> > 0.
-//! With eq (1)'s friction b, the robot oscillates through the goal with a
-//! decaying amplitude that falls as alpha grows.
+//! With eq (1)'s friction b, the robot oscillates through the goal with an
+//! amplitude that falls as alpha grows. It does not die out: the
+//! constant-magnitude attraction is held for a whole tick, and the energy
+//! gained by overshooting the goal within a tick balances the damping, so
+//! a limit cycle remains (Fig. 1 settings, dt = 0.1 s: about 7.6 m for
+//! alpha = 0.01, 5.0 m for 0.1, 0.8 m for 1; scenarios/papers/
+//! chung-homing-fig1.toml).
 //!
 //! Parameters: `f_g` (the paper's f_c, default 10 as in Fig. 1), `alpha`
 //! (default 0.1, Fig. 1's larger value).
@@ -106,5 +111,46 @@ mod tests {
         };
         let f = h.plan(&obs(Vec2::new(10.0, 0.0), Vec2::zeros())).vector();
         assert_eq!(f, Vec2::zeros());
+    }
+
+    #[test]
+    fn oscillation_about_the_goal_falls_as_alpha_grows() {
+        // scenarios/papers/chung-homing-fig1.toml: m = 1, f_c = 10, b = 0.1.
+        let text = include_str!("../../../scenarios/papers/chung-homing-fig1.toml");
+        let mut sim = crate::testkit::Sim::new(0.1, 10);
+        let alphas = [0.01, 0.1, 1.0];
+        for (i, alpha) in alphas.iter().enumerate() {
+            assert!(text.contains(&format!("params = {{ f_g = 10.0, alpha = {alpha:?} }}")));
+            let y = 3.0 * i as f64;
+            let h = Homing {
+                f_g: 10.0,
+                alpha: *alpha,
+            };
+            sim.add_robot(
+                Box::new(h),
+                Vec2::new(0.0, y),
+                Vec2::new(10.0, y),
+                0.2,
+                1.0,
+                0.1,
+                100.0,
+                100.0,
+            );
+        }
+        let mut amplitude = [0.0f64; 3];
+        for tick in 1..=1200 {
+            sim.step();
+            if tick > 300 {
+                for (a, r) in amplitude.iter_mut().zip(&sim.robots) {
+                    *a = a.max((r.state.position.x - 10.0).abs());
+                }
+            }
+        }
+        assert!(
+            amplitude[0] > amplitude[1] && amplitude[1] > amplitude[2],
+            "{amplitude:?}"
+        );
+        // As printed and sampled, it does not settle: a limit cycle remains.
+        assert!(amplitude[2] > 0.1, "{amplitude:?}");
     }
 }

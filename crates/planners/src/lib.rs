@@ -15,8 +15,11 @@
 pub mod params;
 mod registry;
 
+pub mod chung;
 pub mod homing;
+pub mod khatib;
 pub mod testkit;
+pub mod vdf;
 
 pub use params::{ParamError, ParamReader, ParamValue, Params};
 pub use registry::{BuildError, PLANNERS, PlannerInfo, build};

@@ -12,10 +12,32 @@ pub struct PlannerInfo {
 }
 
 /// Every planner [`build`] knows, in the order the README lists them.
-pub const PLANNERS: &[PlannerInfo] = &[PlannerInfo {
-    name: "homing",
-    summary: "attraction to the goal with velocity damping, no avoidance (Chung et al. eq 2)",
-}];
+pub const PLANNERS: &[PlannerInfo] = &[
+    PlannerInfo {
+        name: "homing",
+        summary: "attraction to the goal with velocity damping, no avoidance (Chung et al. eq 2)",
+    },
+    PlannerInfo {
+        name: "chung-1",
+        summary: "potential field on relative positions (Chung et al. Strategy I, eq 3)",
+    },
+    PlannerInfo {
+        name: "chung-2",
+        summary: "potential field on relative positions and velocities (Chung et al. Strategy II, eq 4)",
+    },
+    PlannerInfo {
+        name: "chung-3",
+        summary: "Strategy II with the velocity term over distance cubed (Chung et al. Strategy III, eq 5)",
+    },
+    PlannerInfo {
+        name: "vdf",
+        summary: "virtual-distance potential field under acceleration and speed limits (Ko & Choi eqs 1-22)",
+    },
+    PlannerInfo {
+        name: "khatib",
+        summary: "classic potential field (Khatib 1986) as Ko & Choi's case 7 limit of vdf",
+    },
+];
 
 /// Why a planner could not be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -37,6 +59,20 @@ pub enum BuildError {
 pub fn build(name: &str, params: &Params) -> Result<Box<dyn Planner>, BuildError> {
     Ok(match name {
         "homing" => Box::new(crate::homing::Homing::from_params(params)?),
+        "chung-1" => Box::new(crate::chung::Chung::from_params(
+            crate::chung::Strategy::I,
+            params,
+        )?),
+        "chung-2" => Box::new(crate::chung::Chung::from_params(
+            crate::chung::Strategy::II,
+            params,
+        )?),
+        "chung-3" => Box::new(crate::chung::Chung::from_params(
+            crate::chung::Strategy::III,
+            params,
+        )?),
+        "vdf" => Box::new(crate::vdf::Vdf::from_params(params)?),
+        "khatib" => Box::new(crate::khatib::khatib_from_params(params)?),
         _ => {
             return Err(BuildError::UnknownPlanner {
                 name: name.to_string(),
