@@ -16,6 +16,7 @@ pub mod params;
 mod registry;
 
 pub mod homing;
+pub mod hydro;
 pub mod testkit;
 
 pub use params::{ParamError, ParamReader, ParamValue, Params};
