@@ -88,17 +88,27 @@
 //! `conj v = sum_j w_j (h G_j' + b_j D_j') / sum_j w_j` with
 //! `w_j = 1 / delta_j^2`, `delta_j` the robot's distance to the avoidance
 //! circle of `j` (so next to one obstacle its own exact field dominates,
-//! and far from all of them every term is the sink flow). Each wall
-//! segment is a virtual standing cylinder of radius half the segment's
-//! length (plus the robot's radius), tangent to the wall at its point
-//! nearest to the robot and lying beyond it; a wall whose virtual cylinder
-//! would contain the goal is left out.
+//! and far from all of them every term is the sink flow). Walls enter as
+//! standing cylinders of radius half the segment's length plus the robot's
+//! radius: a short wall (robot and goal both outside the circle around the
+//! whole segment) is that circle, so the flow goes round it; a long wall
+//! (a corridor's or the arena's side) is the paper's virtual obstacle that
+//! moves with the robot, a cylinder tangent to the wall at its point
+//! nearest to the robot and lying beyond it (it keeps the robot off the
+//! wall but, facing the robot head-on, it has a stagnation point: a long
+//! wall across the way to the goal is a dead end for this method); a wall
+//! whose virtual cylinder would contain the goal is left out.
 //!
 //! **Cases outside the paper.** Inside an avoidance region the flow is not
 //! defined (it is singular at the centre): the robot then leaves radially
 //! at speed `m` plus the obstacle's velocity. If the goal lies inside a
 //! body's avoidance region the circle theorem does not apply: that body
-//! keeps its doublet but its cylinder is dropped.
+//! keeps its doublet but its cylinder is dropped (the field jumps when the
+//! goal leaves the region; the paper's experiment avoids it by starting
+//! the obstacle clear of the goal, as do our scenarios).
+//!
+//! The paper's experiment (figs 15-20) is in `scenarios/papers/hydro-*.toml`
+//! with the measured peak speeds and velocity changes in their descriptions.
 //!
 //! Parameters: `strength` (the sink `m`, the nominal speed, default 0.5),
 //! `c1`, `c2` (default 2.0 each), `epsilon` (default 0.1), `shape` =
@@ -853,7 +863,10 @@ mod tests {
     /// the scenario files.
     struct Run {
         reached: bool,
+        reached_at: f64,
         min_clearance: f64,
+        peak_time: f64,
+        max_dv_time: f64,
         peak_speed: f64,
         max_dv: f64,
         speeds: Vec<f64>,
@@ -906,7 +919,10 @@ mod tests {
         let ticks = (ex::DURATION / ex::DT).round() as u64;
         let mut run = Run {
             reached: false,
+            reached_at: f64::NAN,
             min_clearance: f64::INFINITY,
+            peak_time: 0.0,
+            max_dv_time: 0.0,
             peak_speed: 0.0,
             max_dv: 0.0,
             speeds: Vec::new(),
@@ -916,15 +932,85 @@ mod tests {
             sim.step();
             let s = sim.robots[i].state;
             run.min_clearance = run.min_clearance.min(sim.clearance(i));
-            run.peak_speed = run.peak_speed.max(s.velocity.norm());
-            run.max_dv = run.max_dv.max((s.velocity - last_v).norm());
+            let t = sim.tick as f64 * ex::DT;
+            if s.velocity.norm() > run.peak_speed {
+                run.peak_speed = s.velocity.norm();
+                run.peak_time = t;
+            }
+            if (s.velocity - last_v).norm() > run.max_dv {
+                run.max_dv = (s.velocity - last_v).norm();
+                run.max_dv_time = t;
+            }
             run.speeds.push(s.velocity.norm());
             last_v = s.velocity;
-            if (s.position - goal).norm() <= ex::GOAL_TOLERANCE {
+            if !run.reached && (s.position - goal).norm() <= ex::GOAL_TOLERANCE {
                 run.reached = true;
+                run.reached_at = t;
             }
         }
         run
+    }
+
+    #[test]
+    fn scenario_files_use_the_experiment_constants() {
+        let files = [
+            (
+                "circle",
+                "binary",
+                include_str!("../../../scenarios/papers/hydro-circle-binary.toml"),
+            ),
+            (
+                "circle",
+                "smooth",
+                include_str!("../../../scenarios/papers/hydro-circle-smooth.toml"),
+            ),
+            (
+                "ellipse",
+                "binary",
+                include_str!("../../../scenarios/papers/hydro-ellipse-binary.toml"),
+            ),
+            (
+                "ellipse",
+                "smooth",
+                include_str!("../../../scenarios/papers/hydro-ellipse-smooth.toml"),
+            ),
+        ];
+        let p = |x: [f64; 2]| format!("[{:?}, {:?}]", x[0], x[1]);
+        let d = Hydro::default();
+        for (shape, correction, text) in files {
+            for line in [
+                format!("dt = {:?}", ex::DT),
+                format!("substeps = {}", ex::SUBSTEPS),
+                format!("duration = {:?}", ex::DURATION),
+                format!("radius = {:?}", ex::ROBOT_RADIUS),
+                format!("mass = {:?}", ex::MASS),
+                format!("max_speed = {:?}", ex::MAX_SPEED),
+                format!("max_accel = {:?}", ex::MAX_ACCEL),
+                format!("velocity_lag = {:?}", ex::VELOCITY_LAG),
+                format!("goal_tolerance = {:?}", ex::GOAL_TOLERANCE),
+                format!("start = {}", p(ex::ROBOT_START)),
+                format!("goal = {}", p(ex::ROBOT_GOAL)),
+                format!("start = {}", p(ex::OBSTACLE_START)),
+                format!("radius = {:?}", ex::OBSTACLE_RADIUS),
+                format!("velocity = {} }}", p(ex::OBSTACLE_VELOCITY)),
+                format!(
+                    "strength = {:?}, c1 = {:?}, c2 = {:?}, epsilon = {:?},",
+                    ex::STRENGTH,
+                    d.c1,
+                    d.c2,
+                    d.epsilon
+                ),
+                format!("gamma = {:?},", d.gamma),
+                format!("shape = \"{shape}\", correction = \"{correction}\""),
+                format!(
+                    "ellipse_time = {:?}, delay = {:?} }}",
+                    ex::ELLIPSE_TIME,
+                    ex::VELOCITY_LAG
+                ),
+            ] {
+                assert!(text.contains(&line), "{shape}-{correction} lacks `{line}`");
+            }
+        }
     }
 
     #[test]
@@ -933,8 +1019,14 @@ mod tests {
             for correction in ["binary", "smooth"] {
                 let r = experiment(shape, correction);
                 eprintln!(
-                    "hydro {shape}/{correction}: reached {} min clearance {:.4} peak speed {:.4} max |dv| per tick {:.4}",
-                    r.reached, r.min_clearance, r.peak_speed, r.max_dv
+                    "hydro {shape}/{correction}: reached at {:.2} s, min clearance {:.4}, \
+                     peak speed {:.4} at {:.2} s, max |dv| per tick {:.4} at {:.2} s",
+                    r.reached_at,
+                    r.min_clearance,
+                    r.peak_speed,
+                    r.peak_time,
+                    r.max_dv,
+                    r.max_dv_time
                 );
                 assert!(r.reached, "{shape}/{correction}");
                 assert!(r.min_clearance > 0.0, "{shape}/{correction}");
