@@ -81,7 +81,7 @@
 //! The paper says the *diameter* grows by that distance; the issue asks for
 //! the radius, which is the safer of the two and what we do.
 //!
-//! **Several obstacles and walls.** The paper defers both to its ref. [5],
+//! **Several obstacles and walls.** The paper defers both to its ref. 5,
 //! which we do not have; it says the fields are superposed with weights,
 //! the largest to the nearest obstacle, and that walls are avoided through
 //! virtual obstacles that move with the robot along the boundary. We take
