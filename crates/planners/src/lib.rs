@@ -18,6 +18,7 @@ mod registry;
 pub mod chung;
 pub mod homing;
 pub mod khatib;
+pub mod hydro;
 pub mod testkit;
 pub mod vdf;
 

@@ -37,6 +37,10 @@ pub const PLANNERS: &[PlannerInfo] = &[
         name: "khatib",
         summary: "classic potential field (Khatib 1986) as Ko & Choi's case 7 limit of vdf",
     },
+    PlannerInfo {
+        name: "hydro",
+        summary: "guiding velocity of a sink-and-cylinder flow, circle or ellipse, binary or smooth anti-chasing (Sugiyama et al.)",
+    },
 ];
 
 /// Why a planner could not be built.
@@ -73,6 +77,7 @@ pub fn build(name: &str, params: &Params) -> Result<Box<dyn Planner>, BuildError
         )?),
         "vdf" => Box::new(crate::vdf::Vdf::from_params(params)?),
         "khatib" => Box::new(crate::khatib::khatib_from_params(params)?),
+        "hydro" => Box::new(crate::hydro::Hydro::from_params(params)?),
         _ => {
             return Err(BuildError::UnknownPlanner {
                 name: name.to_string(),

@@ -1,0 +1,1081 @@
+//! Hydrodynamic potential: Sugiyama, Yamada & Yoshikawa, "Path Planning of a
+//! Mobile Robot for Avoiding Moving Obstacles with Improved Velocity Control
+//! by Using the Hydrodynamic Potential" (shared/papers/003).
+//!
+//! The command is the guiding flow velocity `v = conj(dF/dz)` of a complex
+//! potential `F` in `z = x + i y` (section II):
+//!
+//! - eq (1), a sink of strength `m` at the goal `z_g` and a cylinder of
+//!   radius `a_j` at `z_j` by the circle theorem:
+//!   `G_j(z) = -m log(z - z_g) - m log(z - z~_j) + m log(z - z_j)`.
+//!   The image point is printed as `(z_g - z_j)(z~_j - conj z_j) = a_j^2`,
+//!   which is garbled; the circle theorem needs the inverse point
+//!   `z~_j = z_j + a_j^2 / conj(z_g - z_j)`, which we use.
+//! - eq (2), a doublet for an obstacle moving with `u_j e^{i alpha_j}`:
+//!   `D_j(z) = -a_j^2 u_j e^{i alpha_j} / (z - z_j)`, the exact flow of a
+//!   cylinder translating in fluid at rest.
+//! - eq (3), the speed correction
+//!   `h(z) = (1 - e^{-(c_1 |z - z_st| + epsilon)}) |z - z_g| (1 - e^{-c_2 |z - z_g|})`.
+//!   As printed the exponent reads `-c_1 |z - z_st| + epsilon`, which makes
+//!   `h` negative at the start for any `epsilon > 0` (the robot would be
+//!   sent away from its goal); the prose ("epsilon controls the velocity at
+//!   the start point, epsilon > 0") needs `epsilon` inside the minus sign.
+//!   The factor `|z - z_g|` cancels the sink's `1/|z - z_g|`, so far from
+//!   everything the speed is `m (1 - e^{-c_1 s})`: `m` is the nominal speed,
+//!   it ramps up from `m (1 - e^{-epsilon})` at the start and falls to zero
+//!   like `m c_2 |z - z_g|` at the goal. `z_st` is where the robot was at
+//!   its first `plan` call (the observation carries no start).
+//! - eq (4), the binary anti-chasing correction: `b_j = 1` when
+//!   `|angle(z - z_j) - alpha_j| <= pi/2` (the robot is ahead of the
+//!   obstacle), else 0.
+//! - eq (5), `conj v = h(z) G_j'(z) + b_j(z) D_j'(z)`.
+//!
+//! **Smooth correction, eqs (21)-(22).** As printed,
+//! `b_j = (1 + cos 2 beta_j) / 2` with `beta_j = angle - (alpha_j + pi/2)`
+//! for `pi/2 < |angle - alpha_j| < gamma`, and 0 beyond. It is 1 at
+//! `pi/2` (continuous there) but at `gamma` it equals `(1 - cos 2 gamma)/2`,
+//! which is 1/2 for the paper's `gamma = 3 pi / 4`: the printed form jumps
+//! from 1/2 to 0 and is continuous only for `gamma = pi`. We therefore
+//! stretch the cosine over the band, `b_j = (1 + cos(pi (|angle - alpha_j|
+//! - pi/2) / (gamma - pi/2))) / 2`, which is eq (21) exactly when
+//! `gamma = pi`, goes from 1 at `pi/2` to 0 at `gamma` with zero slope at
+//! both ends, and is continuous for every `gamma` in `(pi/2, pi]`.
+//!
+//! **Ellipse field, section III.** Eqs (14)-(20) are not usable as
+//! printed: eq (14) maps a point rather than defining a flow, and the
+//! "rotation" matrices (15), (18) have determinant -1 (they are
+//! reflections). We build instead the exact potential flow of an elliptic
+//! cylinder translating along its major axis, through the Zhukovsky map of
+//! eq (7) `w = zeta + c^2 / zeta` in the obstacle's frame
+//! `w = e^{-i alpha_j} (z - z_j)` (a true rotation, done on complex numbers):
+//! - the circle `|zeta| = R` maps to the ellipse of semi-axes
+//!   `R + c^2/R` (along the motion) and `R - c^2/R`; we take `c = d u_j`
+//!   (the paper's `(d u_j)^2`, `d` = `ellipse_time`) and choose `R` so that
+//!   the minor semi-axis is the avoidance radius `a_j`:
+//!   `R = (a_j + sqrt(a_j^2 + 4 c^2)) / 2`, major semi-axis
+//!   `sqrt(a_j^2 + (2 d u_j)^2)`, foci at `+-2 d u_j`. The ellipse contains
+//!   the avoidance circle and is never wider than it; it grows ahead of and
+//!   behind the obstacle with its speed and is the circle at `u_j = 0`.
+//! - moving part: `D_j = -u_j (R^2 - c^2) / zeta` (a uniform stream past
+//!   the circle in the zeta-plane, seen from the lab frame); at `c = 0` this
+//!   is eq (2).
+//! - sink part: the circle theorem of eq (1) applied in the zeta-plane
+//!   around `|zeta| = R` to the image `zeta_g` of the goal.
+//! - derivatives by the chain rule, `dzeta/dw = zeta^2 / (zeta^2 - c^2)`,
+//!   `dw/dz = e^{-i alpha_j}`; `zeta` is the root of the inverse map outside
+//!   `|zeta| = c`.
+//!
+//! The flow has no normal component through the ellipse in the obstacle's
+//! own frame (checked in the unit tests).
+//!
+//! **Standing versus moving.** There is no switch and no speed threshold:
+//! every body is a cylinder (eq 1) whose doublet (eq 2) is proportional to
+//! its speed `u_j`, and whose ellipse shrinks to the circle as `u_j -> 0`
+//! (the paper: "the obstacle by a cylinder whether it moves or not"). A
+//! standing body is one with zero velocity, and the field is continuous in
+//! `u_j`, so a noisy differenced velocity cannot flip a mode.
+//!
+//! **Avoidance radius (section II).** `a_j = r_j + r_robot + u_j T`: the
+//! obstacle's radius grown by the robot's (configuration space) and by the
+//! distance the obstacle moves in the robot's time constant `T` (`delay`).
+//! The paper says the *diameter* grows by that distance; the issue asks for
+//! the radius, which is the safer of the two and what we do.
+//!
+//! **Several obstacles and walls.** The paper defers both to its ref. 5,
+//! which we do not have; it says the fields are superposed with weights,
+//! the largest to the nearest obstacle, and that walls are avoided through
+//! virtual obstacles that move with the robot along the boundary. We take
+//! `conj v = sum_j w_j (h G_j' + b_j D_j') / sum_j w_j` with
+//! `w_j = 1 / delta_j^2`, `delta_j` the robot's distance to the avoidance
+//! circle of `j` (so next to one obstacle its own exact field dominates,
+//! and far from all of them every term is the sink flow). Walls enter as
+//! standing cylinders of radius half the segment's length plus the robot's
+//! radius: a short wall (robot and goal both outside the circle around the
+//! whole segment) is that circle, so the flow goes round it; a long wall
+//! (a corridor's or the arena's side) is the paper's virtual obstacle that
+//! moves with the robot, a cylinder tangent to the wall at its point
+//! nearest to the robot and lying beyond it (it keeps the robot off the
+//! wall but, facing the robot head-on, it has a stagnation point: a long
+//! wall across the way to the goal is a dead end for this method); a wall
+//! whose virtual cylinder would contain the goal is left out.
+//!
+//! **Cases outside the paper.** Inside an avoidance region the flow is not
+//! defined (it is singular at the centre): the robot then leaves radially
+//! at speed `m` plus the obstacle's velocity. If the goal lies inside a
+//! body's avoidance region the circle theorem does not apply: that body
+//! keeps its doublet but its cylinder is dropped (the field jumps when the
+//! goal leaves the region; the paper's experiment avoids it by starting
+//! the obstacle clear of the goal, as do our scenarios).
+//!
+//! The paper's experiment (figs 15-20) is in `scenarios/papers/hydro-*.toml`
+//! with the measured peak speeds and velocity changes in their descriptions.
+//!
+//! Parameters: `strength` (the sink `m`, the nominal speed, default 0.5),
+//! `c1`, `c2` (default 2.0 each), `epsilon` (default 0.1), `shape` =
+//! `"circle"` | `"ellipse"` (default `"ellipse"`), `correction` =
+//! `"binary"` | `"smooth"` (default `"smooth"`: the paper's final choice,
+//! Fig. 14(d)), `gamma` (default `3 pi / 4`, the paper's value, in
+//! `(pi/2, pi]`), `ellipse_time` (the `d` of `d u_j`, s, default 2.0),
+//! `delay` (`T`, s, default 0: set it to the robot's `velocity_lag`).
+//! The paper prints no value for any of them but `gamma`; the others are
+//! ours, for a robot of about 0.5 m/s.
+
+use crate::{Command, Observation, ParamError, ParamReader, Params, Planner, Vec2};
+use nalgebra::Complex;
+use std::f64::consts::{FRAC_PI_2, PI};
+
+type C = Complex<f64>;
+
+/// The avoidance region's shape for moving obstacles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Shape {
+    /// The previous method: a circle (eqs 1, 2).
+    Circle,
+    /// Section III: the circle mapped to an ellipse along the motion.
+    Ellipse,
+}
+
+/// The anti-chasing correction `b_j`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Correction {
+    /// Eq (4): 1 ahead of the obstacle, 0 behind.
+    Binary,
+    /// Eqs (21)-(22), continuous (see the module doc).
+    Smooth,
+}
+
+/// One body as the flow sees it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FlowBody {
+    /// Centre `z_j`.
+    pub center: Vec2,
+    /// Avoidance radius `a_j` (the ellipse's minor semi-axis).
+    pub radius: f64,
+    /// Velocity `u_j e^{i alpha_j}`.
+    pub velocity: Vec2,
+    /// Zhukovsky constant `c = d u_j` (0 for a circle).
+    pub focal: f64,
+}
+
+/// Sugiyama, Yamada & Yoshikawa's hydrodynamic potential planner.
+#[derive(Debug, Clone)]
+pub struct Hydro {
+    /// Sink strength `m` (nominal speed).
+    pub strength: f64,
+    /// `c_1` of eq (3): acceleration from the start.
+    pub c1: f64,
+    /// `c_2` of eq (3): deceleration at the goal.
+    pub c2: f64,
+    /// `epsilon` of eq (3): speed at the start.
+    pub epsilon: f64,
+    /// Circle or ellipse for moving obstacles.
+    pub shape: Shape,
+    /// Binary or smooth `b_j`.
+    pub correction: Correction,
+    /// Terminal angle `gamma` of the smooth `b_j`, in `(pi/2, pi]`.
+    pub gamma: f64,
+    /// `d` of `d u_j`, s.
+    pub ellipse_time: f64,
+    /// Robot time constant `T`, s.
+    pub delay: f64,
+    /// Start point `z_st`, set at the first `plan` call.
+    pub start: Option<Vec2>,
+}
+
+impl Default for Hydro {
+    fn default() -> Self {
+        Self {
+            strength: 0.5,
+            c1: 2.0,
+            c2: 2.0,
+            epsilon: 0.1,
+            shape: Shape::Ellipse,
+            correction: Correction::Smooth,
+            gamma: 3.0 * PI / 4.0,
+            ellipse_time: 2.0,
+            delay: 0.0,
+            start: None,
+        }
+    }
+}
+
+fn cx(v: Vec2) -> C {
+    C::new(v.x, v.y)
+}
+
+/// The root of `w = zeta + c^2 / zeta` outside `|zeta| = c`.
+fn inverse_zhukovsky(w: C, c: f64) -> C {
+    let s = (w * w - C::new(4.0 * c * c, 0.0)).sqrt();
+    let a = (w + s) * 0.5;
+    let b = (w - s) * 0.5;
+    if a.norm_sqr() >= b.norm_sqr() { a } else { b }
+}
+
+/// What one body contributes at `z`.
+enum BodyFlow {
+    /// `(G_j', D_j')`: the conjugate velocities of the sink-and-cylinder
+    /// potential and of the moving part.
+    Outside(C, C),
+    /// `z` is inside the avoidance region.
+    Inside,
+}
+
+impl FlowBody {
+    /// `R` of the zeta-plane circle whose image has minor semi-axis `a_j`.
+    fn zeta_radius(&self) -> f64 {
+        let a = self.radius;
+        let c = self.focal;
+        0.5 * (a + (a * a + 4.0 * c * c).sqrt())
+    }
+
+    fn flow(&self, m: f64, z: C, zg: C) -> BodyFlow {
+        let zr = z - cx(self.center);
+        let zgr = zg - cx(self.center);
+        let u = cx(self.velocity);
+        let speed = u.norm();
+        if self.focal <= 0.0 || speed <= 0.0 {
+            // Case circle (eqs 1, 2), standing or moving.
+            let a2 = self.radius * self.radius;
+            if zr.norm_sqr() <= a2 {
+                return BodyFlow::Inside;
+            }
+            let zr_inv = zr.inv();
+            let g = if zgr.norm_sqr() > a2 {
+                // Sink, image sink at the inverse point, source at the centre.
+                let image = a2 / zgr.conj();
+                m * (-(zr - zgr).inv() - (zr - image).inv() + zr_inv)
+            } else {
+                // Goal inside the avoidance circle: sink alone.
+                -m * (zr - zgr).inv()
+            };
+            // Doublet derivative: d/dz [-a^2 U / (z - z_j)] = a^2 U / (z - z_j)^2.
+            let d = a2 * u * zr_inv * zr_inv;
+            return BodyFlow::Outside(g, d);
+        }
+        // Case ellipse (section III, exact through the Zhukovsky map).
+        let rot = u / speed; // e^{i alpha_j}
+        let back = rot.conj(); // e^{-i alpha_j} = dw/dz
+        let c = self.focal;
+        let c2 = c * c;
+        let big_r = self.zeta_radius();
+        let r2 = big_r * big_r;
+        let zeta = inverse_zhukovsky(back * zr, c);
+        if zeta.norm_sqr() <= r2 {
+            return BodyFlow::Inside;
+        }
+        let zeta2 = zeta * zeta;
+        // dzeta/dw * dw/dz
+        let chain = zeta2 / (zeta2 - c2) * back;
+        let zeta_inv = zeta.inv();
+        let zeta_g = inverse_zhukovsky(back * zgr, c);
+        let g = if zeta_g.norm_sqr() > r2 {
+            // Circle theorem in the zeta-plane.
+            let image = r2 / zeta_g.conj();
+            m * (-(zeta - zeta_g).inv() - (zeta - image).inv() + zeta_inv) * chain
+        } else {
+            -m * (zr - zgr).inv()
+        };
+        // D = -U (R^2 - c^2) / zeta, dD/dzeta = U (R^2 - c^2) / zeta^2.
+        let d = speed * (r2 - c2) * zeta_inv * zeta_inv * chain;
+        BodyFlow::Outside(g, d)
+    }
+}
+
+impl Hydro {
+    /// Reads the parameters listed in the module doc.
+    pub fn from_params(params: &Params) -> Result<Self, ParamError> {
+        let d = Self::default();
+        let mut r = ParamReader::new("hydro", params);
+        let strength = r.positive("strength", d.strength)?;
+        let c1 = r.positive("c1", d.c1)?;
+        let c2 = r.positive("c2", d.c2)?;
+        let epsilon = r.positive("epsilon", d.epsilon)?;
+        let shape = match r.choice("shape", &["circle", "ellipse"], "ellipse")? {
+            "circle" => Shape::Circle,
+            _ => Shape::Ellipse,
+        };
+        let correction = match r.choice("correction", &["binary", "smooth"], "smooth")? {
+            "binary" => Correction::Binary,
+            _ => Correction::Smooth,
+        };
+        let gamma = r.number("gamma", d.gamma)?;
+        if !(gamma > FRAC_PI_2 && gamma <= PI + 1e-12) {
+            return Err(r.invalid("gamma", format!("must be in (pi/2, pi], got {gamma}")));
+        }
+        let ellipse_time = r.non_negative("ellipse_time", d.ellipse_time)?;
+        let delay = r.non_negative("delay", d.delay)?;
+        r.finish()?;
+        Ok(Self {
+            strength,
+            c1,
+            c2,
+            epsilon,
+            shape,
+            correction,
+            gamma,
+            ellipse_time,
+            delay,
+            start: None,
+        })
+    }
+
+    /// Eq (3), `h(z)`, for start `z_st` and goal `z_g`.
+    pub fn speed_correction(&self, z: Vec2, start: Vec2, goal: Vec2) -> f64 {
+        let s = (z - start).norm();
+        let r = (z - goal).norm();
+        (1.0 - (-(self.c1 * s + self.epsilon)).exp()) * r * (1.0 - (-self.c2 * r).exp())
+    }
+
+    /// The anti-chasing correction `b_j(z)`: eq (4), or eq (21) made
+    /// continuous (module doc).
+    pub fn correction_at(&self, z: Vec2, body: &FlowBody) -> f64 {
+        let rel = cx(z - body.center);
+        let u = cx(body.velocity);
+        if u.norm_sqr() == 0.0 || rel.norm_sqr() == 0.0 {
+            return 0.0;
+        }
+        // |angle(z - z_j) - alpha_j|, in [0, pi].
+        let off = (rel * u.conj()).arg().abs();
+        if off <= FRAC_PI_2 {
+            // Ahead of the obstacle: full doublet.
+            return 1.0;
+        }
+        match self.correction {
+            // Eq (4): behind the obstacle, no doublet.
+            Correction::Binary => 0.0,
+            // Eq (21), band pi/2 < off < gamma: cosine ramp to 0.
+            Correction::Smooth if off < self.gamma => {
+                0.5 * (1.0 + (PI * (off - FRAC_PI_2) / (self.gamma - FRAC_PI_2)).cos())
+            }
+            // Eq (21), "for other": behind the band.
+            Correction::Smooth => 0.0,
+        }
+    }
+
+    /// The flow body for a sensed disc of radius `radius` at `center`
+    /// moving with `velocity`, seen by a robot of radius `robot_radius`.
+    pub fn body(&self, center: Vec2, velocity: Vec2, radius: f64, robot_radius: f64) -> FlowBody {
+        let speed = velocity.norm();
+        FlowBody {
+            center,
+            // Section II: grown by the distance moved in T.
+            radius: radius + robot_radius + speed * self.delay,
+            velocity,
+            focal: match self.shape {
+                Shape::Circle => 0.0,
+                Shape::Ellipse => self.ellipse_time * speed,
+            },
+        }
+    }
+
+    /// The guiding velocity at `z` among `bodies` (robot-specific
+    /// avoidance regions already built), start `start`, goal `goal`.
+    pub fn velocity_at(&self, z: Vec2, start: Vec2, goal: Vec2, bodies: &[FlowBody]) -> Vec2 {
+        let m = self.strength;
+        let zc = cx(z);
+        let zg = cx(goal);
+        if (z - goal).norm_squared() == 0.0 {
+            // At the goal: h = 0 and the sink is singular; the limit is 0.
+            return Vec2::zeros();
+        }
+        let h = self.speed_correction(z, start, goal);
+        let mut acc = C::new(0.0, 0.0);
+        let mut total = 0.0;
+        for body in bodies {
+            match body.flow(m, zc, zg) {
+                BodyFlow::Inside => {
+                    // Outside the paper: leave the region radially.
+                    let out = z - body.center;
+                    let n = out.norm();
+                    let dir = if n > 0.0 {
+                        out / n
+                    } else {
+                        Vec2::new(1.0, 0.0)
+                    };
+                    return dir * m + body.velocity;
+                }
+                BodyFlow::Outside(g, d) => {
+                    // Eq (5) for this body, weighted by its nearness.
+                    let b = self.correction_at(z, body);
+                    let delta = ((z - body.center).norm() - body.radius).max(1e-9);
+                    let w = 1.0 / (delta * delta);
+                    acc += (h * g + b * d) * w;
+                    total += w;
+                }
+            }
+        }
+        let vbar = if total > 0.0 {
+            acc / total
+        } else {
+            // No body: the corrected sink alone.
+            -h * m * (zc - zg).inv()
+        };
+        Vec2::new(vbar.re, -vbar.im)
+    }
+}
+
+impl Planner for Hydro {
+    fn plan(&mut self, obs: &Observation) -> Command {
+        let me = obs.me;
+        let start = *self.start.get_or_insert(me.position);
+        let mut bodies: Vec<FlowBody> = Vec::with_capacity(obs.others.len() + obs.walls.len());
+        for o in obs.others {
+            bodies.push(self.body(o.position, o.velocity, o.radius, me.radius));
+        }
+        for wall in obs.walls {
+            let mid = (wall.a + wall.b) * 0.5;
+            let rv = 0.5 * (wall.b - wall.a).norm();
+            let a = rv + me.radius;
+            if (me.position - mid).norm() > a && (obs.goal - mid).norm() > a {
+                // Case short wall: a standing cylinder around the whole segment.
+                bodies.push(FlowBody {
+                    center: mid,
+                    radius: a,
+                    velocity: Vec2::zeros(),
+                    focal: 0.0,
+                });
+                continue;
+            }
+            // Case long wall (robot or goal within its circumscribed circle):
+            // a virtual standing cylinder beyond the wall, tangent at the
+            // point nearest to the robot, moving with the robot.
+            let q = wall.closest_point(me.position);
+            let off = me.position - q;
+            let dist = off.norm();
+            if dist <= f64::EPSILON {
+                continue;
+            }
+            let center = q - off * (rv / dist);
+            if (obs.goal - center).norm() <= a {
+                continue;
+            }
+            bodies.push(FlowBody {
+                center,
+                radius: a,
+                velocity: Vec2::zeros(),
+                focal: 0.0,
+            });
+        }
+        Command::Velocity(self.velocity_at(me.position, start, obs.goal, &bodies))
+    }
+}
+
+/// Constants of the paper's experiment (figs 15-20) as the scenario files
+/// in `scenarios/papers/hydro-*.toml` set them, shared with the tests.
+#[cfg(test)]
+pub(crate) mod experiment {
+    use crate::Vec2;
+    pub const DT: f64 = 0.05;
+    pub const SUBSTEPS: u32 = 10;
+    pub const DURATION: f64 = 40.0;
+    pub const ROBOT_START: [f64; 2] = [0.0, 0.0];
+    pub const ROBOT_GOAL: [f64; 2] = [12.0, 0.0];
+    pub const ROBOT_RADIUS: f64 = 0.2;
+    pub const MASS: f64 = 1.0;
+    pub const MAX_SPEED: f64 = 5.0;
+    pub const MAX_ACCEL: f64 = 20.0;
+    pub const VELOCITY_LAG: f64 = 0.1;
+    pub const GOAL_TOLERANCE: f64 = 0.05;
+    pub const OBSTACLE_START: [f64; 2] = [10.0, 0.3];
+    pub const OBSTACLE_VELOCITY: [f64; 2] = [-0.5, 0.0];
+    pub const OBSTACLE_RADIUS: f64 = 0.3;
+    pub const STRENGTH: f64 = 0.5;
+    pub const ELLIPSE_TIME: f64 = 2.0;
+
+    pub fn v(p: [f64; 2]) -> Vec2 {
+        Vec2::new(p[0], p[1])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::experiment as ex;
+    use super::*;
+    use crate::testkit::Sim;
+    use crate::{BodyKind, ParamValue, Segment, SelfState, Sensed};
+
+    fn obs<'a>(
+        pos: Vec2,
+        goal: Vec2,
+        others: &'a [Sensed],
+        walls: &'a [Segment],
+    ) -> Observation<'a> {
+        Observation {
+            tick: 0,
+            time: 0.0,
+            dt: 0.1,
+            me: SelfState {
+                id: 0,
+                position: pos,
+                velocity: Vec2::zeros(),
+                radius: 0.2,
+                mass: 1.0,
+                damping: 0.0,
+                max_speed: 5.0,
+                max_accel: 20.0,
+            },
+            goal,
+            goal_tolerance: 0.05,
+            others,
+            walls,
+            path: None,
+        }
+    }
+
+    fn sensed(p: Vec2, v: Vec2, r: f64) -> Sensed {
+        Sensed {
+            id: 9,
+            kind: BodyKind::Obstacle,
+            position: p,
+            velocity: v,
+            acceleration: Vec2::zeros(),
+            radius: r,
+        }
+    }
+
+    #[test]
+    fn sink_flow_points_at_the_goal_everywhere_away_from_obstacles() {
+        let goal = Vec2::new(3.0, -2.0);
+        for i in 0..20 {
+            for j in 0..20 {
+                let z = Vec2::new(-10.0 + i as f64 * 1.07, -10.0 + j as f64 * 1.13);
+                let mut p = Hydro {
+                    start: Some(Vec2::new(-12.0, 0.0)),
+                    ..Hydro::default()
+                };
+                let v = p.plan(&obs(z, goal, &[], &[])).vector();
+                if (goal - z).norm() < 1e-9 {
+                    continue;
+                }
+                assert!(v.norm() > 0.0, "at {z:?}");
+                let e = goal - z;
+                let sin = (v.x * e.y - v.y * e.x) / (v.norm() * e.norm());
+                assert!(sin.abs() < 1e-12 && v.dot(&e) > 0.0, "at {z:?}: {v:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn far_from_everything_the_speed_is_the_sink_strength() {
+        let p = Hydro::default();
+        let start = Vec2::new(0.0, 0.0);
+        let goal = Vec2::new(100.0, 0.0);
+        let v = p.velocity_at(Vec2::new(50.0, 0.0), start, goal, &[]);
+        assert!((v.norm() - p.strength).abs() < 1e-9, "{v:?}");
+    }
+
+    #[test]
+    fn no_flow_enters_a_standing_cylinder() {
+        let p = Hydro::default();
+        let goal = Vec2::new(10.0, 1.0);
+        let body = p.body(Vec2::new(4.0, 0.5), Vec2::zeros(), 1.0, 0.2);
+        for k in 0..72 {
+            let th = k as f64 * PI / 36.0;
+            let n = Vec2::new(th.cos(), th.sin());
+            let z = body.center + n * (body.radius * (1.0 + 1e-9));
+            let v = p.velocity_at(z, Vec2::new(-3.0, 0.0), goal, &[body]);
+            assert!(
+                v.dot(&n).abs() < 1e-6 * (1.0 + v.norm()),
+                "theta {th}: {v:?}"
+            );
+        }
+        // And the flow is not trivially zero there.
+        let side = body.center + Vec2::new(0.0, body.radius * 1.000001);
+        assert!(
+            p.velocity_at(side, Vec2::new(-3.0, 0.0), goal, &[body])
+                .norm()
+                > 0.1
+        );
+    }
+
+    /// Normal component of (flow - body velocity) on the ellipse boundary
+    /// of a translating body, without `h` and `b` (the exact potential).
+    fn worst_normal_flux(body: &FlowBody, goal: Vec2, m: f64) -> f64 {
+        let speed = body.velocity.norm();
+        let rot = cx(body.velocity) / speed;
+        let big_r = body.zeta_radius();
+        let c = body.focal;
+        let major = big_r + c * c / big_r;
+        let minor = big_r - c * c / big_r;
+        assert!((minor - body.radius).abs() < 1e-12);
+        let mut worst: f64 = 0.0;
+        for k in 0..360 {
+            let th = k as f64 * PI / 180.0 + 0.0123;
+            // Point on the ellipse, slightly outside, in the body frame.
+            let local = C::new(major * th.cos(), minor * th.sin()) * (1.0 + 1e-10);
+            let normal_local = C::new(th.cos() / major, th.sin() / minor);
+            let z = cx(body.center) + rot * local;
+            let n = rot * normal_local / normal_local.norm();
+            let BodyFlow::Outside(g, d) = body.flow(m, z, cx(goal)) else {
+                panic!("point {th} counted inside");
+            };
+            let flow = (g + d).conj() - cx(body.velocity);
+            let flux = (flow * n.conj()).re;
+            worst = worst.max(flux.abs() / (1.0 + flow.norm()));
+        }
+        worst
+    }
+
+    #[test]
+    fn ellipse_flow_does_not_cross_the_moving_ellipse_in_its_own_frame() {
+        let p = Hydro::default();
+        for (vel, goal) in [
+            (Vec2::new(-0.5, 0.0), Vec2::new(10.0, 0.0)),
+            (Vec2::new(0.3, -0.8), Vec2::new(-4.0, 7.0)),
+            (Vec2::new(1.5, 1.0), Vec2::new(2.0, -9.0)),
+        ] {
+            let body = p.body(Vec2::new(3.0, 1.0), vel, 0.3, 0.2);
+            assert!(body.focal > 0.0);
+            let worst = worst_normal_flux(&body, goal, p.strength);
+            assert!(worst < 1e-6, "velocity {vel:?}: relative flux {worst}");
+        }
+    }
+
+    #[test]
+    fn ellipse_is_longer_along_the_motion_and_grows_with_speed() {
+        let p = Hydro::default();
+        let slow = p.body(Vec2::zeros(), Vec2::new(0.2, 0.0), 0.3, 0.2);
+        let fast = p.body(Vec2::zeros(), Vec2::new(0.8, 0.0), 0.3, 0.2);
+        let major = |b: &FlowBody| {
+            let r = b.zeta_radius();
+            r + b.focal * b.focal / r
+        };
+        assert!(major(&slow) > slow.radius);
+        assert!(major(&fast) > major(&slow));
+        // A point ahead of the obstacle, outside the circle but inside the
+        // fast ellipse, is inside the avoidance region.
+        let ahead = Vec2::new(major(&fast) * 0.9, 0.0);
+        assert!(ahead.x > fast.radius);
+        assert!(matches!(
+            fast.flow(0.5, cx(ahead), C::new(10.0, 0.0)),
+            BodyFlow::Inside
+        ));
+    }
+
+    #[test]
+    fn circle_doublet_does_not_cross_the_moving_circle_in_its_own_frame() {
+        let p = Hydro {
+            shape: Shape::Circle,
+            ..Hydro::default()
+        };
+        let body = p.body(Vec2::new(3.0, 1.0), Vec2::new(-0.5, 0.2), 0.3, 0.2);
+        assert_eq!(body.focal, 0.0);
+        for k in 0..72 {
+            let th = k as f64 * PI / 36.0 + 0.01;
+            let n = C::new(th.cos(), th.sin());
+            let z = cx(body.center) + n * body.radius * (1.0 + 1e-10);
+            let BodyFlow::Outside(g, d) = body.flow(0.5, z, C::new(10.0, 0.0)) else {
+                panic!("inside");
+            };
+            let flow = (g + d).conj() - cx(body.velocity);
+            assert!((flow * n.conj()).re.abs() < 1e-6, "theta {th}");
+        }
+    }
+
+    #[test]
+    fn speed_correction_is_finite_at_the_goal_and_the_speed_vanishes_there() {
+        let p = Hydro::default();
+        let start = Vec2::new(0.0, 0.0);
+        let goal = Vec2::new(5.0, 0.0);
+        let mut last = f64::INFINITY;
+        for k in 1..12 {
+            let r = 10f64.powi(-k);
+            let z = goal - Vec2::new(r, 0.0);
+            let h = p.speed_correction(z, start, goal);
+            assert!(h.is_finite() && h <= r);
+            let v = p.velocity_at(z, start, goal, &[]).norm();
+            // Close to the goal the speed is about m c2 |z - z_g|.
+            assert!(v <= p.strength * p.c2 * r * (1.0 + 1e-6), "r {r}: {v}");
+            assert!(v < last);
+            last = v;
+        }
+        assert_eq!(p.velocity_at(goal, start, goal, &[]), Vec2::zeros());
+    }
+
+    #[test]
+    fn speed_ramps_up_from_the_start() {
+        let p = Hydro::default();
+        let start = Vec2::new(0.0, 0.0);
+        let goal = Vec2::new(10.0, 0.0);
+        let v0 = p.velocity_at(start, start, goal, &[]).norm();
+        let expected = p.strength * (1.0 - (-p.epsilon).exp()) * (1.0 - (-p.c2 * 10.0).exp());
+        assert!((v0 - expected).abs() < 1e-12 && v0 > 0.0);
+        let v1 = p.velocity_at(Vec2::new(0.5, 0.0), start, goal, &[]).norm();
+        let v2 = p.velocity_at(Vec2::new(2.0, 0.0), start, goal, &[]).norm();
+        assert!(v0 < v1 && v1 < v2, "{v0} {v1} {v2}");
+    }
+
+    #[test]
+    fn printed_eq_21_jumps_at_gamma_and_ours_is_continuous() {
+        let gamma = 3.0 * PI / 4.0;
+        // As printed: (1 + cos 2 beta) / 2 with beta = gamma - pi/2 at the band's end.
+        let printed_end = 0.5 * (1.0 + (2.0 * (gamma - FRAC_PI_2)).cos());
+        assert!((printed_end - 0.5).abs() < 1e-12);
+        let p = Hydro::default();
+        let body = FlowBody {
+            center: Vec2::zeros(),
+            radius: 0.5,
+            velocity: Vec2::new(1.0, 0.0),
+            focal: 0.0,
+        };
+        let b = |phi: f64| p.correction_at(Vec2::new(phi.cos(), phi.sin()) * 2.0, &body);
+        let n = 20_000;
+        let mut worst: f64 = 0.0;
+        for k in 0..n {
+            let a = -PI + 2.0 * PI * k as f64 / n as f64;
+            let step = 2.0 * PI / n as f64;
+            worst = worst.max((b(a + step) - b(a)).abs());
+        }
+        // The largest step over an angle step of 3e-4 rad is of its order.
+        assert!(worst < 1e-3, "worst jump {worst}");
+        assert!((b(0.0) - 1.0).abs() < 1e-12);
+        assert!((b(FRAC_PI_2 + 1e-9) - 1.0).abs() < 1e-9);
+        assert!(b(gamma - 1e-9).abs() < 1e-9);
+        assert_eq!(b(PI), 0.0);
+        // With gamma = pi it is the printed eq (21).
+        let q = Hydro {
+            gamma: PI,
+            ..Hydro::default()
+        };
+        for phi in [1.7, 2.0, 2.5, 3.0] {
+            let beta = phi - (0.0 + FRAC_PI_2);
+            let printed = 0.5 * (1.0 + (2.0 * beta).cos());
+            let ours = q.correction_at(Vec2::new(phi.cos(), phi.sin()), &body);
+            assert!((printed - ours).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn binary_correction_jumps_at_the_obstacles_beam() {
+        let p = Hydro {
+            correction: Correction::Binary,
+            ..Hydro::default()
+        };
+        let body = FlowBody {
+            center: Vec2::zeros(),
+            radius: 0.5,
+            velocity: Vec2::new(0.0, 1.0),
+            focal: 0.0,
+        };
+        assert_eq!(p.correction_at(Vec2::new(1.0, 1e-9), &body), 1.0);
+        assert_eq!(p.correction_at(Vec2::new(1.0, -1e-9), &body), 0.0);
+    }
+
+    #[test]
+    fn a_sensed_obstacle_ahead_deflects_the_command_to_the_free_side() {
+        let goal = Vec2::new(10.0, 0.0);
+        let mut free = Hydro::default();
+        let v_free = free.plan(&obs(Vec2::zeros(), goal, &[], &[])).vector();
+        // Obstacle slightly above the straight line, coming head-on.
+        let others = [sensed(Vec2::new(1.5, 0.2), Vec2::new(-0.5, 0.0), 0.3)];
+        let mut p = Hydro::default();
+        let v = p.plan(&obs(Vec2::zeros(), goal, &others, &[])).vector();
+        assert!(v_free.y.abs() < 1e-12);
+        assert!(v.y < -1e-3 * v.norm(), "{v:?}");
+    }
+
+    #[test]
+    fn weights_favour_the_nearest_obstacle() {
+        // Next to one obstacle's boundary the flow is that obstacle's alone:
+        // no flow into it although another obstacle is near.
+        let p = Hydro::default();
+        let goal = Vec2::new(10.0, 0.0);
+        let a = p.body(Vec2::new(4.0, 0.0), Vec2::zeros(), 0.5, 0.2);
+        let b = p.body(Vec2::new(4.0, 2.0), Vec2::zeros(), 0.5, 0.2);
+        let n = Vec2::new(-0.6, 0.8);
+        let z = a.center + n * (a.radius + 1e-7);
+        let v = p.velocity_at(z, Vec2::zeros(), goal, &[a, b]);
+        assert!(v.dot(&n).abs() < 1e-5 * v.norm(), "{v:?}");
+    }
+
+    #[test]
+    fn a_wall_between_robot_and_goal_is_not_crossed() {
+        let walls = [Segment {
+            a: Vec2::new(2.0, -1.5),
+            b: Vec2::new(2.0, 1.5),
+        }];
+        let mut sim = Sim::new(0.05, 10);
+        let planner = Hydro::default();
+        let i = sim.add_robot(
+            Box::new(planner),
+            Vec2::new(0.0, 0.1),
+            Vec2::new(5.0, 0.0),
+            0.2,
+            1.0,
+            0.0,
+            5.0,
+            20.0,
+        );
+        sim.robots[i].velocity_lag = 0.1;
+        sim.walls = walls.to_vec();
+        let mut reached = false;
+        for _ in 0..1200 {
+            sim.step();
+            let p = sim.robots[i].state.position;
+            let d = (walls[0].closest_point(p) - p).norm();
+            assert!(d > 0.2, "touched the wall at {p:?}");
+            if (p - Vec2::new(5.0, 0.0)).norm() < 0.05 {
+                reached = true;
+                break;
+            }
+        }
+        assert!(reached, "stopped at {:?}", sim.robots[i].state.position);
+    }
+
+    #[test]
+    fn parameters_have_the_issue_names_and_refuse_bad_values() {
+        let mut params = Params::new();
+        for (k, v) in [
+            ("strength", ParamValue::Number(0.7)),
+            ("c1", ParamValue::Number(1.0)),
+            ("c2", ParamValue::Number(3.0)),
+            ("epsilon", ParamValue::Number(0.2)),
+            ("shape", ParamValue::Text("circle".into())),
+            ("correction", ParamValue::Text("binary".into())),
+            ("gamma", ParamValue::Number(PI)),
+            ("ellipse_time", ParamValue::Number(2.0)),
+            ("delay", ParamValue::Number(0.1)),
+        ] {
+            params.insert(k.into(), v);
+        }
+        let p = Hydro::from_params(&params).unwrap();
+        assert_eq!(p.shape, Shape::Circle);
+        assert_eq!(p.correction, Correction::Binary);
+        assert_eq!(p.delay, 0.1);
+        params.insert("gamma".into(), ParamValue::Number(1.0));
+        assert!(Hydro::from_params(&params).is_err());
+        params.insert("gamma".into(), ParamValue::Number(PI));
+        params.insert("shape".into(), ParamValue::Text("square".into()));
+        assert!(Hydro::from_params(&params).is_err());
+    }
+
+    #[test]
+    fn delay_grows_the_avoidance_radius_by_the_distance_moved() {
+        let p = Hydro {
+            delay: 0.4,
+            ..Hydro::default()
+        };
+        let b = p.body(Vec2::zeros(), Vec2::new(0.0, 2.0), 0.3, 0.2);
+        assert!((b.radius - (0.3 + 0.2 + 0.8)).abs() < 1e-12);
+    }
+
+    /// One run of the paper's experiment (figs 15-20) with the constants of
+    /// the scenario files.
+    struct Run {
+        reached: bool,
+        reached_at: f64,
+        min_clearance: f64,
+        peak_time: f64,
+        max_dv_time: f64,
+        peak_speed: f64,
+        max_dv: f64,
+        speeds: Vec<f64>,
+    }
+
+    fn experiment(shape: &str, correction: &str) -> Run {
+        experiment_d(shape, correction, ex::ELLIPSE_TIME)
+    }
+
+    #[test]
+    #[ignore = "prints peak speed and velocity change against ellipse_time"]
+    fn print_ellipse_time_scan() {
+        for d in [0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 4.0] {
+            for c in ["binary", "smooth"] {
+                let r = experiment_d("ellipse", c, d);
+                eprintln!(
+                    "d {d} {c}: reached {} clearance {:.3} peak {:.4} dv {:.4}",
+                    r.reached, r.min_clearance, r.peak_speed, r.max_dv
+                );
+            }
+        }
+    }
+
+    fn experiment_d(shape: &str, correction: &str, d: f64) -> Run {
+        let mut params = Params::new();
+        params.insert("shape".into(), ParamValue::Text(shape.into()));
+        params.insert("correction".into(), ParamValue::Text(correction.into()));
+        params.insert("strength".into(), ParamValue::Number(ex::STRENGTH));
+        params.insert("ellipse_time".into(), ParamValue::Number(d));
+        params.insert("delay".into(), ParamValue::Number(ex::VELOCITY_LAG));
+        let planner = crate::build("hydro", &params).unwrap();
+        let mut sim = Sim::new(ex::DT, ex::SUBSTEPS);
+        let goal = ex::v(ex::ROBOT_GOAL);
+        let i = sim.add_robot(
+            planner,
+            ex::v(ex::ROBOT_START),
+            goal,
+            ex::ROBOT_RADIUS,
+            ex::MASS,
+            0.0,
+            ex::MAX_SPEED,
+            ex::MAX_ACCEL,
+        );
+        sim.robots[i].velocity_lag = ex::VELOCITY_LAG;
+        sim.add_obstacle(
+            ex::v(ex::OBSTACLE_START),
+            ex::v(ex::OBSTACLE_VELOCITY),
+            ex::OBSTACLE_RADIUS,
+        );
+        let ticks = (ex::DURATION / ex::DT).round() as u64;
+        let mut run = Run {
+            reached: false,
+            reached_at: f64::NAN,
+            min_clearance: f64::INFINITY,
+            peak_time: 0.0,
+            max_dv_time: 0.0,
+            peak_speed: 0.0,
+            max_dv: 0.0,
+            speeds: Vec::new(),
+        };
+        let mut last_v = Vec2::zeros();
+        for _ in 0..ticks {
+            sim.step();
+            let s = sim.robots[i].state;
+            run.min_clearance = run.min_clearance.min(sim.clearance(i));
+            let t = sim.tick as f64 * ex::DT;
+            if s.velocity.norm() > run.peak_speed {
+                run.peak_speed = s.velocity.norm();
+                run.peak_time = t;
+            }
+            if (s.velocity - last_v).norm() > run.max_dv {
+                run.max_dv = (s.velocity - last_v).norm();
+                run.max_dv_time = t;
+            }
+            run.speeds.push(s.velocity.norm());
+            last_v = s.velocity;
+            if !run.reached && (s.position - goal).norm() <= ex::GOAL_TOLERANCE {
+                run.reached = true;
+                run.reached_at = t;
+            }
+        }
+        run
+    }
+
+    #[test]
+    fn scenario_files_use_the_experiment_constants() {
+        let files = [
+            (
+                "circle",
+                "binary",
+                include_str!("../../../scenarios/papers/hydro-circle-binary.toml"),
+            ),
+            (
+                "circle",
+                "smooth",
+                include_str!("../../../scenarios/papers/hydro-circle-smooth.toml"),
+            ),
+            (
+                "ellipse",
+                "binary",
+                include_str!("../../../scenarios/papers/hydro-ellipse-binary.toml"),
+            ),
+            (
+                "ellipse",
+                "smooth",
+                include_str!("../../../scenarios/papers/hydro-ellipse-smooth.toml"),
+            ),
+        ];
+        let p = |x: [f64; 2]| format!("[{:?}, {:?}]", x[0], x[1]);
+        let d = Hydro::default();
+        for (shape, correction, text) in files {
+            for line in [
+                format!("dt = {:?}", ex::DT),
+                format!("substeps = {}", ex::SUBSTEPS),
+                format!("duration = {:?}", ex::DURATION),
+                format!("radius = {:?}", ex::ROBOT_RADIUS),
+                format!("mass = {:?}", ex::MASS),
+                format!("max_speed = {:?}", ex::MAX_SPEED),
+                format!("max_accel = {:?}", ex::MAX_ACCEL),
+                format!("velocity_lag = {:?}", ex::VELOCITY_LAG),
+                format!("goal_tolerance = {:?}", ex::GOAL_TOLERANCE),
+                format!("start = {}", p(ex::ROBOT_START)),
+                format!("goal = {}", p(ex::ROBOT_GOAL)),
+                format!("start = {}", p(ex::OBSTACLE_START)),
+                format!("radius = {:?}", ex::OBSTACLE_RADIUS),
+                format!("velocity = {} }}", p(ex::OBSTACLE_VELOCITY)),
+                format!(
+                    "strength = {:?}, c1 = {:?}, c2 = {:?}, epsilon = {:?},",
+                    ex::STRENGTH,
+                    d.c1,
+                    d.c2,
+                    d.epsilon
+                ),
+                format!("gamma = {:?},", d.gamma),
+                format!("shape = \"{shape}\", correction = \"{correction}\""),
+                format!(
+                    "ellipse_time = {:?}, delay = {:?} }}",
+                    ex::ELLIPSE_TIME,
+                    ex::VELOCITY_LAG
+                ),
+            ] {
+                assert!(text.contains(&line), "{shape}-{correction} lacks `{line}`");
+            }
+        }
+    }
+
+    #[test]
+    fn paper_experiment_every_variant_reaches_the_goal_without_collision() {
+        for shape in ["circle", "ellipse"] {
+            for correction in ["binary", "smooth"] {
+                let r = experiment(shape, correction);
+                eprintln!(
+                    "hydro {shape}/{correction}: reached at {:.2} s, min clearance {:.4}, \
+                     peak speed {:.4} at {:.2} s, max |dv| per tick {:.4} at {:.2} s",
+                    r.reached_at,
+                    r.min_clearance,
+                    r.peak_speed,
+                    r.peak_time,
+                    r.max_dv,
+                    r.max_dv_time
+                );
+                assert!(r.reached, "{shape}/{correction}");
+                assert!(r.min_clearance > 0.0, "{shape}/{correction}");
+            }
+        }
+    }
+
+    #[test]
+    fn paper_experiment_ellipse_peak_speed_is_below_the_circles() {
+        for correction in ["binary", "smooth"] {
+            let c = experiment("circle", correction);
+            let e = experiment("ellipse", correction);
+            assert!(
+                e.peak_speed < c.peak_speed,
+                "{correction}: ellipse {} circle {}",
+                e.peak_speed,
+                c.peak_speed
+            );
+        }
+    }
+
+    #[test]
+    fn paper_experiment_smooth_velocity_change_is_below_the_binarys() {
+        for shape in ["circle", "ellipse"] {
+            let b = experiment(shape, "binary");
+            let s = experiment(shape, "smooth");
+            assert!(
+                s.max_dv < b.max_dv,
+                "{shape}: smooth {} binary {}",
+                s.max_dv,
+                b.max_dv
+            );
+        }
+    }
+
+    #[test]
+    #[ignore = "prints the speed traces of the four variants"]
+    fn print_speed_traces() {
+        let runs: Vec<_> = ["circle", "ellipse"]
+            .iter()
+            .flat_map(|s| ["binary", "smooth"].map(|c| (*s, c)))
+            .map(|(s, c)| experiment(s, c).speeds)
+            .collect();
+        for (k, s) in runs[0].iter().enumerate() {
+            let t = (k + 1) as f64 * ex::DT;
+            eprintln!(
+                "{t:.2} {s:.4} {:.4} {:.4} {:.4}",
+                runs[1][k], runs[2][k], runs[3][k]
+            );
+        }
+    }
+}
