@@ -15,7 +15,10 @@
 pub mod params;
 mod registry;
 
+pub mod dwa;
 pub mod homing;
+pub mod orca;
+pub mod social_force;
 pub mod testkit;
 
 pub use params::{ParamError, ParamReader, ParamValue, Params};

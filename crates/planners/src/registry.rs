@@ -12,10 +12,24 @@ pub struct PlannerInfo {
 }
 
 /// Every planner [`build`] knows, in the order the README lists them.
-pub const PLANNERS: &[PlannerInfo] = &[PlannerInfo {
-    name: "homing",
-    summary: "attraction to the goal with velocity damping, no avoidance (Chung et al. eq 2)",
-}];
+pub const PLANNERS: &[PlannerInfo] = &[
+    PlannerInfo {
+        name: "homing",
+        summary: "attraction to the goal with velocity damping, no avoidance (Chung et al. eq 2)",
+    },
+    PlannerInfo {
+        name: "orca",
+        summary: "optimal reciprocal collision avoidance, as in RVO2 (van den Berg et al. 2011)",
+    },
+    PlannerInfo {
+        name: "dwa",
+        summary: "dynamic window approach for a holonomic disc (Fox, Burgard & Thrun 1997)",
+    },
+    PlannerInfo {
+        name: "social-force",
+        summary: "social force model: goal relaxation plus exponential repulsion (Helbing & Molnar 1995)",
+    },
+];
 
 /// Why a planner could not be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -37,6 +51,9 @@ pub enum BuildError {
 pub fn build(name: &str, params: &Params) -> Result<Box<dyn Planner>, BuildError> {
     Ok(match name {
         "homing" => Box::new(crate::homing::Homing::from_params(params)?),
+        "orca" => Box::new(crate::orca::Orca::from_params(params)?),
+        "dwa" => Box::new(crate::dwa::Dwa::from_params(params)?),
+        "social-force" => Box::new(crate::social_force::SocialForce::from_params(params)?),
         _ => {
             return Err(BuildError::UnknownPlanner {
                 name: name.to_string(),
