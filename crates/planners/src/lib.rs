@@ -19,6 +19,10 @@ pub mod chung;
 pub mod homing;
 pub mod khatib;
 pub mod hydro;
+pub mod dwa;
+pub mod homing;
+pub mod orca;
+pub mod social_force;
 pub mod testkit;
 pub mod vdf;
 

@@ -41,6 +41,18 @@ pub const PLANNERS: &[PlannerInfo] = &[
         name: "hydro",
         summary: "guiding velocity of a sink-and-cylinder flow, circle or ellipse, binary or smooth anti-chasing (Sugiyama et al.)",
     },
+    PlannerInfo {
+        name: "orca",
+        summary: "optimal reciprocal collision avoidance, as in RVO2 (van den Berg et al. 2011)",
+    },
+    PlannerInfo {
+        name: "dwa",
+        summary: "dynamic window approach for a holonomic disc (Fox, Burgard & Thrun 1997)",
+    },
+    PlannerInfo {
+        name: "social-force",
+        summary: "social force model: goal relaxation plus exponential repulsion (Helbing & Molnar 1995)",
+    },
 ];
 
 /// Why a planner could not be built.
@@ -78,6 +90,9 @@ pub fn build(name: &str, params: &Params) -> Result<Box<dyn Planner>, BuildError
         "vdf" => Box::new(crate::vdf::Vdf::from_params(params)?),
         "khatib" => Box::new(crate::khatib::khatib_from_params(params)?),
         "hydro" => Box::new(crate::hydro::Hydro::from_params(params)?),
+        "orca" => Box::new(crate::orca::Orca::from_params(params)?),
+        "dwa" => Box::new(crate::dwa::Dwa::from_params(params)?),
+        "social-force" => Box::new(crate::social_force::SocialForce::from_params(params)?),
         _ => {
             return Err(BuildError::UnknownPlanner {
                 name: name.to_string(),

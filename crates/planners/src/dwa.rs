@@ -1,0 +1,395 @@
+//! Dynamic window approach: D. Fox, W. Burgard & S. Thrun, "The Dynamic
+//! Window Approach to Collision Avoidance", IEEE Robotics & Automation
+//! Magazine 4(1), 1997, pp. 23-33, written for a holonomic disc.
+//!
+//! The paper searches (v, omega) of a synchro-drive; a holonomic disc
+//! commands a velocity vector, so the search space here is the velocity
+//! plane and the "curvature" of each candidate is a straight line.
+//!
+//! 1. **Dynamic window** V_d (paper section 3.1, "dynamic window"): the
+//!    velocities reachable within one control period, |v - v_c| <=
+//!    max_accel * dt around the current velocity v_c, intersected with the
+//!    speed limit V_s (|v| <= max_speed). It is sampled on a `samples` x
+//!    `samples` grid over its bounding box (the current velocity is always
+//!    a candidate).
+//! 2. **Admissible velocities** V_a (section 3.1): the paper admits v when
+//!    the robot can still stop before the first obstacle on its curvature,
+//!    v <= sqrt(2 dist(v) a_brake). The paper's obstacles stand still;
+//!    here every other body moves (at its sensed velocity, held constant),
+//!    so we apply the condition in each body's own frame, where it does
+//!    stand still: v is admissible when, for every body o, |v - v_o| <=
+//!    sqrt(2 dist_o max_accel) with dist_o = |v - v_o| t_o(v), t_o the time
+//!    to contact with o (walls: v_o = 0, which is the paper's condition).
+//!    Neither reading makes DWA collision-free between moving robots (each
+//!    assumes the other keeps its velocity): two robots reaching a
+//!    right-angle crossing at the same instant graze (overlap 0.006 with
+//!    radius 0.3 in the testkit); staggered by one unit they pass.
+//! 3. **Objective** (section 3.2, eq for G(v, omega)):
+//!    G(v) = w_heading heading(v) + w_clearance clearance(v) + w_speed speed(v),
+//!    maximised over the admissible samples, each term in [0, 1]:
+//!    - heading = 1 - theta / pi, theta the angle between v and the goal as
+//!      seen from the position reached after one period (the paper
+//!      evaluates the heading at the predicted position); 1/2 for v = 0;
+//!    - clearance = min(t_c, horizon) / horizon: the paper's dist term,
+//!      measured in time so that it covers moving bodies, and saturated at
+//!      `horizon` as the paper saturates dist when nothing is on the
+//!      curvature;
+//!    - speed = 1 - ||v| - v_goal| / max_speed with v_goal = min(max_speed,
+//!      sqrt(2 max_accel d_goal), d_goal / dt): the paper's "as fast as
+//!      possible" while far from the goal, and a braking profile near it
+//!      (the paper leaves stopping at the goal to its global planner; a
+//!      point goal needs one).
+//!
+//!    The paper smooths the weighted sum and normalises each term over the
+//!    window; we use the fixed normalisations above instead, which keeps
+//!    the weights comparable between ticks.
+//!
+//! Within `goal_tolerance` of the goal the robot picks the slowest
+//! admissible sample (it stops). If no sample is admissible (already
+//! boxed in), it picks the one with the longest time to contact.
+//!
+//! Parameters and defaults: `w_heading` = 2, `w_clearance` = 0.2, `w_speed`
+//! = 0.2 (Fox et al.'s alpha, beta, gamma in their RHINO experiments, as the
+//! paper reports them; the paper is not among shared/papers, so these are
+//! quoted from the published article); `samples` = 11 per axis and
+//! `horizon` = 3 s are our choices (the paper discretises its window
+//! without fixing a resolution).
+
+use crate::{Command, Observation, ParamError, ParamReader, Params, Planner, Segment, Vec2};
+
+/// Dynamic window approach for a holonomic disc.
+#[derive(Debug, Clone)]
+pub struct Dwa {
+    /// Grid points per axis over the dynamic window.
+    pub samples: usize,
+    /// Weight of the heading term (paper's alpha).
+    pub w_heading: f64,
+    /// Weight of the clearance term (paper's beta).
+    pub w_clearance: f64,
+    /// Weight of the speed term (paper's gamma).
+    pub w_speed: f64,
+    /// Look-ahead time at which clearance saturates, s.
+    pub horizon: f64,
+}
+
+impl Default for Dwa {
+    fn default() -> Self {
+        Self {
+            samples: 11,
+            w_heading: 2.0,
+            w_clearance: 0.2,
+            w_speed: 0.2,
+            horizon: 3.0,
+        }
+    }
+}
+
+/// Smallest t >= 0 with |p + v t| <= r, for a point at `p` moving at `v`
+/// relative to a disc of radius `r` at the origin; `None` if never. A point
+/// already inside counts as a contact at 0 only while it moves inwards.
+fn time_to_disc(p: Vec2, v: Vec2, r: f64) -> Option<f64> {
+    let c = p.norm_squared() - r * r;
+    let b = p.dot(&v);
+    if c <= 0.0 {
+        return (b < 0.0).then_some(0.0);
+    }
+    let a = v.norm_squared();
+    if b >= 0.0 || a <= f64::EPSILON {
+        return None;
+    }
+    let disc = b * b - a * c;
+    if disc < 0.0 {
+        return None;
+    }
+    Some((-b - disc.sqrt()) / a)
+}
+
+/// Time until a disc of radius `r` at `p` moving at `v` first touches the
+/// static segment `s`; `None` if never.
+fn time_to_segment(p: Vec2, v: Vec2, r: f64, s: &Segment) -> Option<f64> {
+    let closest = s.closest_point(p);
+    let gap = p - closest;
+    if gap.norm() <= r {
+        // Touching already: contact now only when moving into the wall.
+        return (gap.dot(&v) < 0.0).then_some(0.0);
+    }
+    // The two round ends.
+    let mut best = [s.a, s.b]
+        .iter()
+        .filter_map(|&e| time_to_disc(p - e, v, r))
+        .fold(f64::INFINITY, f64::min);
+    // The flat sides: the line through the segment, offset by r.
+    let ab = s.b - s.a;
+    let len = ab.norm();
+    if len > f64::EPSILON {
+        let n = Vec2::new(-ab.y, ab.x) / len;
+        let dist = (p - s.a).dot(&n);
+        let closing = -v.dot(&n) * dist.signum();
+        if closing > 0.0 {
+            let t = (dist.abs() - r) / closing;
+            let q = p + v * t;
+            let along = (q - s.a).dot(&ab) / (len * len);
+            if (0.0..=1.0).contains(&along) {
+                best = best.min(t);
+            }
+        }
+    }
+    best.is_finite().then_some(best)
+}
+
+impl Dwa {
+    /// Reads `samples`, `w_heading`, `w_clearance`, `w_speed` and `horizon`.
+    pub fn from_params(params: &Params) -> Result<Self, ParamError> {
+        let d = Self::default();
+        let mut r = ParamReader::new("dwa", params);
+        let samples = r.count("samples", d.samples, 2)?;
+        let w_heading = r.non_negative("w_heading", d.w_heading)?;
+        let w_clearance = r.non_negative("w_clearance", d.w_clearance)?;
+        let w_speed = r.non_negative("w_speed", d.w_speed)?;
+        let horizon = r.positive("horizon", d.horizon)?;
+        r.finish()?;
+        Ok(Self {
+            samples,
+            w_heading,
+            w_clearance,
+            w_speed,
+            horizon,
+        })
+    }
+
+    /// Time to the first contact of the robot moving at `v` (infinite if
+    /// none), and whether `v` is admissible: for every body (and wall),
+    /// the robot can bring its velocity relative to that body to zero
+    /// before contact, |v - v_o| <= sqrt(2 a_max |v - v_o| t_c).
+    fn time_to_contact(obs: &Observation, v: Vec2) -> (f64, bool) {
+        let me = &obs.me;
+        let a_max = me.max_accel;
+        let mut t_min = f64::INFINITY;
+        let mut admissible = true;
+        let mut consider = |t: Option<f64>, closing: Vec2| {
+            if let Some(t) = t {
+                t_min = t_min.min(t);
+                let s = closing.norm();
+                if s > 0.0 && s > 2.0 * a_max * t {
+                    admissible = false;
+                }
+            }
+        };
+        for o in obs.others {
+            let rel = v - o.velocity;
+            consider(
+                time_to_disc(me.position - o.position, rel, me.radius + o.radius),
+                rel,
+            );
+        }
+        for w in obs.walls {
+            consider(time_to_segment(me.position, v, me.radius, w), v);
+        }
+        (t_min, admissible)
+    }
+
+    /// The sampled dynamic window V_d intersected with V_s.
+    fn window(&self, obs: &Observation) -> Vec<Vec2> {
+        let me = &obs.me;
+        let reach = me.max_accel * obs.dt.max(0.0);
+        let vc = me.velocity;
+        let mut out = vec![vc];
+        let n = self.samples;
+        let lo = Vec2::new(
+            (vc.x - reach).max(-me.max_speed),
+            (vc.y - reach).max(-me.max_speed),
+        );
+        let hi = Vec2::new(
+            (vc.x + reach).min(me.max_speed),
+            (vc.y + reach).min(me.max_speed),
+        );
+        for i in 0..n {
+            for j in 0..n {
+                let f = |k: usize, a: f64, b: f64| a + (b - a) * k as f64 / (n - 1) as f64;
+                let v = Vec2::new(f(i, lo.x, hi.x), f(j, lo.y, hi.y));
+                if (v - vc).norm() <= reach * (1.0 + 1e-12)
+                    && v.norm() <= me.max_speed * (1.0 + 1e-12)
+                {
+                    out.push(v);
+                }
+            }
+        }
+        out
+    }
+}
+
+impl Planner for Dwa {
+    fn plan(&mut self, obs: &Observation) -> Command {
+        let me = &obs.me;
+        let to_goal = obs.goal - me.position;
+        let d_goal = to_goal.norm();
+        let a_max = me.max_accel;
+        let dt = if obs.dt > 0.0 { obs.dt } else { 1.0 };
+        let v_goal = me
+            .max_speed
+            .min((2.0 * a_max * d_goal).sqrt())
+            .min(d_goal / dt);
+        let at_goal = d_goal <= obs.goal_tolerance;
+
+        let mut best: Option<(f64, Vec2)> = None;
+        let mut least_bad = (f64::NEG_INFINITY, me.velocity);
+        for v in self.window(obs) {
+            let speed = v.norm();
+            let (t_c, admissible) = Self::time_to_contact(obs, v);
+            if t_c > least_bad.0 {
+                least_bad = (t_c, v);
+            }
+            if !admissible {
+                continue;
+            }
+            let score = if at_goal {
+                // Goal reached: stop (slowest admissible velocity).
+                -speed
+            } else {
+                // Heading at the predicted position.
+                let ahead = obs.goal - (me.position + v * dt);
+                let heading = if speed <= f64::EPSILON || ahead.norm() <= f64::EPSILON {
+                    0.5
+                } else {
+                    let cos = (v.dot(&ahead) / (speed * ahead.norm())).clamp(-1.0, 1.0);
+                    1.0 - cos.acos() / std::f64::consts::PI
+                };
+                let clearance = t_c.min(self.horizon) / self.horizon;
+                let speed_term = if me.max_speed > 0.0 {
+                    1.0 - (speed - v_goal).abs() / me.max_speed
+                } else {
+                    0.0
+                };
+                self.w_heading * heading + self.w_clearance * clearance + self.w_speed * speed_term
+            };
+            if best.is_none_or(|(s, _)| score > s) {
+                best = Some((score, v));
+            }
+        }
+        // No admissible velocity: the one that keeps contact furthest off.
+        Command::Velocity(best.map_or(least_bad.1, |(_, v)| v))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testkit::Sim;
+    use crate::{BodyKind, SelfState, Sensed};
+
+    fn obs<'a>(velocity: Vec2, others: &'a [Sensed], walls: &'a [Segment]) -> Observation<'a> {
+        Observation {
+            tick: 0,
+            time: 0.0,
+            dt: 0.1,
+            me: SelfState {
+                id: 0,
+                position: Vec2::zeros(),
+                velocity,
+                radius: 0.3,
+                mass: 1.0,
+                damping: 0.0,
+                max_speed: 1.0,
+                max_accel: 2.0,
+            },
+            goal: Vec2::new(10.0, 0.0),
+            goal_tolerance: 0.1,
+            others,
+            walls,
+            path: None,
+        }
+    }
+
+    #[test]
+    fn time_to_contact_of_discs_and_segments_is_exact() {
+        // Point at x = -5 moving +x at 1 towards a disc of radius 1: t = 4.
+        let t = time_to_disc(Vec2::new(-5.0, 0.0), Vec2::new(1.0, 0.0), 1.0).unwrap();
+        assert!((t - 4.0).abs() < 1e-12);
+        assert!(time_to_disc(Vec2::new(-5.0, 0.0), Vec2::new(-1.0, 0.0), 1.0).is_none());
+        // Disc of radius 0.5 at the origin moving +x at 2 towards the wall
+        // x = 3: touches after (3 - 0.5) / 2.
+        let wall = Segment {
+            a: Vec2::new(3.0, -1.0),
+            b: Vec2::new(3.0, 1.0),
+        };
+        let t = time_to_segment(Vec2::zeros(), Vec2::new(2.0, 0.0), 0.5, &wall).unwrap();
+        assert!((t - 1.25).abs() < 1e-12, "{t}");
+        // Past the wall's end it reaches the round end only.
+        let t = time_to_segment(Vec2::new(0.0, 1.3), Vec2::new(1.0, 0.0), 0.5, &wall).unwrap();
+        assert!((t - 2.6).abs() < 1e-12, "{t}");
+    }
+
+    #[test]
+    fn chosen_velocity_stays_in_the_dynamic_window() {
+        let mut dwa = Dwa::default();
+        let v0 = Vec2::new(0.0, 0.8);
+        let v = dwa.plan(&obs(v0, &[], &[])).vector();
+        // Reachable in one tick: |dv| <= 2 * 0.1, and turned towards +x.
+        assert!((v - v0).norm() <= 0.2 + 1e-9, "{v:?}");
+        assert!(v.norm() <= 1.0 + 1e-9);
+        assert!(v.x > 0.1, "{v:?}");
+    }
+
+    #[test]
+    fn free_robot_heads_for_the_goal_at_full_speed() {
+        let mut dwa = Dwa::default();
+        let v = dwa.plan(&obs(Vec2::new(1.0, 0.0), &[], &[])).vector();
+        assert!((v - Vec2::new(1.0, 0.0)).norm() < 1e-9, "{v:?}");
+    }
+
+    #[test]
+    fn velocities_that_cannot_stop_before_contact_are_not_admissible() {
+        // A still body 0.1 from contact straight ahead: moving at u along
+        // x, stopping takes u^2 / 4 and contact comes after 0.1, so only
+        // u <= sqrt(0.4) = 0.63 is admissible; free, the robot would take
+        // the window's fastest, 0.7.
+        let ahead = [Sensed {
+            id: 1,
+            kind: BodyKind::Obstacle,
+            position: Vec2::new(0.7, 0.0),
+            velocity: Vec2::zeros(),
+            acceleration: Vec2::zeros(),
+            radius: 0.3,
+        }];
+        let mut dwa = Dwa::default();
+        let free = dwa.plan(&obs(Vec2::new(0.5, 0.0), &[], &[])).vector();
+        assert!((free - Vec2::new(0.7, 0.0)).norm() < 1e-9, "{free:?}");
+        let v = dwa.plan(&obs(Vec2::new(0.5, 0.0), &ahead, &[])).vector();
+        let (t_c, admissible) = Dwa::time_to_contact(&obs(Vec2::zeros(), &ahead, &[]), v);
+        assert!(admissible);
+        assert!(v.norm() <= 2.0 * t_c * 2.0 + 1e-12, "{v:?} t_c {t_c}");
+        assert!(v.x < 0.64, "{v:?}");
+    }
+
+    #[test]
+    fn two_robots_crossing_at_right_angles_one_behind_the_other_pass_without_contact() {
+        let mut sim = Sim::new(0.1, 10);
+        // B starts one unit further back: with both reaching the crossing
+        // at the same instant the encounter is mirror-symmetric about the
+        // diagonal, which this model resolves by no rule of its own.
+        let (ra, rb) = (Vec2::new(-5.0, 0.0), Vec2::new(0.0, -6.0));
+        for (start, goal) in [(ra, -ra), (rb, Vec2::new(0.0, 5.0))] {
+            sim.add_robot(
+                Box::new(Dwa::default()),
+                start,
+                goal,
+                0.3,
+                1.0,
+                0.0,
+                1.0,
+                2.0,
+            );
+        }
+        let mut min_gap = f64::INFINITY;
+        let mut reached = [false; 2];
+        for _ in 0..400 {
+            sim.step();
+            min_gap = min_gap.min(sim.clearance(0));
+            for (k, r) in sim.robots.iter().enumerate() {
+                reached[k] |= (r.state.position - r.goal).norm() < 0.2;
+            }
+        }
+        assert!(min_gap > 0.0, "contact: gap {min_gap}");
+        assert_eq!(reached, [true, true]);
+    }
+}
