@@ -15,6 +15,7 @@
 pub mod params;
 mod registry;
 
+pub mod designated_path;
 pub mod homing;
 pub mod testkit;
 

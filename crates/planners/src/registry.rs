@@ -12,10 +12,16 @@ pub struct PlannerInfo {
 }
 
 /// Every planner [`build`] knows, in the order the README lists them.
-pub const PLANNERS: &[PlannerInfo] = &[PlannerInfo {
-    name: "homing",
-    summary: "attraction to the goal with velocity damping, no avoidance (Chung et al. eq 2)",
-}];
+pub const PLANNERS: &[PlannerInfo] = &[
+    PlannerInfo {
+        name: "homing",
+        summary: "attraction to the goal with velocity damping, no avoidance (Chung et al. eq 2)",
+    },
+    PlannerInfo {
+        name: "designated-path",
+        summary: "subgoals on a designated path, via points in (x, y, t) at several speeds chosen by eq (1) (Yamada et al.)",
+    },
+];
 
 /// Why a planner could not be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -37,6 +43,9 @@ pub enum BuildError {
 pub fn build(name: &str, params: &Params) -> Result<Box<dyn Planner>, BuildError> {
     Ok(match name {
         "homing" => Box::new(crate::homing::Homing::from_params(params)?),
+        "designated-path" => Box::new(crate::designated_path::DesignatedPathPlanner::from_params(
+            params,
+        )?),
         _ => {
             return Err(BuildError::UnknownPlanner {
                 name: name.to_string(),
