@@ -1,6 +1,9 @@
 //! One `plan` call per planner with 64 sensed bodies.
 use criterion::{Criterion, criterion_group, criterion_main};
-use mrsim_planners::{BodyKind, Observation, PLANNERS, Params, SelfState, Sensed, Vec2, build};
+use mrsim_planners::{
+    BodyKind, DesignatedPath, Observation, PLANNERS, ParamValue, Params, SelfState, Sensed, Vec2,
+    build,
+};
 
 fn scene(n: usize) -> Vec<Sensed> {
     (0..n)
@@ -54,5 +57,58 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench);
+/// `designated-path` as the issue asks: a designated path, 16 sensed bodies,
+/// 6 speeds (the current one and 0.1..0.5 m/s), a robot in the paper's
+/// speed range among them.
+fn bench_designated_path(c: &mut Criterion) {
+    let others: Vec<Sensed> = scene(16)
+        .into_iter()
+        .map(|mut s| {
+            s.position *= 0.5;
+            s.velocity *= 0.3;
+            s.radius = 0.2;
+            s
+        })
+        .collect();
+    let path = DesignatedPath {
+        points: vec![
+            Vec2::new(0.0, 0.0),
+            Vec2::new(3.0, 0.0),
+            Vec2::new(3.0, 3.0),
+            Vec2::new(6.0, 3.0),
+        ],
+        boundary: 1.0,
+    };
+    let obs = Observation {
+        tick: 10,
+        time: 1.0,
+        dt: 0.1,
+        me: SelfState {
+            id: 0,
+            position: Vec2::new(0.0, 0.0),
+            velocity: Vec2::new(0.2, 0.0),
+            radius: 0.2,
+            mass: 1.0,
+            damping: 0.0,
+            max_speed: 0.5,
+            max_accel: 0.5,
+        },
+        goal: Vec2::new(6.0, 3.0),
+        goal_tolerance: 0.1,
+        others: &others,
+        walls: &[],
+        path: Some(&path),
+    };
+    let mut params = Params::new();
+    params.insert("subgoal_spacing".into(), ParamValue::Number(0.5));
+    let mut g = c.benchmark_group("plan_16_bodies_with_path");
+    if let Ok(mut p) = build("designated-path", &params) {
+        g.bench_function("designated-path", |b| {
+            b.iter(|| p.plan(std::hint::black_box(&obs)))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench, bench_designated_path);
 criterion_main!(benches);

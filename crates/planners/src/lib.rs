@@ -16,6 +16,7 @@ pub mod params;
 mod registry;
 
 pub mod chung;
+pub mod designated_path;
 pub mod homing;
 pub mod khatib;
 pub mod hydro;

@@ -53,6 +53,10 @@ pub const PLANNERS: &[PlannerInfo] = &[
         name: "social-force",
         summary: "social force model: goal relaxation plus exponential repulsion (Helbing & Molnar 1995)",
     },
+    PlannerInfo {
+        name: "designated-path",
+        summary: "subgoals on a designated path, via points in (x, y, t) at several speeds chosen by eq (1) (Yamada et al.)",
+    },
 ];
 
 /// Why a planner could not be built.
@@ -93,6 +97,9 @@ pub fn build(name: &str, params: &Params) -> Result<Box<dyn Planner>, BuildError
         "orca" => Box::new(crate::orca::Orca::from_params(params)?),
         "dwa" => Box::new(crate::dwa::Dwa::from_params(params)?),
         "social-force" => Box::new(crate::social_force::SocialForce::from_params(params)?),
+        "designated-path" => Box::new(crate::designated_path::DesignatedPathPlanner::from_params(
+            params,
+        )?),
         _ => {
             return Err(BuildError::UnknownPlanner {
                 name: name.to_string(),

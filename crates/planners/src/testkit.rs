@@ -8,7 +8,9 @@
 //! crossing avoided, a goal reached) in microseconds. The end-to-end tests
 //! run the same cases through the real world and agent processes.
 
-use crate::{BodyKind, Command, Observation, Planner, Segment, SelfState, Sensed, Vec2};
+use crate::{
+    BodyKind, Command, DesignatedPath, Observation, Planner, Segment, SelfState, Sensed, Vec2,
+};
 
 /// One robot of a [`Sim`].
 pub struct SimRobot {
@@ -22,6 +24,8 @@ pub struct SimRobot {
     pub velocity_lag: f64,
     /// Command being applied.
     pub command: Command,
+    /// Designated path passed to the planner (Yamada), if any.
+    pub path: Option<DesignatedPath>,
 }
 
 /// A scripted constant-velocity obstacle.
@@ -93,6 +97,7 @@ impl Sim {
             goal,
             velocity_lag: 0.0,
             command: Command::Force(Vec2::zeros()),
+            path: None,
         });
         self.robots.len() - 1
     }
@@ -138,7 +143,7 @@ impl Sim {
         let time = self.tick as f64 * self.dt;
         for i in 0..self.robots.len() {
             let others = self.sensed(i);
-            let r = &self.robots[i];
+            let r = &mut self.robots[i];
             let obs = Observation {
                 tick: self.tick,
                 time,
@@ -148,10 +153,10 @@ impl Sim {
                 goal_tolerance: 1e-3,
                 others: &others,
                 walls: &self.walls,
-                path: None,
+                path: r.path.as_ref(),
             };
-            let cmd = self.robots[i].planner.plan(&obs);
-            self.robots[i].command = cmd;
+            let cmd = r.planner.plan(&obs);
+            r.command = cmd;
         }
         let h = self.dt / self.substeps as f64;
         for _ in 0..self.substeps {
