@@ -167,7 +167,10 @@ fn replay_data(run: &RunData) -> Value {
     let mut open_lost: BTreeMap<usize, usize> = BTreeMap::new();
     let mut listed = Vec::new();
     let last_frame = ticks.len().saturating_sub(1);
-    for e in &run.events {
+    // In tick order (stable), whatever order the world logged them in.
+    let mut events: Vec<&crate::Event> = run.events.iter().collect();
+    events.sort_by_key(|e| e.tick);
+    for e in events {
         let frame = frame_of(e.tick);
         let text = match &e.kind {
             EventKind::Collision { a, b, .. } => {
