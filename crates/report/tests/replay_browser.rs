@@ -106,13 +106,11 @@ fn run_chromium(chromium: &Path, url: &str, extra: &[String]) -> String {
         "chromium failed ({status}); stderr:\n{}",
         std::fs::read_to_string(&stderr_path).unwrap_or_default()
     );
-    let out = std::fs::read_to_string(&stdout_path).unwrap();
-    let _ = std::fs::remove_dir_all(&profile);
-    out
+    std::fs::read_to_string(&stdout_path).unwrap()
 }
 
 /// A 3-robot run folder with its replay page.
-fn replay_run(tag: &str) -> (PathBuf, RunData) {
+fn replay_run(tag: &str) -> (TempDir, RunData) {
     let dir = temp_dir(tag);
     write_run(&dir, 3, false);
     let run = RunData::load(&dir).unwrap();

@@ -343,3 +343,19 @@ fn the_replay_page_is_self_contained_and_names_cannot_break_out_of_the_data() {
         assert!(!page.contains(external), "page refers to {external}");
     }
 }
+
+#[test]
+fn a_256_robot_run_gets_plots_and_a_replay_with_cycling_colours() {
+    let dir = temp_dir("r256");
+    write_run(&dir, 256, true);
+    render_all(&dir).unwrap();
+    let run = RunData::load(&dir).unwrap();
+    let (w, h, pixels) = decode_png(&dir.join("plot.png"));
+    assert_eq!((w, h), plot_size(&run));
+    for c in PALETTE {
+        assert!(pixels.contains(&c));
+    }
+    assert_eq!(robot_color(255), robot_color(255 % PALETTE.len()));
+    let page = std::fs::read_to_string(dir.join("replay.html")).unwrap();
+    assert!(page.contains(r#""name":"r255""#));
+}

@@ -15,8 +15,28 @@ pub const TICKS: u64 = 40;
 pub const COLLISION_TICK: u64 = 20;
 pub const DT: f64 = 0.1;
 
-/// A fresh, empty folder under the system temp dir.
-pub fn temp_dir(tag: &str) -> PathBuf {
+/// A fresh, empty folder under the system temp dir, removed when dropped
+/// unless the test is failing (then it is kept to look at).
+pub struct TempDir(PathBuf);
+
+impl std::ops::Deref for TempDir {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            eprintln!("kept {}", self.0.display());
+        } else {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+}
+
+pub fn temp_dir(tag: &str) -> TempDir {
     static N: AtomicUsize = AtomicUsize::new(0);
     let dir = std::env::temp_dir().join(format!(
         "mrsim-report-{tag}-{}-{}",
@@ -25,7 +45,7 @@ pub fn temp_dir(tag: &str) -> PathBuf {
     ));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    dir
+    TempDir(dir)
 }
 
 fn robot(name: &str, start: [f64; 2], goal: [f64; 2]) -> RobotSpec {
