@@ -300,3 +300,25 @@ fn the_tick_in_the_url_is_the_frame_shown() {
     );
     assert!(dom.contains("tick 17 (18/41)"), "clock not at tick 17");
 }
+
+#[test]
+fn without_a_tick_the_page_plays_to_the_last_tick() {
+    let Some(chromium) = chromium() else { return };
+    let (dir, _run) = replay_run("browser-play");
+    let url = format!("file://{}", dir.join("replay.html").display());
+    // Virtual time: the 4 s run at 1x plays out in no real time.
+    let dom = run_chromium(
+        &chromium,
+        &url,
+        &[
+            "--virtual-time-budget=20000".to_string(),
+            "--dump-dom".to_string(),
+        ],
+    );
+    assert!(
+        dom.contains("tick 40 (41/41)"),
+        "did not play to the end:\n{}",
+        dom.lines().find(|l| l.contains("clock")).unwrap_or("")
+    );
+    assert!(dom.contains(r#"<button id="play" type="button">Play</button>"#), "not paused at the end");
+}
