@@ -320,5 +320,8 @@ fn without_a_tick_the_page_plays_to_the_last_tick() {
         "did not play to the end:\n{}",
         dom.lines().find(|l| l.contains("clock")).unwrap_or("")
     );
-    assert!(dom.contains(r#"<button id="play" type="button">Play</button>"#), "not paused at the end");
+    assert!(
+        dom.contains(r#"<button id="play" type="button">Play</button>"#),
+        "not paused at the end"
+    );
 }
