@@ -35,7 +35,7 @@ pub enum RenderError {
     },
     /// A required file is missing.
     #[error(
-        "{path}: missing (a run folder holds scenario.json, trajectory.csv, events.jsonl and metrics.json)"
+        "{path}: missing (a run folder needs scenario.json, trajectory.csv and events.jsonl)"
     )]
     Missing {
         /// The file that should be there.
