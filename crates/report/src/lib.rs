@@ -34,9 +34,7 @@ pub enum RenderError {
         path: PathBuf,
     },
     /// A required file is missing.
-    #[error(
-        "{path}: missing (a run folder needs scenario.json, trajectory.csv and events.jsonl)"
-    )]
+    #[error("{path}: missing (a run folder needs scenario.json, trajectory.csv and events.jsonl)")]
     Missing {
         /// The file that should be there.
         path: PathBuf,
