@@ -1,0 +1,100 @@
+//! Seeing a run: reads a finished run's folder and draws it.
+//!
+//! [`RunData::load`] reads `scenario.json`, `trajectory.csv`, `events.jsonl`,
+//! `metrics.json` and the optional `diagnostics.csv`; [`write_plots`] draws
+//! `plot.svg` and `plot.png` (map with trajectories, speeds, diagnostics);
+//! [`write_replay`] writes `replay.html`, one self-contained page that
+//! animates the run. [`render_all`] does all three; `mrsim run` calls it at
+//! the end of a run and `mrsim report DIR` on a folder.
+#![warn(missing_docs)]
+
+mod palette;
+mod plot;
+mod replay;
+mod run;
+
+pub use palette::{COLLISION, PALETTE, hex, robot_color};
+pub use plot::{PLOT_WIDTH, plot_size, write_plots};
+pub use replay::{MAP_HEIGHT, MAP_WIDTH, ReplayView, STRIP_HEIGHT, write_replay};
+pub use run::{
+    BodyKind, BodyTrack, DIAGNOSTICS_FILE, DiagnosticSample, EVENTS_FILE, Event, EventKind,
+    METRICS_FILE, Metrics, Percentiles, RobotMetrics, RunData, SCENARIO_FILE, Sample,
+    TRAJECTORY_FILE, Trajectory,
+};
+
+use std::path::{Path, PathBuf};
+
+/// Why a run folder could not be read or drawn.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// The path given is not a folder.
+    #[error("{path}: not a run folder (not a directory)")]
+    NotADirectory {
+        /// The path.
+        path: PathBuf,
+    },
+    /// A required file is missing.
+    #[error("{path}: missing (a run folder needs scenario.json, trajectory.csv and events.jsonl)")]
+    Missing {
+        /// The file that should be there.
+        path: PathBuf,
+    },
+    /// A file could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// A line of a CSV or JSONL file is malformed.
+    #[error("{path}:{line}: {reason}")]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number (the header is line 1).
+        line: usize,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// A JSON file is malformed (the message gives line and column).
+    #[error("{path}: {source}")]
+    Json {
+        /// The file.
+        path: PathBuf,
+        /// serde_json's error.
+        source: serde_json::Error,
+    },
+    /// plotters failed to draw.
+    #[error("{path}: drawing failed: {reason}")]
+    Plot {
+        /// The file being drawn.
+        path: PathBuf,
+        /// plotters' message.
+        reason: String,
+    },
+    /// The PNG encoder failed.
+    #[error("{path}: {source}")]
+    Png {
+        /// The file.
+        path: PathBuf,
+        /// png's error.
+        source: png::EncodingError,
+    },
+}
+
+/// Reads the run folder `dir` and writes `plot.svg`, `plot.png` and
+/// `replay.html` into it.
+pub fn render_all(dir: &Path) -> Result<(), RenderError> {
+    let run = RunData::load(dir)?;
+    write_plots(&run, dir)?;
+    write_replay(&run, dir)?;
+    Ok(())
+}
+
+pub(crate) fn write_file(path: &Path, bytes: &[u8]) -> Result<(), RenderError> {
+    std::fs::write(path, bytes).map_err(|source| RenderError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
