@@ -90,6 +90,11 @@ pub enum Command {
         #[arg(long, hide = true)]
         impersonate: Option<u32>,
     },
+    /// Regenerate plot.svg, plot.png and replay.html of a run folder.
+    Report {
+        /// The run folder.
+        dir: PathBuf,
+    },
     /// List the planners.
     Planners,
     /// Check a scenario file without running it.
@@ -130,6 +135,12 @@ pub fn main(cli: Cli) -> i32 {
             timeout,
             impersonate,
         } => crate::launch::agent(&robot, &run, timeout, impersonate),
+        Command::Report { dir } => mrsim_report::render_all(&dir)
+            .map(|()| {
+                println!("wrote {0}/plot.svg, {0}/plot.png, {0}/replay.html", dir.display());
+                0
+            })
+            .map_err(|e| anyhow::anyhow!("{e}")),
         Command::Planners => {
             for p in mrsim_planners::PLANNERS {
                 println!("{:<20} {}", p.name, p.summary);

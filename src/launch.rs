@@ -275,6 +275,9 @@ pub fn run(args: &ScenarioArgs, run_id: Option<String>, quiet: bool) -> Result<i
         .with_context(|| format!("reading {}", dir.join("metrics.json").display()))?;
     let metrics: serde_json::Value =
         serde_json::from_str(&metrics).context("parsing metrics.json")?;
+    if let Err(e) = mrsim_report::render_all(&dir) {
+        eprintln!("warning: cannot draw the run's plots and replay: {e}");
+    }
     if !quiet {
         print!("{}", crate::table::summary(&metrics));
     }
@@ -344,6 +347,9 @@ pub fn world(
     if !launched {
         std::thread::sleep(Duration::from_millis(300));
         ns.remove_leftovers();
+        if let Err(e) = mrsim_report::render_all(&dir) {
+            eprintln!("warning: cannot draw the run's plots and replay: {e}");
+        }
         let v = serde_json::to_value(&outcome.metrics).unwrap_or_default();
         print!("{}", crate::table::summary(&v));
         println!("run folder: {}", dir.display());

@@ -17,11 +17,10 @@ mod registry;
 
 pub mod chung;
 pub mod designated_path;
-pub mod homing;
-pub mod khatib;
-pub mod hydro;
 pub mod dwa;
 pub mod homing;
+pub mod hydro;
+pub mod khatib;
 pub mod orca;
 pub mod social_force;
 pub mod testkit;
