@@ -15,7 +15,11 @@
 pub mod params;
 mod registry;
 
+pub mod estimate;
+pub mod free_space;
 pub mod homing;
+pub mod prediction;
+pub mod trajectory_guided;
 pub mod testkit;
 
 pub use params::{ParamError, ParamReader, ParamValue, Params};

@@ -12,10 +12,20 @@ pub struct PlannerInfo {
 }
 
 /// Every planner [`build`] knows, in the order the README lists them.
-pub const PLANNERS: &[PlannerInfo] = &[PlannerInfo {
-    name: "homing",
-    summary: "attraction to the goal with velocity damping, no avoidance (Chung et al. eq 2)",
-}];
+pub const PLANNERS: &[PlannerInfo] = &[
+    PlannerInfo {
+        name: "homing",
+        summary: "attraction to the goal with velocity damping, no avoidance (Chung et al. eq 2)",
+    },
+    PlannerInfo {
+        name: "trajectory-guided",
+        summary: "first collision-free candidate trajectory against predicted obstacles (Zhu & Loh 3.3b)",
+    },
+    PlannerInfo {
+        name: "free-space",
+        summary: "search for a wide-enough free path through (x, y, t) occupancy frames (Zhu & Loh 3.3a)",
+    },
+];
 
 /// Why a planner could not be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -37,6 +47,10 @@ pub enum BuildError {
 pub fn build(name: &str, params: &Params) -> Result<Box<dyn Planner>, BuildError> {
     Ok(match name {
         "homing" => Box::new(crate::homing::Homing::from_params(params)?),
+        "trajectory-guided" => Box::new(
+            crate::trajectory_guided::TrajectoryGuided::from_params(params)?,
+        ),
+        "free-space" => Box::new(crate::free_space::FreeSpace::from_params(params)?),
         _ => {
             return Err(BuildError::UnknownPlanner {
                 name: name.to_string(),
