@@ -19,8 +19,8 @@ pub mod estimate;
 pub mod free_space;
 pub mod homing;
 pub mod prediction;
-pub mod trajectory_guided;
 pub mod testkit;
+pub mod trajectory_guided;
 
 pub use params::{ParamError, ParamReader, ParamValue, Params};
 pub use registry::{BuildError, PLANNERS, PlannerInfo, build};

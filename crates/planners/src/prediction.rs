@@ -105,7 +105,8 @@ fn erf(x: f64) -> f64 {
     let t = 1.0 / (1.0 + 0.327_591_1 * x);
     let poly = t
         * (0.254_829_592
-            + t * (-0.284_496_736 + t * (1.421_413_741 + t * (-1.453_152_027 + t * 1.061_405_429))));
+            + t * (-0.284_496_736
+                + t * (1.421_413_741 + t * (-1.453_152_027 + t * 1.061_405_429))));
     s * (1.0 - poly * (-x * x).exp())
 }
 
@@ -131,7 +132,10 @@ pub fn disc_probability(d: f64, r: f64, sigma: f64) -> f64 {
     if lo >= hi {
         return 0.0;
     }
-    let (th_lo, th_hi) = ((lo / r).clamp(-1.0, 1.0).asin(), (hi / r).clamp(-1.0, 1.0).asin());
+    let (th_lo, th_hi) = (
+        (lo / r).clamp(-1.0, 1.0).asin(),
+        (hi / r).clamp(-1.0, 1.0).asin(),
+    );
     const N: usize = 64;
     let h = (th_hi - th_lo) / N as f64;
     let inv = r / (sigma * (2.0 * std::f64::consts::PI).sqrt());
@@ -192,6 +196,11 @@ impl Predicted {
         let r = self.radius + extra;
         if self.sigma <= 1e-12 * r {
             return d <= r;
+        }
+        // Quick accept: the Gaussian's mass within r - d of the mean alone.
+        if d < r && 1.0 - (-(r - d) * (r - d) / (2.0 * self.sigma * self.sigma)).exp() >= threshold
+        {
+            return true;
         }
         match self.reach(extra, threshold) {
             Some(reach) if d <= reach => disc_probability(d, r, self.sigma) >= threshold,
@@ -452,7 +461,8 @@ mod tests {
 
     #[test]
     fn extended_prediction_ignores_a_one_tick_velocity_blip() {
-        let mut e = Prediction::Extended(ExtendedAnticipation::new(ExtendedFallback::Current, 1e-6));
+        let mut e =
+            Prediction::Extended(ExtendedAnticipation::new(ExtendedFallback::Current, 1e-6));
         let steady = v(1.0, 0.0);
         let blip = v(-4.0, 2.0);
         e.observe(0.0, &[body(3, v(0.0, 0.0), steady)]);
@@ -473,8 +483,8 @@ mod tests {
 
     #[test]
     fn disc_probability_at_the_centre_is_the_rayleigh_law() {
-        for &(r, s) in &[(0.5, 0.1), (0.5, 0.5), (0.5, 2.0), (3.0, 0.2)] {
-            let exact = 1.0 - (-(r * r) / (2.0 * s * s) as f64).exp();
+        for &(r, s) in &[(0.5f64, 0.1f64), (0.5, 0.5), (0.5, 2.0), (3.0, 0.2)] {
+            let exact = 1.0 - (-(r * r) / (2.0 * s * s)).exp();
             let p = disc_probability(0.0, r, s);
             assert!((p - exact).abs() < 1e-3, "r {r} s {s}: {p} vs {exact}");
         }
@@ -533,7 +543,10 @@ mod tests {
         params.insert("accel_sigma".into(), ParamValue::Number(1.0));
         let mut r = ParamReader::new("t", &params);
         assert!(Prediction::read(&mut r, &params).is_err());
-        params.insert("prediction".into(), ParamValue::Text("probabilistic".into()));
+        params.insert(
+            "prediction".into(),
+            ParamValue::Text("probabilistic".into()),
+        );
         let mut r = ParamReader::new("t", &params);
         let (p, thr) = Prediction::read(&mut r, &params).unwrap();
         assert_eq!(p.kind(), PredictionKind::Probabilistic);

@@ -47,9 +47,9 @@ pub enum BuildError {
 pub fn build(name: &str, params: &Params) -> Result<Box<dyn Planner>, BuildError> {
     Ok(match name {
         "homing" => Box::new(crate::homing::Homing::from_params(params)?),
-        "trajectory-guided" => Box::new(
-            crate::trajectory_guided::TrajectoryGuided::from_params(params)?,
-        ),
+        "trajectory-guided" => Box::new(crate::trajectory_guided::TrajectoryGuided::from_params(
+            params,
+        )?),
         "free-space" => Box::new(crate::free_space::FreeSpace::from_params(params)?),
         _ => {
             return Err(BuildError::UnknownPlanner {

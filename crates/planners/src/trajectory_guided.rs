@@ -358,7 +358,7 @@ impl TrajectoryGuided {
 
 impl Planner for TrajectoryGuided {
     fn plan(&mut self, obs: &Observation) -> Command {
-        if !(obs.dt > 0.0) {
+        if obs.dt.is_nan() || obs.dt <= 0.0 {
             return Command::Velocity(Vec2::zeros());
         }
         let dt = obs.dt;
@@ -502,7 +502,10 @@ mod tests {
         let stop = c.iter().position(|c| c.origin == Origin::Stop).unwrap();
         assert!(c[2..stop].iter().all(|c| c.velocity.x > 0.0));
         assert!(c[stop + 1..].iter().all(|c| c.velocity.x <= 1e-9));
-        assert!(c.iter().all(|c| (c.velocity - Vec2::new(-1.0, 0.0)).norm() > 1e-9));
+        assert!(
+            c.iter()
+                .all(|c| (c.velocity - Vec2::new(-1.0, 0.0)).norm() > 1e-9)
+        );
     }
 
     #[test]
@@ -595,7 +598,11 @@ mod tests {
                 }
             })
             .collect();
-        let obs = observation(me(Vec2::zeros(), Vec2::zeros()), Vec2::new(10.0, 0.0), &others);
+        let obs = observation(
+            me(Vec2::zeros(), Vec2::zeros()),
+            Vec2::new(10.0, 0.0),
+            &others,
+        );
         p.plan(&obs);
         let chosen = p.last_choice().unwrap();
         assert!(chosen.free_steps < chosen.steps);
