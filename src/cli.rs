@@ -137,7 +137,10 @@ pub fn main(cli: Cli) -> i32 {
         } => crate::launch::agent(&robot, &run, timeout, impersonate),
         Command::Report { dir } => mrsim_report::render_all(&dir)
             .map(|()| {
-                println!("wrote {0}/plot.svg, {0}/plot.png, {0}/replay.html", dir.display());
+                println!(
+                    "wrote {0}/plot.svg, {0}/plot.png, {0}/replay.html",
+                    dir.display()
+                );
                 0
             })
             .map_err(|e| anyhow::anyhow!("{e}")),

@@ -25,6 +25,58 @@ fn scene(n: usize) -> Vec<Sensed> {
         .collect()
 }
 
+/// Zhu & Loh's planners: growth with the number of obstacles (20-step
+/// horizon) and with the horizon (16 obstacles).
+fn zhu_loh(c: &mut Criterion) {
+    use mrsim_planners::ParamValue;
+    let dt = 0.1;
+    let me = SelfState {
+        id: 0,
+        position: Vec2::new(0.0, 0.0),
+        velocity: Vec2::new(0.5, 0.1),
+        radius: 0.3,
+        mass: 1.0,
+        damping: 0.5,
+        max_speed: 2.0,
+        max_accel: 5.0,
+    };
+    // (obstacles, horizon steps)
+    let cases = [(4, 20), (16, 20), (64, 20), (16, 10), (16, 40)];
+    for (name, extra) in [
+        ("trajectory_guided", vec![("candidates", 32.0)]),
+        // grid 0.14 with max_speed 2 and 20 steps: a 65 x 65 window.
+        ("free_space", vec![("grid", 0.14)]),
+    ] {
+        let mut g = c.benchmark_group(format!("zhu_loh_{name}"));
+        for &(bodies, steps) in &cases {
+            let others = scene(bodies);
+            let obs = Observation {
+                tick: 10,
+                time: 1.0,
+                dt,
+                me,
+                goal: Vec2::new(20.0, 1.0),
+                goal_tolerance: 0.2,
+                others: &others,
+                walls: &[],
+                path: None,
+            };
+            let mut params = Params::new();
+            params.insert("horizon".into(), ParamValue::Number(steps as f64 * dt));
+            for (k, v) in &extra {
+                params.insert(k.to_string(), ParamValue::Number(*v));
+            }
+            let Ok(mut p) = build(&name.replace('_', "-"), &params) else {
+                continue;
+            };
+            g.bench_function(format!("{bodies}_obstacles_{steps}_steps"), |b| {
+                b.iter(|| p.plan(std::hint::black_box(&obs)))
+            });
+        }
+        g.finish();
+    }
+}
+
 fn bench(c: &mut Criterion) {
     let others = scene(64);
     let obs = Observation {
@@ -110,5 +162,5 @@ fn bench_designated_path(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench, bench_designated_path);
+criterion_group!(benches, bench, bench_designated_path, zhu_loh);
 criterion_main!(benches);

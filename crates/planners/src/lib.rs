@@ -18,12 +18,16 @@ mod registry;
 pub mod chung;
 pub mod designated_path;
 pub mod dwa;
+pub mod estimate;
+pub mod free_space;
 pub mod homing;
 pub mod hydro;
 pub mod khatib;
 pub mod orca;
+pub mod prediction;
 pub mod social_force;
 pub mod testkit;
+pub mod trajectory_guided;
 pub mod vdf;
 
 pub use params::{ParamError, ParamReader, ParamValue, Params};

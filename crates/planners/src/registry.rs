@@ -57,6 +57,14 @@ pub const PLANNERS: &[PlannerInfo] = &[
         name: "designated-path",
         summary: "subgoals on a designated path, via points in (x, y, t) at several speeds chosen by eq (1) (Yamada et al.)",
     },
+    PlannerInfo {
+        name: "trajectory-guided",
+        summary: "first collision-free candidate trajectory against predicted obstacles (Zhu & Loh 3.3b)",
+    },
+    PlannerInfo {
+        name: "free-space",
+        summary: "search for a wide-enough free path through (x, y, t) occupancy frames (Zhu & Loh 3.3a)",
+    },
 ];
 
 /// Why a planner could not be built.
@@ -100,6 +108,10 @@ pub fn build(name: &str, params: &Params) -> Result<Box<dyn Planner>, BuildError
         "designated-path" => Box::new(crate::designated_path::DesignatedPathPlanner::from_params(
             params,
         )?),
+        "trajectory-guided" => Box::new(crate::trajectory_guided::TrajectoryGuided::from_params(
+            params,
+        )?),
+        "free-space" => Box::new(crate::free_space::FreeSpace::from_params(params)?),
         _ => {
             return Err(BuildError::UnknownPlanner {
                 name: name.to_string(),
