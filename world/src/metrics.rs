@@ -169,3 +169,16 @@ pub struct RunMetrics {
     /// True if the run was stopped early by a signal.
     pub interrupted: bool,
 }
+
+/// Distance from `p` to the segment `w`.
+pub fn segment_distance(w: [[f64; 2]; 2], p: [f64; 2]) -> f64 {
+    let (a, b) = (w[0], w[1]);
+    let ab = [b[0] - a[0], b[1] - a[1]];
+    let len2 = ab[0] * ab[0] + ab[1] * ab[1];
+    let t = if len2 > 0.0 {
+        (((p[0] - a[0]) * ab[0] + (p[1] - a[1]) * ab[1]) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p[0] - a[0] - ab[0] * t).hypot(p[1] - a[1] - ab[1] * t)
+}

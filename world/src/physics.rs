@@ -64,6 +64,9 @@ pub struct Contact {
     pub b: Owner,
     /// Midpoint of the two bodies' positions (walls: the body's position).
     pub at: [f64; 2],
+    /// Surface-to-surface distance when the contact started (rapier reports
+    /// a contact slightly before touching, within its prediction distance).
+    pub gap: f64,
 }
 
 /// The simulated world.
@@ -274,12 +277,37 @@ impl World {
                         (Some(p), None) | (None, Some(p)) => p,
                         (None, None) => [0.0, 0.0],
                     };
-                    contacts.push(Contact { a: *a, b: *b, at });
+                    let gap = self.owner_gap(*a, *b);
+                    contacts.push(Contact {
+                        a: *a,
+                        b: *b,
+                        at,
+                        gap,
+                    });
                 }
             }
         }
         self.tick += 1;
         self.refresh_states();
+    }
+
+    fn owner_radius(&self, o: Owner) -> f64 {
+        match o {
+            Owner::Robot(i) => self.scenario.robots[i].radius,
+            Owner::Obstacle(i) => self.scenario.obstacles[i].radius,
+            Owner::Wall(_) => 0.0,
+        }
+    }
+
+    fn owner_gap(&self, a: Owner, b: Owner) -> f64 {
+        let r = self.owner_radius(a) + self.owner_radius(b);
+        match (self.owner_position(a), self.owner_position(b), a, b) {
+            (Some(p), Some(q), _, _) => (p[0] - q[0]).hypot(p[1] - q[1]) - r,
+            (Some(p), None, _, Owner::Wall(w)) | (None, Some(p), Owner::Wall(w), _) => {
+                crate::metrics::segment_distance(self.walls[w], p) - r
+            }
+            _ => 0.0,
+        }
     }
 
     fn owner_position(&self, o: Owner) -> Option<[f64; 2]> {

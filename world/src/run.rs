@@ -364,6 +364,7 @@ impl Loop<'_> {
             self.collisions_total += 1;
             for &i in &robots {
                 self.acc[i].collisions += 1;
+                self.acc[i].min_clearance = self.acc[i].min_clearance.min(c.gap);
             }
             let n = self.agents.len();
             let name = |o: Owner| match o {
@@ -372,7 +373,7 @@ impl Loop<'_> {
                 Owner::Wall(w) => format!("wall{w}"),
             };
             self.event(json!({"type": "collision", "a": name(c.a), "b": name(c.b),
-                              "x": c.at[0], "y": c.at[1]}));
+                              "x": c.at[0], "y": c.at[1], "gap": c.gap}));
         }
     }
 
@@ -396,7 +397,7 @@ impl Loop<'_> {
                 }
             }
             for w in walls {
-                clear = clear.min(segment_distance(*w, s.position) - s.radius);
+                clear = clear.min(crate::metrics::segment_distance(*w, s.position) - s.radius);
             }
             acc.min_clearance = acc.min_clearance.min(clear);
             // Goal test (Ko & Choi eq 22): within tolerance N ticks running.
@@ -430,18 +431,6 @@ impl Loop<'_> {
             .zip(&self.agents)
             .all(|(a, g)| a.reached_goal || matches!(g, Agent::Lost { .. }))
     }
-}
-
-fn segment_distance(w: [[f64; 2]; 2], p: [f64; 2]) -> f64 {
-    let (a, b) = (w[0], w[1]);
-    let ab = [b[0] - a[0], b[1] - a[1]];
-    let len2 = ab[0] * ab[0] + ab[1] * ab[1];
-    let t = if len2 > 0.0 {
-        (((p[0] - a[0]) * ab[0] + (p[1] - a[1]) * ab[1]) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (p[0] - a[0] - ab[0] * t).hypot(p[1] - a[1] - ab[1] * t)
 }
 
 /// Runs `world` to the end over `link`, writing the outputs into

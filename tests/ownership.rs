@@ -1,0 +1,147 @@
+//! Only the agent that owns a robot can drive it; strangers are refused.
+//! The world and agents are started by hand, as a user would in separate
+//! terminals.
+
+mod common;
+use common::*;
+use std::process::{Child, Stdio};
+use std::time::{Duration, Instant};
+
+const TWO: &str = r#"name = "two"
+[world]
+dt = 0.1
+duration = 20.0
+stall_timeout = 1.0
+
+[[robot]]
+name = "a"
+start = [0.0, 0.0]
+goal = [3.0, 0.0]
+planner = "social-force"
+
+[[robot]]
+name = "b"
+start = [0.0, 4.0]
+goal = [3.0, 4.0]
+planner = "social-force"
+"#;
+
+fn wait_timeout(child: &mut Child, secs: u64) -> Option<std::process::ExitStatus> {
+    let start = Instant::now();
+    while start.elapsed() < Duration::from_secs(secs) {
+        if let Ok(Some(s)) = child.try_wait() {
+            return Some(s);
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let _ = child.kill();
+    child.wait().ok()
+}
+
+#[test]
+fn a_command_for_a_robot_the_agent_does_not_own_is_rejected_and_logged() {
+    let dir = fresh_dir("own");
+    let file = dir.join("two.toml");
+    std::fs::write(&file, TWO).expect("write");
+    let out = dir.join("out");
+    let id = run_id("own");
+    let mut world = mrsim()
+        .arg("world")
+        .arg(&file)
+        .args(["--run", &id, "--start-timeout", "30", "--out"])
+        .arg(&out)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("world");
+    // The agent for `a` claims robot 1 (`b`) in every command.
+    let mut rogue = mrsim()
+        .args(["agent", "--robot", "a", "--run", &id, "--impersonate", "1"])
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("rogue");
+    let mut honest = mrsim()
+        .args(["agent", "--robot", "b", "--run", &id])
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("honest");
+    let ws = wait_timeout(&mut world, 60).expect("world ended");
+    assert!(ws.success(), "world failed");
+    wait_timeout(&mut rogue, 10);
+    wait_timeout(&mut honest, 10);
+
+    let m = metrics(&out);
+    assert!(m["commands_rejected"].as_u64().unwrap_or(0) > 0, "{m:#}");
+    assert!(
+        m["robots"]["b"]["commands_rejected"].as_u64().unwrap_or(0) > 0,
+        "{m:#}"
+    );
+    // b was driven only by its own agent and got home; a never moved.
+    assert_eq!(m["robots"]["b"]["reached_goal"], true, "{m:#}");
+    assert_eq!(m["robots"]["a"]["reached_goal"], false);
+    let rows = trajectory(&out);
+    let a = track(&rows, "a");
+    assert!(
+        a.iter().all(|r| r.x.abs() < 1e-6 && r.y.abs() < 1e-6),
+        "a moved"
+    );
+    let ev = events(&out);
+    assert!(
+        ev.iter()
+            .any(|e| e["type"] == "command_rejected" && e["robot"] == "b"),
+        "no command_rejected event for b"
+    );
+    assert_clean(&id);
+}
+
+#[test]
+fn a_stranger_is_refused_with_a_clear_message_and_the_run_is_unaffected() {
+    let dir = fresh_dir("stranger");
+    let file = dir.join("two.toml");
+    std::fs::write(&file, TWO).expect("write");
+    let out = dir.join("out");
+    let id = run_id("str");
+    let mut world = mrsim()
+        .arg("world")
+        .arg(&file)
+        .args(["--run", &id, "--start-timeout", "30", "--out"])
+        .arg(&out)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("world");
+    let a = mrsim()
+        .args(["agent", "--robot", "a", "--run", &id])
+        .spawn()
+        .expect("a");
+    // Wrong robot name.
+    let o = mrsim()
+        .args(["agent", "--robot", "zz", "--run", &id, "--timeout", "20"])
+        .output()
+        .expect("zz");
+    assert!(!o.status.success());
+    let msg = String::from_utf8_lossy(&o.stderr);
+    assert!(msg.contains("no robot named `zz`"), "{msg}");
+    // The robot is already driven.
+    let o = mrsim()
+        .args(["agent", "--robot", "a", "--run", &id, "--timeout", "20"])
+        .output()
+        .expect("a2");
+    assert!(!o.status.success());
+    let msg = String::from_utf8_lossy(&o.stderr);
+    assert!(msg.contains("already driven"), "{msg}");
+    let mut b = mrsim()
+        .args(["agent", "--robot", "b", "--run", &id])
+        .spawn()
+        .expect("b");
+    let ws = wait_timeout(&mut world, 60).expect("world ended");
+    assert!(ws.success());
+    let mut a = a;
+    wait_timeout(&mut a, 10);
+    wait_timeout(&mut b, 10);
+    let m = metrics(&out);
+    assert_eq!(m["success_rate"], 1.0, "{m:#}");
+    assert_eq!(m["commands_rejected"], 0);
+    assert_eq!(m["agents_lost"], 0);
+    assert_clean(&id);
+}
