@@ -495,7 +495,7 @@ pub fn run(
         "waiting for {n} agents to join run {}",
         lp.opts.run_id
     ));
-    while lp.agents.iter().any(|a| *a == Agent::Waiting) {
+    while lp.agents.contains(&Agent::Waiting) {
         if lp.link.termination_requested() {
             interrupted = true;
             break;
