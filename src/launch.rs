@@ -103,13 +103,28 @@ fn prepare_out(out: &Option<PathBuf>, name: &str) -> Result<PathBuf> {
                     }
                 })
                 .collect();
+            let base = PathBuf::from("runs");
+            std::fs::create_dir_all(&base).map_err(|e| {
+                invalid(format!(
+                    "output folder {}: cannot create it: {e}",
+                    base.display()
+                ))
+            })?;
+            // create_dir fails if the folder exists: two launchers started in
+            // the same second never share a folder.
             let mut n = 0;
             loop {
-                let d = PathBuf::from("runs").join(format!("{safe}-{secs}-{n}"));
-                if !d.exists() {
-                    break d;
+                let d = base.join(format!("{safe}-{secs}-{n}"));
+                match std::fs::create_dir(&d) {
+                    Ok(()) => break d,
+                    Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && n < 10_000 => n += 1,
+                    Err(e) => {
+                        return Err(invalid(format!(
+                            "output folder {}: cannot create it: {e}",
+                            d.display()
+                        )));
+                    }
                 }
-                n += 1;
             }
         }
     };
