@@ -91,6 +91,7 @@ impl Observer {
             },
             goal,
             goal_tolerance: spec.goal_tolerance,
+            goal_hold_ticks: spec.goal_hold_ticks,
             others: &self.others,
             walls,
             path,

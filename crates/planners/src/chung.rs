@@ -213,6 +213,7 @@ mod tests {
             me,
             goal,
             goal_tolerance: 0.05,
+            goal_hold_ticks: 3,
             others,
             walls: &[],
             path: None,

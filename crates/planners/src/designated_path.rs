@@ -744,6 +744,7 @@ mod tests {
             me,
             goal,
             goal_tolerance: 0.1,
+            goal_hold_ticks: 3,
             others,
             walls: &[],
             path,

@@ -75,6 +75,7 @@ mod tests {
             },
             goal: Vec2::new(10.0, 0.0),
             goal_tolerance: 0.1,
+            goal_hold_ticks: 3,
             others: &[],
             walls: &[],
             path: None,

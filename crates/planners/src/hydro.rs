@@ -516,6 +516,7 @@ mod tests {
             },
             goal,
             goal_tolerance: 0.05,
+            goal_hold_ticks: 3,
             others,
             walls,
             path: None,

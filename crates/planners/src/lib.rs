@@ -132,6 +132,9 @@ pub struct Observation<'a> {
     pub goal: Vec2,
     /// Distance to the goal that counts as reached.
     pub goal_tolerance: f64,
+    /// Consecutive ticks within `goal_tolerance` that count as arrival
+    /// (the scenario's `goal_hold_ticks`; Ko & Choi eq 22's N).
+    pub goal_hold_ticks: u32,
     /// Bodies within sensing range and field of view, robots and obstacles
     /// alike (every other robot is a moving obstacle).
     pub others: &'a [Sensed],

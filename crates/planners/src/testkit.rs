@@ -151,6 +151,7 @@ impl Sim {
                 me: r.state,
                 goal: r.goal,
                 goal_tolerance: 1e-3,
+                goal_hold_ticks: 3,
                 others: &others,
                 walls: &self.walls,
                 path: r.path.as_ref(),

@@ -71,9 +71,11 @@
 //!   at top speed on a slowly widening path (30-90 cm away after two
 //!   minutes) and eq (22) never holds. The unit tests below measure that
 //!   rather than hide it; the scenario files say so.
-//! - Eq (22) needs N (the scenario's `goal_hold_ticks`), which the
-//!   observation does not carry: [`Vdf::goal_hold_ticks`] is 3, the
-//!   scenario default, until it does.
+//! - Eq (22)'s N is the robot's `goal_hold_ticks` and eps_d its
+//!   `goal_tolerance`, both from the observation. As printed, eq (22)
+//!   asks for N + 1 consecutive samples (k = i+1-N, ..., i+1), and the
+//!   planner follows it; the world's `reached_goal` metric counts N
+//!   samples, so it is recorded one tick before this planner brakes.
 //!
 //! Parameters (defaults: section 5.1, cases 1-3, in cm): `alpha` (5),
 //! `beta` (5), `eta` (1000), `zeta` (2), `eps_vd` (40).
@@ -98,8 +100,6 @@ pub struct Vdf {
     pub eps_vd: f64,
     /// False for Khatib's field: vd = d, the outward speed ignored.
     pub use_outward_speed: bool,
-    /// Eq (22)'s N: the goal test needs N + 1 consecutive ticks in tolerance.
-    pub goal_hold_ticks: u32,
     /// Prefix of the per-body diagnostic (`vd_` or `d_`).
     diag_prefix: &'static str,
     /// P''(t_i): the acceleration carried into the next period (eq 11).
@@ -132,7 +132,6 @@ impl Vdf {
             zeta,
             eps_vd,
             use_outward_speed: true,
-            goal_hold_ticks: 3,
             diag_prefix: "vd_",
             accel: Vec2::zeros(),
             ticks_in_tolerance: 0,
@@ -294,7 +293,7 @@ impl Planner for Vdf {
         } else {
             self.ticks_in_tolerance = 0;
         }
-        if self.ticks_in_tolerance > self.goal_hold_ticks {
+        if self.ticks_in_tolerance > obs.goal_hold_ticks {
             self.arrived = true;
         }
         if self.arrived {
@@ -383,6 +382,7 @@ mod tests {
             me,
             goal,
             goal_tolerance: 1.0,
+            goal_hold_ticks: 3,
             others,
             walls: &[],
             path: None,
@@ -558,6 +558,22 @@ mod tests {
         assert!((d[0].value - 15.0).abs() < 1e-12);
         assert_eq!(d[1].name, "vd_9");
         assert_eq!(d[1].value, f64::INFINITY);
+    }
+
+    #[test]
+    fn the_goal_test_counts_the_robots_own_goal_hold_ticks() {
+        // N = 6 from the observation: the seventh consecutive sample brakes.
+        let mut v = Vdf::new(5.0, 5.0, 1000.0, 2.0, 40.0);
+        let goal = Vec2::new(10.0, 0.0);
+        let vel = Vec2::new(2.0, 0.0);
+        let s = me(Vec2::new(9.8, 0.0), vel);
+        let mut o = obs(s, goal, &[]);
+        o.goal_hold_ticks = 6;
+        for _ in 0..6 {
+            assert!(v.plan(&o).vector().x > 0.0);
+        }
+        let f = v.plan(&o).vector();
+        assert!((f / s.mass - (-vel / 0.1)).norm() < 1e-9, "{f}");
     }
 
     #[test]
