@@ -14,8 +14,7 @@ use crate::motion::{MotionError, MotionState};
 use mrsim_proto::{BodyState, body_kind};
 use mrsim_scenario::Scenario;
 use rapier2d::prelude::*;
-use std::collections::HashMap;
-use std::sync::mpsc;
+use std::collections::{HashMap, HashSet};
 
 /// A command as the world applies it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -45,7 +44,7 @@ pub enum WorldError {
 }
 
 /// What a body's collider belongs to.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Owner {
     /// Robot index.
     Robot(usize),
@@ -64,8 +63,8 @@ pub struct Contact {
     pub b: Owner,
     /// Midpoint of the two bodies' positions (walls: the body's position).
     pub at: [f64; 2],
-    /// Surface-to-surface distance when the contact started (rapier reports
-    /// a contact slightly before touching, within its prediction distance).
+    /// Surface-to-surface distance when the contact started (at most the
+    /// touch tolerance; negative = overlap).
     pub gap: f64,
 }
 
@@ -80,8 +79,8 @@ pub struct World {
     owners: HashMap<ColliderHandle, Owner>,
     commands: Vec<Applied>,
     states: Vec<BodyState>,
-    collisions: mpsc::Receiver<CollisionEvent>,
-    collector: ChannelEventCollector,
+    touching: HashSet<(Owner, Owner)>,
+    touch_tolerance: f64,
     walls: Vec<[[f64; 2]; 2]>,
     tick: u64,
 }
@@ -112,8 +111,7 @@ impl World {
             let h = phys.insert_body(body);
             let collider = ColliderBuilder::ball(r.radius.max(min_radius) as f32)
                 .mass(r.mass as f32)
-                .friction(0.0)
-                .active_events(ActiveEvents::COLLISION_EVENTS);
+                .friction(0.0);
             let c = phys.insert_collider(collider, Some(h));
             owners.insert(c, Owner::Robot(i));
             robots.push(h);
@@ -133,8 +131,7 @@ impl World {
                 RigidBodyBuilder::kinematic_position_based()
             };
             let h = phys.insert_body(builder.translation(v2(o.start)));
-            let collider = ColliderBuilder::ball(o.radius.max(min_radius) as f32)
-                .active_events(ActiveEvents::COLLISION_EVENTS);
+            let collider = ColliderBuilder::ball(o.radius.max(min_radius) as f32);
             let c = phys.insert_collider(collider, Some(h));
             owners.insert(c, Owner::Obstacle(i));
             obstacles.push(h);
@@ -144,16 +141,10 @@ impl World {
         let walls = scenario.all_walls();
         for (i, w) in walls.iter().enumerate() {
             let h = phys.insert_body(RigidBodyBuilder::fixed());
-            let collider = ColliderBuilder::segment(v2(w[0]), v2(w[1]))
-                .active_events(ActiveEvents::COLLISION_EVENTS);
+            let collider = ColliderBuilder::segment(v2(w[0]), v2(w[1]));
             let c = phys.insert_collider(collider, Some(h));
             owners.insert(c, Owner::Wall(i));
         }
-
-        let (tx, collisions) = mpsc::channel();
-        let (ftx, _) = mpsc::channel();
-        let (stx, _) = mpsc::channel();
-        let collector = ChannelEventCollector::new(tx, ftx, stx);
 
         let mut world = Self {
             scenario: scenario.clone(),
@@ -164,8 +155,8 @@ impl World {
             owners,
             commands: vec![Applied::BRAKE; scenario.robots.len()],
             states: Vec::with_capacity(scenario.robots.len() + scenario.obstacles.len()),
-            collisions,
-            collector,
+            touching: HashSet::new(),
+            touch_tolerance: 1e-3 * scenario.length_unit.per_metre(),
             walls,
             tick: 0,
         };
@@ -264,31 +255,46 @@ impl World {
                     body.set_next_kinematic_translation(v2(m.position));
                 }
             }
-            self.phys.step_with_events(&(), &self.collector);
-            while let Ok(ev) = self.collisions.try_recv() {
-                if let CollisionEvent::Started(c1, c2, _) = ev {
-                    let (Some(a), Some(b)) = (self.owners.get(&c1), self.owners.get(&c2)) else {
-                        continue;
-                    };
-                    let pa = self.owner_position(*a);
-                    let pb = self.owner_position(*b);
-                    let at = match (pa, pb) {
-                        (Some(p), Some(q)) => [(p[0] + q[0]) / 2.0, (p[1] + q[1]) / 2.0],
-                        (Some(p), None) | (None, Some(p)) => p,
-                        (None, None) => [0.0, 0.0],
-                    };
-                    let gap = self.owner_gap(*a, *b);
-                    contacts.push(Contact {
-                        a: *a,
-                        b: *b,
-                        at,
-                        gap,
-                    });
-                }
-            }
+            self.phys.step();
+            self.detect_contacts(contacts);
         }
         self.tick += 1;
         self.refresh_states();
+    }
+
+    /// A collision is a pair whose surfaces have actually closed (gap at
+    /// most 1 mm in the scenario's unit) and were apart before. Rapier's own
+    /// contact events start within its prediction distance (centimetres in a
+    /// cm-scale world), which would count near misses; so rapier only
+    /// proposes the candidate pairs and the gap is measured here, after
+    /// every substep.
+    fn detect_contacts(&mut self, contacts: &mut Vec<Contact>) {
+        let mut now = HashSet::with_capacity(self.touching.len());
+        for pair in self.phys.narrow_phase.contact_pairs() {
+            let (Some(&a), Some(&b)) = (
+                self.owners.get(&pair.collider1),
+                self.owners.get(&pair.collider2),
+            ) else {
+                continue;
+            };
+            if !matches!(a, Owner::Robot(_)) && !matches!(b, Owner::Robot(_)) {
+                continue;
+            }
+            let gap = self.owner_gap(a, b);
+            if gap > self.touch_tolerance {
+                continue;
+            }
+            now.insert((a, b));
+            if !self.touching.contains(&(a, b)) {
+                let at = match (self.owner_position(a), self.owner_position(b)) {
+                    (Some(p), Some(q)) => [(p[0] + q[0]) / 2.0, (p[1] + q[1]) / 2.0],
+                    (Some(p), None) | (None, Some(p)) => p,
+                    (None, None) => [0.0, 0.0],
+                };
+                contacts.push(Contact { a, b, at, gap });
+            }
+        }
+        self.touching = now;
     }
 
     fn owner_radius(&self, o: Owner) -> f64 {
