@@ -12,6 +12,7 @@
 
 pub mod metrics;
 pub mod motion;
+pub mod path_metrics;
 pub mod physics;
 pub mod record;
 pub mod run;
