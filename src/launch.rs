@@ -398,7 +398,11 @@ fn merge_diagnostics(dir: &std::path::Path) {
 /// have ended, so that their diagnostics are complete.
 fn wait_for_agents(metrics: &mrsim_world::metrics::RunMetrics, limit: Duration) {
     let start = Instant::now();
-    let pids: Vec<u32> = metrics.robots.values().filter_map(|r| r.agent_pid).collect();
+    let pids: Vec<u32> = metrics
+        .robots
+        .values()
+        .filter_map(|r| r.agent_pid)
+        .collect();
     while start.elapsed() < limit && pids.iter().any(|&p| mrsim_world::run::pid_alive(p)) {
         std::thread::sleep(Duration::from_millis(20));
     }

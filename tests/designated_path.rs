@@ -163,7 +163,11 @@ fn from_the_side_the_robot_slows_down_and_lets_the_obstacle_pass() {
     // obstacle is on its way there; then back to nominal speed.
     assert!(ticks.iter().all(|t| t.robot.y.abs() < 0.05));
     let last_before = before[before.len() - 1];
-    assert!(last_before.robot.x < 1.0 - CONTACT, "at {}", last_before.robot.x);
+    assert!(
+        last_before.robot.x < 1.0 - CONTACT,
+        "at {}",
+        last_before.robot.x
+    );
     let later = ticks
         .iter()
         .find(|t| t.time >= 10.0)
@@ -202,10 +206,7 @@ fn on_a_path_with_corners_the_blocked_corner_is_given_up_and_the_corridor_kept()
         "corner subgoal left at x = {}",
         at.robot.x
     );
-    let turned = ticks
-        .iter()
-        .find(|t| t.robot.y > 0.5)
-        .expect("turned up");
+    let turned = ticks.iter().find(|t| t.robot.y > 0.5).expect("turned up");
     assert!(turned.robot.x < 3.0, "turned at x = {}", turned.robot.x);
 }
 

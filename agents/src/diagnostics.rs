@@ -301,7 +301,11 @@ mod tests {
         for (id, name, ticks) in [(1usize, "b", [0u64, 1, 2]), (0, "a", [0, 1, 2])] {
             let w = DiagnosticsWriter::start(&dir, id, name).expect("writer");
             for t in ticks {
-                w.push(t, t as f64 * 0.1, vec![d("speed", t as f64), d("vd_3", f64::INFINITY)]);
+                w.push(
+                    t,
+                    t as f64 * 0.1,
+                    vec![d("speed", t as f64), d("vd_3", f64::INFINITY)],
+                );
             }
             w.finish().expect("flushed");
         }

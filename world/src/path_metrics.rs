@@ -91,11 +91,10 @@ mod tests {
     }
 
     #[test]
-    fn deviation_is_the_distance_to_the_nearest_segment_and_violations_count_ticks_outside()
-    {
+    fn deviation_is_the_distance_to_the_nearest_segment_and_violations_count_ticks_outside() {
         // An L: (0,0) -> (4,0) -> (4,4), corridor half-width 1.
-        let mut acc = PathAccumulator::new(&[[0.0, 0.0], [4.0, 0.0], [4.0, 4.0]], Some(1.0))
-            .expect("a path");
+        let mut acc =
+            PathAccumulator::new(&[[0.0, 0.0], [4.0, 0.0], [4.0, 4.0]], Some(1.0)).expect("a path");
         acc.record([1.0, 0.5]); // 0.5 from the first segment
         acc.record([5.5, 2.0]); // 1.5 from the second: outside
         acc.record([4.0, 1.0]); // on the second segment

@@ -462,9 +462,10 @@ pub fn run(
     // Absolute, so that an agent started from another folder writes its
     // diagnostics into this run's folder.
     let out_dir = std::fs::canonicalize(&dir).unwrap_or_else(|_| dir.clone());
-    let setup =
-        serde_json::to_vec(&json!({"run_id": opts.run_id, "out_dir": out_dir, "scenario": scenario}))
-            .map_err(|e| out_err("setup")(e.into()))?;
+    let setup = serde_json::to_vec(
+        &json!({"run_id": opts.run_id, "out_dir": out_dir, "scenario": scenario}),
+    )
+    .map_err(|e| out_err("setup")(e.into()))?;
     let rec = Recorder::start(&dir, names.clone()).map_err(out_err("trajectory.csv"))?;
     link.publish_setup(&setup)?;
 
