@@ -273,6 +273,8 @@ pub fn run(args: &ScenarioArgs, run_id: Option<String>, quiet: bool) -> Result<i
     }
     let removed = ns.remove_leftovers();
     let _ = removed;
+    // Every agent has ended: join their diagnostics into diagnostics.csv.
+    merge_diagnostics(&dir);
 
     if !world_status.success() {
         eprintln!(
@@ -313,6 +315,8 @@ pub fn world(
     let loaded = load(args)?;
     let scenario = loaded.scenario.clone();
     let dir = prepare_out(&args.out, &scenario.name)?;
+    // Absolute: the setup tells agents where to write their diagnostics.
+    let dir = std::fs::canonicalize(&dir).unwrap_or(dir);
     let ns = Namespace::new(run_id).map_err(|e| invalid(e.to_string()))?;
     if !launched {
         // A world started by hand owns its namespace: clear what a crashed
@@ -362,6 +366,8 @@ pub fn world(
     if !launched {
         std::thread::sleep(Duration::from_millis(300));
         ns.remove_leftovers();
+        wait_for_agents(&outcome.metrics, Duration::from_secs(3));
+        merge_diagnostics(&dir);
         if let Err(e) = mrsim_report::render_all(&dir) {
             eprintln!("warning: cannot draw the run's plots and replay: {e}");
         }
@@ -384,5 +390,35 @@ pub fn agent(robot: &str, run_id: &str, timeout: f64, impersonate: Option<u32>) 
     match mrsim_agents::run(&mut link, &opts) {
         Ok(_) => Ok(0),
         Err(e) => Err(anyhow!("agent {robot}: {e}")),
+    }
+}
+
+/// Joins the agents' diagnostics part files in `dir` into diagnostics.csv
+/// (a warning, not a failure, if that cannot be done).
+fn merge_diagnostics(dir: &std::path::Path) {
+    match mrsim_agents::diagnostics::merge(dir) {
+        Ok(s) if s.skipped > 0 => eprintln!(
+            "note: diagnostics: {} unfinished or malformed lines left out",
+            s.skipped
+        ),
+        Ok(_) => {}
+        Err(e) => eprintln!(
+            "warning: cannot merge the agents' diagnostics in {}: {e}",
+            dir.display()
+        ),
+    }
+}
+
+/// Waits (at most `limit`) until the agent processes of a hand-started run
+/// have ended, so that their diagnostics are complete.
+fn wait_for_agents(metrics: &mrsim_world::metrics::RunMetrics, limit: Duration) {
+    let start = Instant::now();
+    let pids: Vec<u32> = metrics
+        .robots
+        .values()
+        .filter_map(|r| r.agent_pid)
+        .collect();
+    while start.elapsed() < limit && pids.iter().any(|&p| mrsim_world::run::pid_alive(p)) {
+        std::thread::sleep(Duration::from_millis(20));
     }
 }

@@ -9,6 +9,7 @@
 //! sees the transport or a clock; the agent measures its compute time.
 #![warn(missing_docs)]
 
+pub mod diagnostics;
 pub mod observe;
 
 use mrsim_planners::{Command, DesignatedPath, Planner, Segment, Vec2};
@@ -199,6 +200,28 @@ pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentEx
         boundary: spec.boundary.unwrap_or(f64::INFINITY),
     });
     let mut observer = observe::Observer::new(&scenario, me);
+    // The planner's diagnostics go to a part file in the run's folder, when
+    // the world's folder is reachable from here (same machine).
+    let diag = value
+        .get("out_dir")
+        .and_then(|d| d.as_str())
+        .map(std::path::PathBuf::from)
+        .filter(|d| d.is_dir())
+        .and_then(
+            |d| match diagnostics::DiagnosticsWriter::start(&d, me, &spec.name) {
+                Ok(w) => Some(w),
+                Err(e) => {
+                    eprintln!("agent {}: no diagnostics: {e}", spec.name);
+                    None
+                }
+            },
+        );
+    let finish = |diag: Option<diagnostics::DiagnosticsWriter>, exit: AgentExit| {
+        if let Some(Err(e)) = diag.map(diagnostics::DiagnosticsWriter::finish) {
+            eprintln!("agent {}: diagnostics not fully written: {e}", spec.name);
+        }
+        Ok(exit)
+    };
 
     // Control loop.
     let mut header = SnapshotHeader::default();
@@ -208,7 +231,7 @@ pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentEx
     let mut last_heard = Instant::now();
     loop {
         if link.termination_requested() {
-            return Ok(AgentExit::Interrupted);
+            return finish(diag, AgentExit::Interrupted);
         }
         link.wait(Duration::from_millis(100))?;
         let woke = now_ns();
@@ -220,7 +243,7 @@ pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentEx
         }
         last_heard = Instant::now();
         if header.finished != 0 {
-            return Ok(AgentExit::Finished);
+            return finish(diag, AgentExit::Finished);
         }
         if answered.is_some_and(|t| t >= header.tick) || me >= bodies.len() {
             continue;
@@ -245,5 +268,9 @@ pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentEx
         };
         link.send_command(&msg)?;
         answered = Some(header.tick);
+        // After the command is out: off the tick's critical path.
+        if let Some(d) = &diag {
+            d.push(header.tick, header.sim_time, planner.diagnostics());
+        }
     }
 }

@@ -5,13 +5,15 @@
 //! that drives a `World` through an injected
 //! [`WorldTransport`](mrsim_transport::WorldTransport), so the same loop
 //! serves iceoryx2 processes and in-process threads. The world never sees a
-//! planner: it enforces each robot's actuator limits whatever the agent
+//! planner (it borrows only the pure `distance_to_path` helper of the
+//! planners crate for the designated-path metrics): it enforces each robot's actuator limits whatever the agent
 //! asks, moves scripted obstacles, detects collisions, and records
 //! everything a researcher needs afterwards ([`record`]).
 #![warn(missing_docs)]
 
 pub mod metrics;
 pub mod motion;
+pub mod path_metrics;
 pub mod physics;
 pub mod record;
 pub mod run;

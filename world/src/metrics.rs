@@ -96,6 +96,8 @@ pub struct RobotAccumulator {
     pub rejected: u64,
     /// Commands that came after their tick's deadline.
     pub late: u64,
+    /// Designated-path metrics, for a robot with a `path`.
+    pub path: Option<crate::path_metrics::PathAccumulator>,
 }
 
 /// One robot's row of metrics.json.
@@ -131,6 +133,11 @@ pub struct RobotMetrics {
     pub commands_rejected: u64,
     /// Commands that arrived after their deadline.
     pub commands_late: u64,
+    /// Distance from the designated path, per tick (null without a path).
+    pub path_deviation: Option<crate::path_metrics::PathDeviation>,
+    /// Ticks with the centre farther than `boundary` from the path (null
+    /// without a path or a boundary).
+    pub boundary_violations: Option<u64>,
 }
 
 /// metrics.json.

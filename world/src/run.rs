@@ -400,6 +400,9 @@ impl Loop<'_> {
                 clear = clear.min(crate::metrics::segment_distance(*w, s.position) - s.radius);
             }
             acc.min_clearance = acc.min_clearance.min(clear);
+            if let Some(p) = &mut acc.path {
+                p.record(s.position);
+            }
             // Goal test (Ko & Choi eq 22): within tolerance N ticks running.
             let d = (spec.goal[0] - s.position[0]).hypot(spec.goal[1] - s.position[1]);
             if d <= spec.goal_tolerance {
@@ -456,9 +459,13 @@ pub fn run(
     let scenario_json =
         serde_json::to_vec_pretty(&scenario).map_err(|e| out_err("scenario.json")(e.into()))?;
     std::fs::write(dir.join("scenario.json"), &scenario_json).map_err(out_err("scenario.json"))?;
-    let setup =
-        serde_json::to_vec(&json!({"run_id": opts.run_id, "out_dir": dir, "scenario": scenario}))
-            .map_err(|e| out_err("setup")(e.into()))?;
+    // Absolute, so that an agent started from another folder writes its
+    // diagnostics into this run's folder.
+    let out_dir = std::fs::canonicalize(&dir).unwrap_or_else(|_| dir.clone());
+    let setup = serde_json::to_vec(
+        &json!({"run_id": opts.run_id, "out_dir": out_dir, "scenario": scenario}),
+    )
+    .map_err(|e| out_err("setup")(e.into()))?;
     let rec = Recorder::start(&dir, names.clone()).map_err(out_err("trajectory.csv"))?;
     link.publish_setup(&setup)?;
 
@@ -470,9 +477,12 @@ pub fn run(
         opts,
         names,
         agents: vec![Agent::Waiting; n],
-        acc: (0..n)
-            .map(|_| RobotAccumulator {
+        acc: scenario
+            .robots
+            .iter()
+            .map(|r| RobotAccumulator {
                 min_clearance: f64::INFINITY,
+                path: crate::path_metrics::PathAccumulator::new(&r.path, r.boundary),
                 ..Default::default()
             })
             .collect(),
@@ -675,6 +685,8 @@ pub fn run(
                     lost: a.lost,
                     commands_rejected: a.rejected,
                     commands_late: a.late,
+                    path_deviation: a.path.as_ref().map(|p| p.deviation()),
+                    boundary_violations: a.path.as_ref().and_then(|p| p.boundary_violations()),
                 },
             )
         })

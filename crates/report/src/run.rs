@@ -253,7 +253,8 @@ pub struct RunData {
     pub events: Vec<Event>,
     /// `metrics.json`, `None` if the file is absent (a run cut short).
     pub metrics: Option<Metrics>,
-    /// `diagnostics.csv`, `None` if the file is absent.
+    /// `diagnostics.csv`, `None` if the file is absent or empty. Values may
+    /// be `inf`, `-inf` or `NaN` (the plots leave them out).
     pub diagnostics: Option<Vec<DiagnosticSample>>,
 }
 
@@ -294,6 +295,8 @@ impl RunData {
         };
         let diagnostics_path = dir.join(DIAGNOSTICS_FILE);
         let diagnostics = match read_optional(&diagnostics_path)? {
+            // An empty file (no header either) means no diagnostics, as no file.
+            Some(text) if text.trim().is_empty() => None,
             Some(text) => Some(parse_diagnostics(&diagnostics_path, &text)?),
             None => None,
         };

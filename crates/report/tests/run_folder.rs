@@ -36,6 +36,23 @@ fn a_run_folder_loads_with_every_file() {
 }
 
 #[test]
+fn an_empty_diagnostics_file_reads_as_no_diagnostics_and_non_finite_values_as_numbers() {
+    let dir = temp_dir("diag-empty");
+    write_run(&dir, 2, false);
+    std::fs::write(dir.join("diagnostics.csv"), "").unwrap();
+    assert!(RunData::load(&dir).unwrap().diagnostics.is_none());
+    std::fs::write(
+        dir.join("diagnostics.csv"),
+        "tick,time,robot,name,value\n0,0.0,r0,vd_2,inf\n1,0.1,r0,vd_2,3.5\n",
+    )
+    .unwrap();
+    let run = RunData::load(&dir).unwrap();
+    let values: Vec<f64> = run.diagnostics.iter().flatten().map(|d| d.value).collect();
+    assert_eq!(values, [f64::INFINITY, 3.5]);
+    write_plots(&run, &dir).unwrap();
+}
+
+#[test]
 fn unknown_event_types_are_skipped_and_known_ones_kept_in_order() {
     let dir = temp_dir("events");
     write_run(&dir, 3, false);
