@@ -180,6 +180,7 @@ impl Loop<'_> {
                         self.log(&format!("agent for {name} rejoined (pid {})", req.pid));
                     } else {
                         self.event(json!({"type": "agent_joined", "robot": name, "pid": req.pid}));
+                        self.log(&format!("agent for {name} joined (pid {})", req.pid));
                     }
                     JoinReply {
                         nonce: req.nonce,
@@ -339,11 +340,14 @@ impl Loop<'_> {
         Ok(())
     }
 
+    /// Every live agent has answered this tick: with a valid command, or
+    /// with garbage (rejected; the robot brakes and the world moves on
+    /// rather than waiting `stall_timeout` for an answer that came).
     fn all_answered(&self) -> bool {
         self.agents
             .iter()
-            .zip(&self.got)
-            .all(|(a, g)| !matches!(a, Agent::Live { .. }) || g.is_some())
+            .zip(self.got.iter().zip(&self.garbage))
+            .all(|(a, (g, bad))| !matches!(a, Agent::Live { .. }) || g.is_some() || *bad)
     }
 
     fn record_contacts(&mut self, contacts: &[Contact]) {

@@ -112,6 +112,7 @@ impl ShmWorld {
     ) -> Result<Self, TransportError> {
         let cfg = config(ns)?;
         let node = node(&cfg, WORLD_NODE)?;
+        ns.make_private();
         // A crashed earlier run of the same id may have left dead nodes.
         let _ = node.try_cleanup_dead_nodes();
         let agents = cap.agents();
@@ -384,6 +385,7 @@ impl ShmAgent {
     fn try_connect(ns: &Namespace, node_name: &str) -> Result<Self, TransportError> {
         let cfg = config(ns)?;
         let node = node(&cfg, node_name)?;
+        ns.make_private();
         let setup_sub = node
             .service_builder(&service_name("mrsim/setup")?)
             .publish_subscribe::<[u8]>()
@@ -462,23 +464,35 @@ impl ShmAgent {
     }
 
     fn check_world(&mut self) -> bool {
-        let mut alive = false;
-        let listed = Node::<S>::list(&self.cfg, |state| {
-            if let NodeState::Alive(view) = &state {
-                use iceoryx2::node::NodeView;
-                if view
-                    .details()
-                    .as_ref()
-                    .is_some_and(|d| d.name().as_str() == WORLD_NODE)
-                {
-                    alive = true;
-                    return CallbackProgression::Stop;
-                }
-            }
-            CallbackProgression::Continue
-        });
-        listed.is_err() || alive
+        world_node_alive(&self.cfg).unwrap_or(true)
     }
+}
+
+/// Whether a live world process holds run `ns` (its iceoryx2 node is
+/// listed alive). A crashed world's node is listed dead, so this is false
+/// for a run that only left stale shared memory behind.
+pub fn world_running(ns: &Namespace) -> Result<bool, TransportError> {
+    world_node_alive(&config(ns)?).ok_or_else(|| setup_err("node list", "cannot list nodes"))
+}
+
+/// Some(alive) if the node list could be read.
+fn world_node_alive(cfg: &Config) -> Option<bool> {
+    let mut alive = false;
+    let listed = Node::<S>::list(cfg, |state| {
+        if let NodeState::Alive(view) = &state {
+            use iceoryx2::node::NodeView;
+            if view
+                .details()
+                .as_ref()
+                .is_some_and(|d| d.name().as_str() == WORLD_NODE)
+            {
+                alive = true;
+                return CallbackProgression::Stop;
+            }
+        }
+        CallbackProgression::Continue
+    });
+    listed.ok().map(|_| alive)
 }
 
 impl AgentTransport for ShmAgent {
