@@ -316,7 +316,9 @@ pub fn run(
     let removed = ns.remove_leftovers();
     let _ = removed;
 
-    if !world_status.success() {
+    // 130: the world was interrupted and wrote what it had (metrics.json).
+    let interrupted = world_status.code() == Some(130);
+    if !world_status.success() && !interrupted {
         eprintln!(
             "error: the world process (pid {}) {}; outputs so far are in {}",
             world.id(),

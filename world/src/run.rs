@@ -262,6 +262,13 @@ impl Loop<'_> {
             }
             return self.reject(&cmd, "command for a past tick");
         }
+        if cmd.sent_ns < self.published_ns {
+            // Named this tick before the tick existed: a guess, not an answer.
+            return self.reject(
+                &cmd,
+                "command for a future tick (sent before it was published)",
+            );
+        }
         if self.got[i].is_some() {
             return self.reject(&cmd, "second command in one tick");
         }
@@ -584,7 +591,10 @@ pub fn run(
             if waited >= limit {
                 if !realtime {
                     for i in 0..n {
-                        if matches!(lp.agents[i], Agent::Live { .. }) && lp.got[i].is_none() {
+                        if matches!(lp.agents[i], Agent::Live { .. })
+                            && lp.got[i].is_none()
+                            && !lp.garbage[i]
+                        {
                             lp.lose(
                                 i,
                                 format!(

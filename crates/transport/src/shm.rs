@@ -84,8 +84,14 @@ fn wait_on(listener: &Listener<S>, timeout: Duration) -> Result<(), TransportErr
     }
 }
 
-fn terminated(node: &Node<S>) -> bool {
-    node.wait(Duration::ZERO).is_err()
+/// True once SIGINT or SIGTERM arrived. iceoryx2 reports a termination
+/// request only once (its signal handler's last signal is taken when read),
+/// so the answer is kept in `seen`: asked twice, a loop must hear it twice.
+fn terminated(node: &Node<S>, seen: &std::cell::Cell<bool>) -> bool {
+    if !seen.get() && node.wait(Duration::ZERO).is_err() {
+        seen.set(true);
+    }
+    seen.get()
 }
 
 /// The world's side over iceoryx2.
@@ -99,6 +105,7 @@ pub struct ShmWorld {
     reply_pub: Publisher<S, JoinReply, ()>,
     wake: Listener<S>,
     max_bodies: usize,
+    terminated: std::cell::Cell<bool>,
 }
 
 impl ShmWorld {
@@ -230,6 +237,7 @@ impl ShmWorld {
             reply_pub,
             wake,
             max_bodies,
+            terminated: std::cell::Cell::new(false),
         })
     }
 }
@@ -341,7 +349,7 @@ impl WorldTransport for ShmWorld {
     }
 
     fn termination_requested(&self) -> bool {
-        terminated(&self.node)
+        terminated(&self.node, &self.terminated)
     }
 
     fn cleanup_dead(&mut self) {
@@ -362,6 +370,7 @@ pub struct ShmAgent {
     wake: Notifier<S>,
     last_world_check: Instant,
     world_alive: bool,
+    terminated: std::cell::Cell<bool>,
 }
 
 impl ShmAgent {
@@ -460,6 +469,7 @@ impl ShmAgent {
             wake,
             last_world_check: Instant::now(),
             world_alive: true,
+            terminated: std::cell::Cell::new(false),
         })
     }
 
@@ -593,6 +603,6 @@ impl AgentTransport for ShmAgent {
     }
 
     fn termination_requested(&self) -> bool {
-        terminated(&self.node)
+        terminated(&self.node, &self.terminated)
     }
 }
