@@ -255,24 +255,27 @@ pub fn run(
     let mut restarts = vec![0u32; agents.len()];
 
     // Wait for the world; forward a signal to everything we started.
-    let mut forwarded = false;
+    let mut forwarded: Option<Instant> = None;
     let world_status = loop {
         if let Some(status) = world.try_wait().context("waiting for the world")? {
             break status;
         }
+        // Stop the world first: it writes what it has and tells the agents
+        // the run is over, so they end by themselves (the ones that do not
+        // are stopped below); a world that does not end in 5 s is killed.
         let sig = SIGNALLED.load(Ordering::SeqCst);
-        if sig != 0 && !forwarded {
+        if sig != 0 && forwarded.is_none() {
             signal(&world, libc::SIGTERM);
-            for (_, a) in &agents {
-                signal(a, libc::SIGTERM);
-            }
-            forwarded = true;
+            forwarded = Some(Instant::now());
+        }
+        if forwarded.is_some_and(|t| t.elapsed() > Duration::from_secs(5)) {
+            signal(&world, libc::SIGKILL);
         }
         for ((name, a), n) in agents.iter_mut().zip(restarts.iter_mut()) {
             let Ok(Some(status)) = a.try_wait() else {
                 continue;
             };
-            if !restart_agents || forwarded || status.success() || *n >= MAX_RESTARTS {
+            if !restart_agents || forwarded.is_some() || status.success() || *n >= MAX_RESTARTS {
                 continue;
             }
             *n += 1;

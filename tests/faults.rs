@@ -289,7 +289,10 @@ fn an_agent_killed_twenty_times_still_rejoins_within_the_port_limits() {
         let _ = a.wait();
         wait_line(&format!("lost the agent for a: agent process {pid} died"));
     }
+    // The 21st agent for a joins (a lost robot does not hold the start
+    // back, so a must be driven again before b completes the roster).
     let mut a = agent(&id, "a", None);
+    wait_line(&format!("rejoined (pid {})", a.id()));
     let mut b = agent(&id, "b", None);
     let ws = wait_timeout(&mut w, 60).expect("world ended");
     assert!(ws.success());
@@ -549,6 +552,8 @@ fn sigint_or_sigterm_to_the_launcher_stops_everything_and_writes_an_interrupted_
         assert!(pids.iter().all(|p| process_gone(*p)), "left running");
         let m = metrics(&out);
         assert_eq!(m["interrupted"], true, "{m:#}");
+        // The agents ended with the run, they were not lost.
+        assert_eq!(m["agents_lost"], 0, "{m:#}");
         let ticks = m["ticks"].as_u64().unwrap_or(0);
         assert!(ticks > 0 && ticks < 1200, "{m:#}");
         // Everything gathered so far was written.
@@ -611,6 +616,8 @@ fn bad_commands_are_rejected_counted_logged_and_never_drive_a_robot() {
         ("past", "social-force", Some("past-tick")),
         ("future", "social-force", Some("future-tick")),
         ("double", "social-force", Some("double")),
+        // Asks to join twice: one agent, one token, driven normally.
+        ("twice", "social-force", Some("join-twice")),
         // Last: its commands name robot 0, `honest`.
         ("other", "social-force", Some("other-robot")),
     ];
@@ -691,6 +698,9 @@ fn bad_commands_are_rejected_counted_logged_and_never_drive_a_robot() {
     assert_eq!(m["robots"]["honest"]["reached_goal"], true);
     assert_eq!(m["robots"]["other"]["lost"], 1);
     assert!(still("other"));
+    assert_eq!(m["robots"]["twice"]["reached_goal"], true);
+    assert_eq!(m["robots"]["twice"]["commands_rejected"], 0);
+    assert_eq!(of(&ev, "agent_joined", "twice").len(), 1);
     assert_eq!(m["agents_lost"], 3, "{m:#}");
     assert_clean(&id);
 }

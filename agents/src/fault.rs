@@ -30,6 +30,9 @@ pub enum Fault {
     FutureTick,
     /// Every command is sent twice.
     Double,
+    /// The join request is sent twice at once (as an agent whose first
+    /// reply was slow re-asks).
+    JoinTwice,
     /// From this tick on the planner never returns: the agent stops
     /// answering but stays alive (it still ends with the run or on SIGTERM,
     /// so tests leave nothing running).
@@ -46,7 +49,7 @@ pub enum Fault {
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error(
     "unknown fault `{0}` (nan, inf, huge, other-robot, past-tick, future-tick, double, \
-     hang-at-tick=N, die-at-tick=N, stop-at-tick=N, slow-ms=N)"
+     join-twice, hang-at-tick=N, die-at-tick=N, stop-at-tick=N, slow-ms=N)"
 )]
 pub struct UnknownFault(pub String);
 
@@ -67,6 +70,7 @@ impl FromStr for Fault {
             ("past-tick", None) => Fault::PastTick,
             ("future-tick", None) => Fault::FutureTick,
             ("double", None) => Fault::Double,
+            ("join-twice", None) => Fault::JoinTwice,
             ("hang-at-tick", Some(n)) => Fault::HangAt(n),
             ("die-at-tick", Some(n)) => Fault::DieAt(n),
             ("stop-at-tick", Some(n)) => Fault::StopAt(n),
@@ -147,7 +151,11 @@ impl Injector {
             },
             Fault::FutureTick => m.tick += 1,
             Fault::Double => return vec![m, m],
-            Fault::HangAt(_) | Fault::DieAt(_) | Fault::StopAt(_) | Fault::SlowMs(_) => {}
+            Fault::JoinTwice
+            | Fault::HangAt(_)
+            | Fault::DieAt(_)
+            | Fault::StopAt(_)
+            | Fault::SlowMs(_) => {}
         }
         vec![m]
     }
@@ -167,6 +175,7 @@ mod tests {
             ("past-tick", Fault::PastTick),
             ("future-tick", Fault::FutureTick),
             ("double", Fault::Double),
+            ("join-twice", Fault::JoinTwice),
             ("hang-at-tick=7", Fault::HangAt(7)),
             ("die-at-tick=3", Fault::DieAt(3)),
             ("stop-at-tick=0", Fault::StopAt(0)),

@@ -145,6 +145,9 @@ pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentEx
             return Ok(AgentExit::Interrupted);
         }
         if last_ask.is_none_or(|t| t.elapsed() > Duration::from_millis(500)) {
+            if last_ask.is_none() && opts.fault == Some(fault::Fault::JoinTwice) {
+                link.request_join(&req)?;
+            }
             link.request_join(&req)?;
             last_ask = Some(Instant::now());
         }

@@ -163,6 +163,18 @@ impl Loop<'_> {
                 Agent::Live { pid, .. } if pid != req.pid && pid_alive(pid) => {
                     refuse(format!("robot `{name}` is already driven by process {pid}"))
                 }
+                // The same process asking again (its first reply was slow
+                // and it re-asked): the same answer, not a second token the
+                // agent would never see.
+                Agent::Live { pid, token } if pid == req.pid => JoinReply {
+                    nonce: req.nonce,
+                    accepted: 1,
+                    robot_id: i as u32,
+                    token,
+                    protocol_version: PROTOCOL_VERSION,
+                    _pad: 0,
+                    reason: FixedStr::default(),
+                },
                 previous => {
                     let token =
                         splitmix(now_ns() ^ ((req.pid as u64) << 32) ^ i as u64 ^ req.nonce) | 1;
@@ -648,6 +660,9 @@ pub fn run(
             break;
         }
     }
+    // A termination request that came while the last tick ended the run
+    // (its agents stopped with it) still makes the run an interrupted one.
+    interrupted |= lp.link.termination_requested();
     lp.rec.tick(lp.tick, lp.time(), lp.world.states());
     let wall = wall_start.elapsed().as_secs_f64();
 
