@@ -26,7 +26,7 @@ launcher=$!
 
 pid_of() { # the mrsim process whose command line contains "$1"
     for p in /proc/[0-9]*; do
-        if tr '\0' ' ' <"$p/cmdline" 2>/dev/null | grep -q -- "$1"; then
+        if { tr '\0' ' ' <"$p/cmdline"; } 2>/dev/null | grep -q -- "$1"; then
             basename "$p"
             return 0
         fi

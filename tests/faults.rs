@@ -24,6 +24,26 @@ fn lanes(names: &[(&str, &str)], goal: f64, world: &str) -> String {
     s
 }
 
+/// Robots `a` and `b` with social-force planners.
+fn two(goal: f64, world: &str) -> String {
+    lanes(&[("a", "social-force"), ("b", "social-force")], goal, world)
+}
+
+/// A realtime run far longer than any test waits.
+const REALTIME_LONG: &str = "dt = 0.05\nduration = 60.0\nmode = \"realtime\"";
+
+/// Starts `mrsim run` and waits for its world and both agents to exist;
+/// returns the launcher and their pids (world first).
+fn launched(file: &Path, out: &Path, id: &str) -> (Child, u32, Vec<u32>) {
+    let l = launcher(file, out, id, &[]);
+    let world = wait_for_process(&["--run", id, "--start-timeout"], &[], 30);
+    let agents = ["a", "b"]
+        .iter()
+        .map(|r| wait_for_process(&["agent", "--robot", r, "--run", id], &[], 30))
+        .collect();
+    (l, world, agents)
+}
+
 fn scenario(tag: &str, text: &str) -> (PathBuf, PathBuf) {
     let dir = fresh_dir(tag);
     let file = dir.join("s.toml");
@@ -195,11 +215,7 @@ fn an_agent_killed_mid_run_in_lockstep_is_lost_at_once_braked_and_the_others_fin
 
 #[test]
 fn a_killed_agent_in_realtime_is_restarted_by_the_launcher_and_rejoins_its_robot() {
-    let text = lanes(
-        &[("a", "social-force"), ("b", "social-force")],
-        4.0,
-        "dt = 0.05\nduration = 30.0\nmode = \"realtime\"",
-    );
+    let text = two(4.0, "dt = 0.05\nduration = 30.0\nmode = \"realtime\"");
     let (file, out) = scenario("restart", &text);
     let id = run_id("rs");
     let mut l = launcher(&file, &out, &id, &["--restart-agents"]);
@@ -251,11 +267,7 @@ fn a_killed_agent_in_realtime_is_restarted_by_the_launcher_and_rejoins_its_robot
 fn an_agent_killed_twenty_times_still_rejoins_within_the_port_limits() {
     // 2 robots: every channel has room for 2 + 16 agents. Twenty dead agents
     // only fit if what each left behind is cleaned up.
-    let text = lanes(
-        &[("a", "social-force"), ("b", "social-force")],
-        3.0,
-        "dt = 0.1\nduration = 30.0",
-    );
+    let text = two(3.0, "dt = 0.1\nduration = 30.0");
     let (file, out) = scenario("limits", &text);
     let id = run_id("lim");
     let mut w = world(&file, &out, &id);
@@ -310,11 +322,7 @@ fn an_agent_killed_twenty_times_still_rejoins_within_the_port_limits() {
 #[test]
 fn an_agent_stopped_in_realtime_misses_deadlines_while_the_world_keeps_ticking() {
     // Goals out of reach: the run lasts exactly `duration`.
-    let text = lanes(
-        &[("a", "social-force"), ("b", "social-force")],
-        100.0,
-        "dt = 0.05\nduration = 4.0\nmode = \"realtime\"",
-    );
+    let text = two(100.0, "dt = 0.05\nduration = 4.0\nmode = \"realtime\"");
     let (file, out) = scenario("stop-rt", &text);
     let id = run_id("srt");
     let mut l = launcher(&file, &out, &id, &[]);
@@ -349,11 +357,7 @@ fn an_agent_stopped_in_realtime_misses_deadlines_while_the_world_keeps_ticking()
 
 #[test]
 fn an_agent_stopped_in_lockstep_is_lost_after_stall_timeout_and_rejoins_on_sigcont() {
-    let text = lanes(
-        &[("a", "social-force"), ("b", "social-force")],
-        100.0,
-        "dt = 0.1\nduration = 40.0\nstall_timeout = 1.0",
-    );
+    let text = two(100.0, "dt = 0.1\nduration = 40.0\nstall_timeout = 1.0");
     let (file, out) = scenario("stop-ls", &text);
     let id = run_id("sls");
     let mut w = world(&file, &out, &id);
@@ -398,11 +402,7 @@ fn an_agent_stopped_in_lockstep_is_lost_after_stall_timeout_and_rejoins_on_sigco
 #[test]
 fn a_planner_stuck_in_a_loop_is_lost_in_lockstep_and_misses_every_deadline_in_realtime() {
     // Lockstep: lost after stall_timeout, the others finish.
-    let text = lanes(
-        &[("a", "social-force"), ("b", "social-force")],
-        3.0,
-        "dt = 0.1\nduration = 30.0\nstall_timeout = 1.0",
-    );
+    let text = two(3.0, "dt = 0.1\nduration = 30.0\nstall_timeout = 1.0");
     let (file, out) = scenario("hang-ls", &text);
     let id = run_id("hls");
     let mut w = world(&file, &out, &id);
@@ -425,11 +425,7 @@ fn a_planner_stuck_in_a_loop_is_lost_in_lockstep_and_misses_every_deadline_in_re
     assert_clean(&id);
 
     // Realtime: the world does not wait; every tick from the hang on is a miss.
-    let text = lanes(
-        &[("a", "social-force"), ("b", "social-force")],
-        100.0,
-        "dt = 0.05\nduration = 2.0\nmode = \"realtime\"",
-    );
+    let text = two(100.0, "dt = 0.05\nduration = 2.0\nmode = \"realtime\"");
     let (file, out) = scenario("hang-rt", &text);
     let id = run_id("hrt");
     let mut w = world(&file, &out, &id);
@@ -451,19 +447,10 @@ fn a_planner_stuck_in_a_loop_is_lost_in_lockstep_and_misses_every_deadline_in_re
 
 #[test]
 fn when_the_world_is_killed_the_launcher_names_it_and_every_agent_exits() {
-    let text = lanes(
-        &[("a", "social-force"), ("b", "social-force")],
-        100.0,
-        "dt = 0.05\nduration = 60.0\nmode = \"realtime\"",
-    );
+    let text = two(100.0, REALTIME_LONG);
     let (file, out) = scenario("world-dies", &text);
     let id = run_id("wd");
-    let mut l = launcher(&file, &out, &id, &[]);
-    let wpid = wait_for_process(&["--run", &id, "--start-timeout"], &[], 30);
-    let agents: Vec<u32> = ["a", "b"]
-        .iter()
-        .map(|r| wait_for_process(&["agent", "--robot", r, "--run", &id], &[], 30))
-        .collect();
+    let (mut l, wpid, agents) = launched(&file, &out, &id);
     std::thread::sleep(Duration::from_millis(800));
     send_signal(wpid, libc::SIGKILL);
     let status = wait_timeout(&mut l, 30).expect("launcher ended");
@@ -483,11 +470,7 @@ fn when_the_world_is_killed_the_launcher_names_it_and_every_agent_exits() {
 
 #[test]
 fn a_killed_hand_started_world_leaves_nothing_that_blocks_the_next_world_of_that_run_id() {
-    let long = lanes(
-        &[("a", "social-force"), ("b", "social-force")],
-        100.0,
-        "dt = 0.05\nduration = 60.0\nmode = \"realtime\"",
-    );
+    let long = two(100.0, REALTIME_LONG);
     let (file, out) = scenario("stale", &long);
     let id = run_id("st");
     let mut w = world(&file, &out, &id);
@@ -509,11 +492,7 @@ fn a_killed_hand_started_world_leaves_nothing_that_blocks_the_next_world_of_that
         "the killed world left no shared memory: nothing to prove"
     );
     // The next world of the same run id starts, runs and cleans up.
-    let short = lanes(
-        &[("a", "social-force"), ("b", "social-force")],
-        3.0,
-        "dt = 0.1\nduration = 30.0",
-    );
+    let short = two(3.0, "dt = 0.1\nduration = 30.0");
     let (file, out) = scenario("stale2", &short);
     let mut w = world(&file, &out, &id);
     let mut a = agent(&id, "a", None);
@@ -529,19 +508,10 @@ fn a_killed_hand_started_world_leaves_nothing_that_blocks_the_next_world_of_that
 #[test]
 fn sigint_or_sigterm_to_the_launcher_stops_everything_and_writes_an_interrupted_run() {
     for sig in [libc::SIGINT, libc::SIGTERM] {
-        let text = lanes(
-            &[("a", "social-force"), ("b", "social-force")],
-            100.0,
-            "dt = 0.05\nduration = 60.0\nmode = \"realtime\"",
-        );
+        let text = two(100.0, REALTIME_LONG);
         let (file, out) = scenario("interrupt", &text);
         let id = run_id("int");
-        let mut l = launcher(&file, &out, &id, &[]);
-        let wpid = wait_for_process(&["--run", &id, "--start-timeout"], &[], 30);
-        let mut pids: Vec<u32> = ["a", "b"]
-            .iter()
-            .map(|r| wait_for_process(&["agent", "--robot", r, "--run", &id], &[], 30))
-            .collect();
+        let (mut l, wpid, mut pids) = launched(&file, &out, &id);
         pids.push(wpid);
         wait_for_event(&out, 30, |e| {
             e["type"] == "agent_joined" && e["robot"] == "b"
@@ -566,11 +536,7 @@ fn sigint_or_sigterm_to_the_launcher_stops_everything_and_writes_an_interrupted_
 
 #[test]
 fn a_killed_world_leaves_a_trajectory_flushed_during_the_run_with_only_whole_ticks() {
-    let mut text = lanes(
-        &[("a", "social-force"), ("b", "social-force")],
-        100.0,
-        "dt = 0.05\nduration = 60.0\nmode = \"realtime\"",
-    );
+    let mut text = two(100.0, REALTIME_LONG);
     text += "[[obstacle]]\nname = \"o\"\nstart = [50.0, 20.0]\nradius = 1.0\nmotion = { model = \"constant-velocity\", velocity = [0.0, 1.0] }\n";
     let (file, out) = scenario("flush", &text);
     let id = run_id("fl");

@@ -152,6 +152,15 @@ impl Loop<'_> {
             _pad: 0,
             reason: FixedStr::new(&reason),
         };
+        let accept = |i: usize, token: u64| JoinReply {
+            nonce: req.nonce,
+            accepted: 1,
+            robot_id: i as u32,
+            token,
+            protocol_version: PROTOCOL_VERSION,
+            _pad: 0,
+            reason: FixedStr::default(),
+        };
         let idx = self.world.scenario.robot_index(&name);
         let reply = if req.protocol_version != PROTOCOL_VERSION {
             refuse(format!(
@@ -166,15 +175,7 @@ impl Loop<'_> {
                 // The same process asking again (its first reply was slow
                 // and it re-asked): the same answer, not a second token the
                 // agent would never see.
-                Agent::Live { pid, token } if pid == req.pid => JoinReply {
-                    nonce: req.nonce,
-                    accepted: 1,
-                    robot_id: i as u32,
-                    token,
-                    protocol_version: PROTOCOL_VERSION,
-                    _pad: 0,
-                    reason: FixedStr::default(),
-                },
+                Agent::Live { pid, token } if pid == req.pid => accept(i, token),
                 previous => {
                     let token =
                         splitmix(now_ns() ^ ((req.pid as u64) << 32) ^ i as u64 ^ req.nonce) | 1;
@@ -194,15 +195,7 @@ impl Loop<'_> {
                         self.event(json!({"type": "agent_joined", "robot": name, "pid": req.pid}));
                         self.log(&format!("agent for {name} joined (pid {})", req.pid));
                     }
-                    JoinReply {
-                        nonce: req.nonce,
-                        accepted: 1,
-                        robot_id: i as u32,
-                        token,
-                        protocol_version: PROTOCOL_VERSION,
-                        _pad: 0,
-                        reason: FixedStr::default(),
-                    }
+                    accept(i, token)
                 }
             }
         } else {
