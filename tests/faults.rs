@@ -63,6 +63,14 @@ fn world(file: &Path, out: &Path, id: &str) -> Child {
         .expect("start world")
 }
 
+/// Writes the scenario, starts its world by hand under a fresh run id.
+fn by_hand(tag: &str, id_tag: &str, text: &str) -> (PathBuf, String, Child) {
+    let (file, out) = scenario(tag, text);
+    let id = run_id(id_tag);
+    let w = world(&file, &out, &id);
+    (out, id, w)
+}
+
 fn agent(id: &str, robot: &str, fault: Option<&str>) -> Child {
     let mut c = mrsim();
     c.args(["agent", "--robot", robot, "--run", id]);
@@ -157,9 +165,7 @@ fn an_agent_killed_mid_run_in_lockstep_is_lost_at_once_braked_and_the_others_fin
         // process can explain a loss.
         "dt = 0.1\nduration = 60.0\nstall_timeout = 30.0",
     );
-    let (file, out) = scenario("kill-lock", &text);
-    let id = run_id("kl");
-    let mut w = world(&file, &out, &id);
+    let (out, id, mut w) = by_hand("kill-lock", "kl", &text);
     // a SIGKILLs itself at tick 20: a real SIGKILL at a known tick.
     let mut a = agent(&id, "a", Some("die-at-tick=20"));
     let mut b = agent(&id, "b", None);
@@ -268,9 +274,7 @@ fn an_agent_killed_twenty_times_still_rejoins_within_the_port_limits() {
     // 2 robots: every channel has room for 2 + 16 agents. Twenty dead agents
     // only fit if what each left behind is cleaned up.
     let text = two(3.0, "dt = 0.1\nduration = 30.0");
-    let (file, out) = scenario("limits", &text);
-    let id = run_id("lim");
-    let mut w = world(&file, &out, &id);
+    let (out, id, mut w) = by_hand("limits", "lim", &text);
     let lines = {
         use std::io::BufRead;
         let err = w.stderr.take().expect("world stderr");
@@ -358,9 +362,7 @@ fn an_agent_stopped_in_realtime_misses_deadlines_while_the_world_keeps_ticking()
 #[test]
 fn an_agent_stopped_in_lockstep_is_lost_after_stall_timeout_and_rejoins_on_sigcont() {
     let text = two(100.0, "dt = 0.1\nduration = 40.0\nstall_timeout = 1.0");
-    let (file, out) = scenario("stop-ls", &text);
-    let id = run_id("sls");
-    let mut w = world(&file, &out, &id);
+    let (out, id, mut w) = by_hand("stop-ls", "sls", &text);
     let mut a = agent(&id, "a", Some("stop-at-tick=5"));
     // b's planner takes 5 ms: the run lasts long enough to see a come back.
     let mut b = agent(&id, "b", Some("slow-ms=5"));
@@ -403,9 +405,7 @@ fn an_agent_stopped_in_lockstep_is_lost_after_stall_timeout_and_rejoins_on_sigco
 fn a_planner_stuck_in_a_loop_is_lost_in_lockstep_and_misses_every_deadline_in_realtime() {
     // Lockstep: lost after stall_timeout, the others finish.
     let text = two(3.0, "dt = 0.1\nduration = 30.0\nstall_timeout = 1.0");
-    let (file, out) = scenario("hang-ls", &text);
-    let id = run_id("hls");
-    let mut w = world(&file, &out, &id);
+    let (out, id, mut w) = by_hand("hang-ls", "hls", &text);
     let mut a = agent(&id, "a", Some("hang-at-tick=5"));
     let mut b = agent(&id, "b", None);
     assert!(wait_timeout(&mut w, 60).is_some_and(|s| s.success()));
@@ -426,9 +426,7 @@ fn a_planner_stuck_in_a_loop_is_lost_in_lockstep_and_misses_every_deadline_in_re
 
     // Realtime: the world does not wait; every tick from the hang on is a miss.
     let text = two(100.0, "dt = 0.05\nduration = 2.0\nmode = \"realtime\"");
-    let (file, out) = scenario("hang-rt", &text);
-    let id = run_id("hrt");
-    let mut w = world(&file, &out, &id);
+    let (out, id, mut w) = by_hand("hang-rt", "hrt", &text);
     let mut a = agent(&id, "a", Some("hang-at-tick=5"));
     let mut b = agent(&id, "b", None);
     assert!(wait_timeout(&mut w, 60).is_some_and(|s| s.success()));
@@ -471,9 +469,7 @@ fn when_the_world_is_killed_the_launcher_names_it_and_every_agent_exits() {
 #[test]
 fn a_killed_hand_started_world_leaves_nothing_that_blocks_the_next_world_of_that_run_id() {
     let long = two(100.0, REALTIME_LONG);
-    let (file, out) = scenario("stale", &long);
-    let id = run_id("st");
-    let mut w = world(&file, &out, &id);
+    let (out, id, mut w) = by_hand("stale", "st", &long);
     let mut a = agent(&id, "a", None);
     let mut b = agent(&id, "b", None);
     wait_for_event(&out, 30, |e| {
@@ -538,9 +534,7 @@ fn sigint_or_sigterm_to_the_launcher_stops_everything_and_writes_an_interrupted_
 fn a_killed_world_leaves_a_trajectory_flushed_during_the_run_with_only_whole_ticks() {
     let mut text = two(100.0, REALTIME_LONG);
     text += "[[obstacle]]\nname = \"o\"\nstart = [50.0, 20.0]\nradius = 1.0\nmotion = { model = \"constant-velocity\", velocity = [0.0, 1.0] }\n";
-    let (file, out) = scenario("flush", &text);
-    let id = run_id("fl");
-    let mut w = world(&file, &out, &id);
+    let (out, id, mut w) = by_hand("flush", "fl", &text);
     let mut a = agent(&id, "a", None);
     let mut b = agent(&id, "b", None);
     // Rows of tick 20 (1 s of the run) reach the disk while the world runs:
@@ -593,9 +587,7 @@ fn bad_commands_are_rejected_counted_logged_and_never_drive_a_robot() {
         4.0,
         "dt = 0.1\nduration = 15.0\nstall_timeout = 2.0",
     );
-    let (file, out) = scenario("bad", &text);
-    let id = run_id("bad");
-    let mut w = world(&file, &out, &id);
+    let (out, id, mut w) = by_hand("bad", "bad", &text);
     let mut agents: Vec<Child> = robots.iter().map(|(n, _, f)| agent(&id, n, *f)).collect();
     assert!(wait_timeout(&mut w, 60).is_some_and(|s| s.success()));
     for a in &mut agents {
@@ -675,9 +667,7 @@ fn bad_commands_are_rejected_counted_logged_and_never_drive_a_robot() {
 fn a_runs_shared_memory_and_root_path_are_private_to_its_user() {
     use std::os::unix::fs::PermissionsExt;
     let text = lanes(&[("a", "social-force")], 3.0, "dt = 0.1\nduration = 30.0");
-    let (file, out) = scenario("private", &text);
-    let id = run_id("prv");
-    let mut w = world(&file, &out, &id);
+    let (_out, id, mut w) = by_hand("private", "prv", &text);
     let root = PathBuf::from(format!("/tmp/mrsim/{id}"));
     // The world's services exist once the join service's data is there.
     let start = Instant::now();
