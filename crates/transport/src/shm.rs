@@ -370,6 +370,7 @@ pub struct ShmAgent {
     wake: Notifier<S>,
     last_world_check: Instant,
     world_alive: bool,
+    world_missing: u32,
     terminated: std::cell::Cell<bool>,
 }
 
@@ -469,6 +470,7 @@ impl ShmAgent {
             wake,
             last_world_check: Instant::now(),
             world_alive: true,
+            world_missing: 0,
             terminated: std::cell::Cell::new(false),
         })
     }
@@ -489,18 +491,25 @@ pub fn world_running(ns: &Namespace) -> Result<bool, TransportError> {
 fn world_node_alive(cfg: &Config) -> Option<bool> {
     let mut alive = false;
     let listed = Node::<S>::list(cfg, |state| {
-        if let NodeState::Alive(view) = &state {
-            use iceoryx2::node::NodeView;
-            if view
-                .details()
-                .as_ref()
-                .is_some_and(|d| d.name().as_str() == WORLD_NODE)
+        use iceoryx2::node::NodeView;
+        match &state {
+            NodeState::Alive(view)
+                if view
+                    .details()
+                    .as_ref()
+                    .is_some_and(|d| d.name().as_str() == WORLD_NODE) =>
             {
                 alive = true;
-                return CallbackProgression::Stop;
+                CallbackProgression::Stop
             }
+            // A node whose state cannot be read (being created or cleaned
+            // up right now) may be the world: not proof that it is gone.
+            NodeState::Inaccessible(_) | NodeState::Undefined(_) => {
+                alive = true;
+                CallbackProgression::Stop
+            }
+            _ => CallbackProgression::Continue,
         }
-        CallbackProgression::Continue
     });
     listed.ok().map(|_| alive)
 }
@@ -597,7 +606,13 @@ impl AgentTransport for ShmAgent {
     fn world_alive(&mut self) -> bool {
         if self.world_alive && self.last_world_check.elapsed() >= Duration::from_millis(200) {
             self.last_world_check = Instant::now();
-            self.world_alive = self.check_world();
+            // Gone only when two checks 200 ms apart both say so.
+            if self.check_world() {
+                self.world_missing = 0;
+            } else {
+                self.world_missing += 1;
+                self.world_alive = self.world_missing < 2;
+            }
         }
         self.world_alive
     }
