@@ -58,6 +58,10 @@ pub enum Command {
         /// Print only the output folder, not the table.
         #[arg(long)]
         quiet: bool,
+        /// Restart an agent process that dies while the world runs (same
+        /// command line); it rejoins and drives its robot from where it is.
+        #[arg(long)]
+        restart_agents: bool,
     },
     /// Start a world by hand; agents join with `mrsim agent --robot NAME --run ID`.
     World {
@@ -89,6 +93,14 @@ pub enum Command {
         /// Fault injection for tests: put this robot id in every command.
         #[arg(long, hide = true)]
         impersonate: Option<u32>,
+        /// Fault injection for tests: nan, inf, huge, other-robot, past-tick,
+        /// future-tick, double, join-twice, hang-at-tick=N, die-at-tick=N, stop-at-tick=N,
+        /// slow-ms=N.
+        #[arg(long, hide = true)]
+        fault: Option<mrsim_agents::fault::Fault>,
+        /// For tests of strangers: announce this protocol version.
+        #[arg(long, hide = true)]
+        protocol_version: Option<u32>,
     },
     /// Regenerate plot.svg, plot.png and replay.html of a run folder.
     Report {
@@ -116,13 +128,15 @@ pub fn main(cli: Cli) -> i32 {
         },
         run: None,
         quiet: false,
+        restart_agents: false,
     });
     let result = match command {
         Command::Run {
             scenario,
             run,
             quiet,
-        } => crate::launch::run(&scenario, run, quiet),
+            restart_agents,
+        } => crate::launch::run(&scenario, run, quiet, restart_agents),
         Command::World {
             scenario,
             run,
@@ -134,7 +148,18 @@ pub fn main(cli: Cli) -> i32 {
             run,
             timeout,
             impersonate,
-        } => crate::launch::agent(&robot, &run, timeout, impersonate),
+            fault,
+            protocol_version,
+        } => crate::launch::agent(
+            &robot,
+            &run,
+            timeout,
+            crate::launch::Misbehave {
+                impersonate,
+                fault,
+                protocol_version,
+            },
+        ),
         Command::Report { dir } => mrsim_report::render_all(&dir)
             .map(|()| {
                 println!(

@@ -171,18 +171,66 @@ fn describe(status: ExitStatus) -> String {
     use std::os::unix::process::ExitStatusExt;
     match (status.code(), status.signal()) {
         (Some(c), _) => format!("exited with status {c}"),
-        (None, Some(s)) => format!("was killed by signal {s}"),
+        (None, Some(s)) => format!("was killed by signal {s} ({})", signal_name(s)),
         _ => "ended".to_string(),
     }
 }
 
+fn signal_name(sig: i32) -> &'static str {
+    match sig {
+        libc::SIGKILL => "SIGKILL",
+        libc::SIGTERM => "SIGTERM",
+        libc::SIGINT => "SIGINT",
+        libc::SIGSEGV => "SIGSEGV",
+        libc::SIGABRT => "SIGABRT",
+        libc::SIGBUS => "SIGBUS",
+        libc::SIGFPE => "SIGFPE",
+        libc::SIGILL => "SIGILL",
+        libc::SIGHUP => "SIGHUP",
+        libc::SIGPIPE => "SIGPIPE",
+        _ => "see `kill -l`",
+    }
+}
+
+/// How often `mrsim run --restart-agents` restarts one robot's agent at most.
+pub const MAX_RESTARTS: u32 = 10;
+
+fn spawn_agent(exe: &std::path::Path, robot: &str, run_id: &str) -> Result<Child> {
+    Command::new(exe)
+        .args(["agent", "--robot", robot, "--run", run_id])
+        .stdin(Stdio::null())
+        .spawn()
+        .with_context(|| format!("cannot start the agent process for {robot}"))
+}
+
+/// Clears what a crashed earlier run with this id left behind, unless a
+/// live world holds the run (then refuses: two worlds cannot share one).
+fn claim_namespace(ns: &Namespace) -> Result<()> {
+    match mrsim_transport::shm::world_running(ns) {
+        Ok(true) => Err(invalid(format!(
+            "run id `{}` is in use by a running world; choose another --run",
+            ns.run_id()
+        ))),
+        _ => {
+            ns.remove_leftovers();
+            Ok(())
+        }
+    }
+}
+
 /// `mrsim run`: the whole run.
-pub fn run(args: &ScenarioArgs, run_id: Option<String>, quiet: bool) -> Result<i32> {
+pub fn run(
+    args: &ScenarioArgs,
+    run_id: Option<String>,
+    quiet: bool,
+    restart_agents: bool,
+) -> Result<i32> {
     let loaded = load(args)?;
     let scenario = &loaded.scenario;
     let dir = prepare_out(&args.out, &scenario.name)?;
     let run_id = run_id.unwrap_or_else(Namespace::fresh_run_id);
     let ns = Namespace::new(&run_id).map_err(|e| invalid(e.to_string()))?;
+    claim_namespace(&ns)?;
     let exe = std::env::current_exe().context("cannot find the mrsim executable")?;
     install_signal_handlers();
 
@@ -217,30 +265,42 @@ pub fn run(args: &ScenarioArgs, run_id: Option<String>, quiet: bool) -> Result<i
 
     let mut agents: Vec<(String, Child)> = Vec::with_capacity(scenario.robots.len());
     for r in &scenario.robots {
-        let child = Command::new(&exe)
-            .args(["agent", "--robot", &r.name, "--run", &run_id])
-            .stdin(Stdio::null())
-            .spawn()
-            .with_context(|| format!("cannot start the agent process for {}", r.name))?;
-        agents.push((r.name.clone(), child));
+        agents.push((r.name.clone(), spawn_agent(&exe, &r.name, &run_id)?));
     }
+    let mut restarts = vec![0u32; agents.len()];
 
     // Wait for the world; forward a signal to everything we started.
-    let mut forwarded = false;
+    let mut forwarded: Option<Instant> = None;
     let world_status = loop {
         if let Some(status) = world.try_wait().context("waiting for the world")? {
             break status;
         }
+        // Stop the world first: it writes what it has and tells the agents
+        // the run is over, so they end by themselves (the ones that do not
+        // are stopped below); a world that does not end in 5 s is killed.
         let sig = SIGNALLED.load(Ordering::SeqCst);
-        if sig != 0 && !forwarded {
+        if sig != 0 && forwarded.is_none() {
             signal(&world, libc::SIGTERM);
-            for (_, a) in &agents {
-                signal(a, libc::SIGTERM);
-            }
-            forwarded = true;
+            forwarded = Some(Instant::now());
         }
-        for (_, a) in agents.iter_mut() {
-            let _ = a.try_wait();
+        if forwarded.is_some_and(|t| t.elapsed() > Duration::from_secs(5)) {
+            signal(&world, libc::SIGKILL);
+        }
+        for ((name, a), n) in agents.iter_mut().zip(restarts.iter_mut()) {
+            let Ok(Some(status)) = a.try_wait() else {
+                continue;
+            };
+            if !restart_agents || forwarded.is_some() || status.success() || *n >= MAX_RESTARTS {
+                continue;
+            }
+            *n += 1;
+            eprintln!(
+                "launcher: the agent for {name} (pid {}) {}; restarting it ({} of at most {MAX_RESTARTS})",
+                a.id(),
+                describe(status),
+                *n
+            );
+            *a = spawn_agent(&exe, name, &run_id)?;
         }
         std::thread::sleep(Duration::from_millis(20));
     };
@@ -276,7 +336,9 @@ pub fn run(args: &ScenarioArgs, run_id: Option<String>, quiet: bool) -> Result<i
     // Every agent has ended: join their diagnostics into diagnostics.csv.
     merge_diagnostics(&dir);
 
-    if !world_status.success() {
+    // 130: the world was interrupted and wrote what it had (metrics.json).
+    let interrupted = world_status.code() == Some(130);
+    if !world_status.success() && !interrupted {
         eprintln!(
             "error: the world process (pid {}) {}; outputs so far are in {}",
             world.id(),
@@ -321,7 +383,7 @@ pub fn world(
     if !launched {
         // A world started by hand owns its namespace: clear what a crashed
         // earlier world of the same run id left behind.
-        ns.remove_leftovers();
+        claim_namespace(&ns)?;
     }
     let setup_len = serde_json::to_vec(&serde_json::json!({
         "run_id": run_id, "out_dir": dir, "scenario": scenario
@@ -378,15 +440,30 @@ pub fn world(
     Ok(if outcome.metrics.interrupted { 130 } else { 0 })
 }
 
+/// Deliberate misbehaviour of an agent, for fault-injection tests.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Misbehave {
+    /// Put this robot id in every command.
+    pub impersonate: Option<u32>,
+    /// Misbehave this way.
+    pub fault: Option<mrsim_agents::fault::Fault>,
+    /// Announce this protocol version.
+    pub protocol_version: Option<u32>,
+}
+
 /// `mrsim agent`: one robot's agent process.
-pub fn agent(robot: &str, run_id: &str, timeout: f64, impersonate: Option<u32>) -> Result<i32> {
+pub fn agent(robot: &str, run_id: &str, timeout: f64, bad: Misbehave) -> Result<i32> {
     let ns = Namespace::new(run_id).map_err(|e| invalid(e.to_string()))?;
     let node_name = format!("mrsim-agent-{robot}");
     let mut link = ShmAgent::connect(&ns, &node_name, Duration::from_secs_f64(timeout))
         .with_context(|| format!("agent {robot}: cannot reach the world of run `{run_id}`"))?;
     let mut opts = mrsim_agents::AgentOptions::new(robot);
     opts.join_timeout = Duration::from_secs_f64(timeout);
-    opts.impersonate = impersonate;
+    opts.impersonate = bad.impersonate;
+    opts.fault = bad.fault;
+    if let Some(v) = bad.protocol_version {
+        opts.protocol_version = v;
+    }
     match mrsim_agents::run(&mut link, &opts) {
         Ok(_) => Ok(0),
         Err(e) => Err(anyhow!("agent {robot}: {e}")),

@@ -4,8 +4,7 @@
 
 mod common;
 use common::*;
-use std::process::{Child, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Stdio;
 
 const TWO: &str = r#"name = "two"
 [world]
@@ -25,18 +24,6 @@ start = [0.0, 4.0]
 goal = [3.0, 4.0]
 planner = "social-force"
 "#;
-
-fn wait_timeout(child: &mut Child, secs: u64) -> Option<std::process::ExitStatus> {
-    let start = Instant::now();
-    while start.elapsed() < Duration::from_secs(secs) {
-        if let Ok(Some(s)) = child.try_wait() {
-            return Some(s);
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let _ = child.kill();
-    child.wait().ok()
-}
 
 #[test]
 fn a_command_for_a_robot_the_agent_does_not_own_is_rejected_and_logged() {
@@ -130,6 +117,18 @@ fn a_stranger_is_refused_with_a_clear_message_and_the_run_is_unaffected() {
     assert!(!o.status.success());
     let msg = String::from_utf8_lossy(&o.stderr);
     assert!(msg.contains("already driven"), "{msg}");
+    // Another protocol version.
+    let o = mrsim()
+        .args(["agent", "--robot", "b", "--run", &id, "--timeout", "20"])
+        .args(["--protocol-version", "99"])
+        .output()
+        .expect("old");
+    assert!(!o.status.success());
+    let msg = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        msg.contains("protocol version 99 refused") && msg.contains("speaks version"),
+        "{msg}"
+    );
     let mut b = mrsim()
         .args(["agent", "--robot", "b", "--run", &id])
         .spawn()
@@ -143,5 +142,20 @@ fn a_stranger_is_refused_with_a_clear_message_and_the_run_is_unaffected() {
     assert_eq!(m["success_rate"], 1.0, "{m:#}");
     assert_eq!(m["commands_rejected"], 0);
     assert_eq!(m["agents_lost"], 0);
+    // Each refusal is in the events, with its reason; none of them drove b
+    // (b joined once, after the refusals, and was never lost).
+    let ev = events(&out);
+    let refused: Vec<&str> = ev
+        .iter()
+        .filter(|e| e["type"] == "join_refused")
+        .filter_map(|e| e["reason"].as_str())
+        .collect();
+    assert_eq!(refused.len(), 3, "{refused:?}");
+    assert!(refused.iter().any(|r| r.contains("protocol version 99")));
+    let b_joins = ev
+        .iter()
+        .filter(|e| e["robot"] == "b" && e["type"] == "agent_joined")
+        .count();
+    assert_eq!(b_joins, 1);
     assert_clean(&id);
 }

@@ -10,6 +10,7 @@
 #![warn(missing_docs)]
 
 pub mod diagnostics;
+pub mod fault;
 pub mod observe;
 
 use mrsim_planners::{Command, DesignatedPath, Planner, Segment, Vec2};
@@ -82,6 +83,11 @@ pub struct AgentOptions {
     /// Deliberately claim this robot id in commands instead of the one the
     /// world assigned (for fault-injection tests of ownership checks).
     pub impersonate: Option<u32>,
+    /// Misbehave on purpose (fault-injection tests); None = honest.
+    pub fault: Option<fault::Fault>,
+    /// The protocol version announced when joining (tests of strangers
+    /// set another one).
+    pub protocol_version: u32,
 }
 
 impl AgentOptions {
@@ -92,6 +98,8 @@ impl AgentOptions {
             join_timeout: Duration::from_secs(30),
             world_check_after: Duration::from_millis(300),
             impersonate: None,
+            fault: None,
+            protocol_version: PROTOCOL_VERSION,
         }
     }
 }
@@ -126,7 +134,7 @@ pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentEx
     // Join: ask for the robot, re-asking until the world answers.
     let nonce = now_ns() ^ ((std::process::id() as u64) << 20) ^ 0x6d72_7369_6d00_0000;
     let req = JoinRequest {
-        protocol_version: PROTOCOL_VERSION,
+        protocol_version: opts.protocol_version,
         pid: std::process::id(),
         nonce,
         robot: FixedStr::new(&opts.robot),
@@ -138,6 +146,9 @@ pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentEx
             return Ok(AgentExit::Interrupted);
         }
         if last_ask.is_none_or(|t| t.elapsed() > Duration::from_millis(500)) {
+            if last_ask.is_none() && opts.fault == Some(fault::Fault::JoinTwice) {
+                link.request_join(&req)?;
+            }
             link.request_join(&req)?;
             last_ask = Some(Instant::now());
         }
@@ -229,6 +240,8 @@ pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentEx
         Vec::with_capacity(scenario.robots.len() + scenario.obstacles.len());
     let mut answered: Option<u64> = None;
     let mut last_heard = Instant::now();
+    let mut injector = opts.fault.map(fault::Injector::new);
+    let mut hung = false;
     loop {
         if link.termination_requested() {
             return finish(diag, AgentExit::Interrupted);
@@ -245,8 +258,14 @@ pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentEx
         if header.finished != 0 {
             return finish(diag, AgentExit::Finished);
         }
-        if answered.is_some_and(|t| t >= header.tick) || me >= bodies.len() {
+        if hung || answered.is_some_and(|t| t >= header.tick) || me >= bodies.len() {
             continue;
+        }
+        if let Some(inj) = injector.as_mut() {
+            hung = inj.before_plan(header.tick) == fault::Before::Hang;
+            if hung {
+                continue;
+            }
         }
         let t0 = now_ns();
         let obs = observer.observe(&header, &bodies, &spec, &walls, path.as_ref());
@@ -266,7 +285,14 @@ pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentEx
             woke_ns: woke,
             sent_ns: now_ns(),
         };
-        link.send_command(&msg)?;
+        match &injector {
+            Some(inj) => {
+                for m in inj.corrupt(msg, scenario.robots.len()) {
+                    link.send_command(&m)?;
+                }
+            }
+            None => link.send_command(&msg)?,
+        }
         answered = Some(header.tick);
         // After the command is out: off the tick's critical path.
         if let Some(d) = &diag {

@@ -145,3 +145,96 @@ pub fn run_id(tag: &str) -> String {
         N.fetch_add(1, Ordering::SeqCst)
     )
 }
+
+/// Waits up to `secs` for `child`; kills it if it is still running then.
+/// Returns its status (None if it could not be waited for).
+pub fn wait_timeout(
+    child: &mut std::process::Child,
+    secs: u64,
+) -> Option<std::process::ExitStatus> {
+    let start = std::time::Instant::now();
+    while start.elapsed() < std::time::Duration::from_secs(secs) {
+        if let Ok(Some(s)) = child.try_wait() {
+            return Some(s);
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let _ = child.kill();
+    child.wait().ok()
+}
+
+/// Sends signal `sig` to process `pid`.
+pub fn send_signal(pid: u32, sig: i32) {
+    // SAFETY: kill(2) on a process this test started.
+    let r = unsafe { libc::kill(pid as libc::pid_t, sig) };
+    assert_eq!(r, 0, "kill({pid}, {sig}) failed");
+}
+
+/// The state letter of process `pid` from /proc (R, S, T, Z, ...), None if
+/// it does not exist.
+pub fn process_state(pid: u32) -> Option<char> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    stat.rsplit_once(") ")?.1.chars().next()
+}
+
+/// True once process `pid` is gone (or only a zombie).
+pub fn process_gone(pid: u32) -> bool {
+    matches!(process_state(pid), None | Some('Z') | Some('X'))
+}
+
+/// The live `mrsim` processes whose command line contains `args` in a row.
+pub fn find_processes(args: &[&str]) -> Vec<u32> {
+    let mut found = Vec::new();
+    let Ok(dir) = std::fs::read_dir("/proc") else {
+        return found;
+    };
+    for e in dir.flatten() {
+        let Ok(pid) = e.file_name().to_string_lossy().parse::<u32>() else {
+            continue;
+        };
+        let Ok(cmd) = std::fs::read(format!("/proc/{pid}/cmdline")) else {
+            continue;
+        };
+        let parts: Vec<String> = cmd
+            .split(|b| *b == 0)
+            .map(|p| String::from_utf8_lossy(p).into_owned())
+            .collect();
+        let is_mrsim = parts.first().is_some_and(|p| p.ends_with("mrsim"));
+        let has = parts
+            .windows(args.len())
+            .any(|w| w.iter().zip(args).all(|(a, b)| a == b));
+        if is_mrsim && has && !process_gone(pid) {
+            found.push(pid);
+        }
+    }
+    found
+}
+
+/// Waits up to `secs` for exactly one live `mrsim` process with `args`
+/// (other than those in `except`) and returns its pid.
+pub fn wait_for_process(args: &[&str], except: &[u32], secs: u64) -> u32 {
+    let start = std::time::Instant::now();
+    loop {
+        let found: Vec<u32> = find_processes(args)
+            .into_iter()
+            .filter(|p| !except.contains(p))
+            .collect();
+        if let [pid] = found[..] {
+            return pid;
+        }
+        assert!(
+            start.elapsed() < std::time::Duration::from_secs(secs),
+            "no single process with {args:?} after {secs} s (found {found:?})"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+}
+
+/// Removes what a run left in /dev/shm and its root path (after a test
+/// killed its world on purpose).
+pub fn remove_leftovers(run_id: &str) {
+    for name in shm_leftovers(run_id) {
+        let _ = std::fs::remove_file(Path::new("/dev/shm").join(name));
+    }
+    let _ = std::fs::remove_dir_all(format!("/tmp/mrsim/{run_id}"));
+}

@@ -85,6 +85,34 @@ pub struct World {
     tick: u64,
 }
 
+/// `v` shortened to length `max` if longer, keeping its direction, also
+/// when its length overflows (a command of 1e300 divided by a small mass):
+/// then the direction comes from the infinite components, or from `v`
+/// rescaled by its largest component. A NaN component gives zero (the
+/// world never lets NaN reach a command, this is a last line).
+pub fn clamp_norm(v: [f64; 2], max: f64) -> [f64; 2] {
+    if v.iter().any(|c| c.is_nan()) {
+        return [0.0, 0.0];
+    }
+    let n = v[0].hypot(v[1]);
+    if n <= max {
+        return v;
+    }
+    let dir = if n.is_finite() {
+        [v[0] / n, v[1] / n]
+    } else {
+        let u = if v.iter().any(|c| c.is_infinite()) {
+            v.map(|c| if c.is_infinite() { c.signum() } else { 0.0 })
+        } else {
+            let m = v[0].abs().max(v[1].abs());
+            [v[0] / m, v[1] / m]
+        };
+        let un = u[0].hypot(u[1]);
+        [u[0] / un, u[1] / un]
+    };
+    [dir[0] * max, dir[1] * max]
+}
+
 fn v2(p: [f64; 2]) -> Vector {
     Vector::new(p[0] as f32, p[1] as f32)
 }
@@ -234,15 +262,8 @@ impl World {
                         [(vc[0] - v[0]) / t, (vc[1] - v[1]) / t]
                     }
                 };
-                let an = a[0].hypot(a[1]);
-                if an > spec.max_accel {
-                    a = [a[0] * spec.max_accel / an, a[1] * spec.max_accel / an];
-                }
-                let mut nv = [v[0] + a[0] * h, v[1] + a[1] * h];
-                let sn = nv[0].hypot(nv[1]);
-                if sn > spec.max_speed {
-                    nv = [nv[0] * spec.max_speed / sn, nv[1] * spec.max_speed / sn];
-                }
+                a = clamp_norm(a, spec.max_accel);
+                let nv = clamp_norm([v[0] + a[0] * h, v[1] + a[1] * h], spec.max_speed);
                 body.set_linvel(v2(nv), true);
             }
             for (k, handle) in self.obstacles.iter().enumerate() {
@@ -360,5 +381,22 @@ impl World {
                 radius: self.scenario.obstacles[k].radius,
             });
         }
+    }
+}
+
+#[cfg(test)]
+mod clamp_tests {
+    use super::clamp_norm;
+
+    #[test]
+    fn clamping_keeps_the_direction_even_when_the_length_overflows() {
+        assert_eq!(clamp_norm([3.0, 4.0], 10.0), [3.0, 4.0]);
+        let c = clamp_norm([3.0, 4.0], 1.0);
+        assert!((c[0] - 0.6).abs() < 1e-12 && (c[1] - 0.8).abs() < 1e-12);
+        let c = clamp_norm([1e308, 1e308], 2.0);
+        assert!((c[0] - 2f64.sqrt()).abs() < 1e-12 && (c[1] - 2f64.sqrt()).abs() < 1e-12);
+        let c = clamp_norm([f64::INFINITY, 5.0], 2.0);
+        assert_eq!(c, [2.0, 0.0]);
+        assert_eq!(clamp_norm([f64::NAN, 1.0], 2.0), [0.0, 0.0]);
     }
 }

@@ -1,9 +1,11 @@
 //! Recording off the tick loop: trajectory.csv and events.jsonl are written
 //! by their own thread, fed through a crossbeam channel, flushed about once
-//! a second, so a crash loses at most the last second and the tick loop
-//! never waits on the disk. Row buffers are returned to the loop for reuse.
+//! a second (also when no tick comes), so a crash loses at most the last
+//! second and the tick loop never waits on the disk. A tick's rows and an
+//! event's line are written in one piece, so what reaches the disk ends
+//! with a whole tick and a whole line (no torn rows after a crash). Row buffers are returned to the loop for reuse.
 
-use crossbeam::channel::{Receiver, Sender, bounded, unbounded};
+use crossbeam::channel::{Receiver, RecvTimeoutError, Sender, bounded, unbounded};
 use mrsim_proto::{BodyState, body_kind};
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -40,10 +42,18 @@ impl Recorder {
         let thread = std::thread::Builder::new()
             .name("recorder".into())
             .spawn(move || {
+                let period = Duration::from_secs(1);
                 let mut last_flush = Instant::now();
-                for msg in rx {
-                    match msg {
-                        Msg::Tick { tick, time, bodies } => {
+                let mut block = Vec::with_capacity(1 << 12);
+                loop {
+                    // Wake at least once a period, so rows reach the disk
+                    // even while the tick loop waits (a lockstep stall).
+                    let left = period.saturating_sub(last_flush.elapsed());
+                    match rx.recv_timeout(left) {
+                        Ok(Msg::Tick { tick, time, bodies }) => {
+                            // A tick's rows go to the buffer in one piece, so
+                            // the file only ever ends after a whole tick.
+                            block.clear();
                             for b in &bodies {
                                 let name =
                                     names.get(b.id as usize).map(String::as_str).unwrap_or("?");
@@ -53,19 +63,22 @@ impl Recorder {
                                     "obstacle"
                                 };
                                 writeln!(
-                                    traj,
+                                    block,
                                     "{tick},{time:.6},{name},{kind},{:.6},{:.6},{:.6},{:.6}",
                                     b.position[0], b.position[1], b.velocity[0], b.velocity[1]
                                 )?;
                             }
+                            traj.write_all(&block)?;
                             let _ = back_tx.send(bodies);
                         }
-                        Msg::Event(line) => {
+                        Ok(Msg::Event(mut line)) => {
+                            line.push('\n');
                             events.write_all(line.as_bytes())?;
-                            events.write_all(b"\n")?;
                         }
+                        Err(RecvTimeoutError::Timeout) => {}
+                        Err(RecvTimeoutError::Disconnected) => break,
                     }
-                    if last_flush.elapsed() >= Duration::from_secs(1) {
+                    if last_flush.elapsed() >= period {
                         traj.flush()?;
                         events.flush()?;
                         last_flush = Instant::now();

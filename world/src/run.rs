@@ -152,6 +152,15 @@ impl Loop<'_> {
             _pad: 0,
             reason: FixedStr::new(&reason),
         };
+        let accept = |i: usize, token: u64| JoinReply {
+            nonce: req.nonce,
+            accepted: 1,
+            robot_id: i as u32,
+            token,
+            protocol_version: PROTOCOL_VERSION,
+            _pad: 0,
+            reason: FixedStr::default(),
+        };
         let idx = self.world.scenario.robot_index(&name);
         let reply = if req.protocol_version != PROTOCOL_VERSION {
             refuse(format!(
@@ -163,6 +172,10 @@ impl Loop<'_> {
                 Agent::Live { pid, .. } if pid != req.pid && pid_alive(pid) => {
                     refuse(format!("robot `{name}` is already driven by process {pid}"))
                 }
+                // The same process asking again (its first reply was slow
+                // and it re-asked): the same answer, not a second token the
+                // agent would never see.
+                Agent::Live { pid, token } if pid == req.pid => accept(i, token),
                 previous => {
                     let token =
                         splitmix(now_ns() ^ ((req.pid as u64) << 32) ^ i as u64 ^ req.nonce) | 1;
@@ -180,16 +193,9 @@ impl Loop<'_> {
                         self.log(&format!("agent for {name} rejoined (pid {})", req.pid));
                     } else {
                         self.event(json!({"type": "agent_joined", "robot": name, "pid": req.pid}));
+                        self.log(&format!("agent for {name} joined (pid {})", req.pid));
                     }
-                    JoinReply {
-                        nonce: req.nonce,
-                        accepted: 1,
-                        robot_id: i as u32,
-                        token,
-                        protocol_version: PROTOCOL_VERSION,
-                        _pad: 0,
-                        reason: FixedStr::default(),
-                    }
+                    accept(i, token)
                 }
             }
         } else {
@@ -260,6 +266,13 @@ impl Loop<'_> {
                 return;
             }
             return self.reject(&cmd, "command for a past tick");
+        }
+        if cmd.sent_ns < self.published_ns {
+            // Named this tick before the tick existed: a guess, not an answer.
+            return self.reject(
+                &cmd,
+                "command for a future tick (sent before it was published)",
+            );
         }
         if self.got[i].is_some() {
             return self.reject(&cmd, "second command in one tick");
@@ -339,11 +352,14 @@ impl Loop<'_> {
         Ok(())
     }
 
+    /// Every live agent has answered this tick: with a valid command, or
+    /// with garbage (rejected; the robot brakes and the world moves on
+    /// rather than waiting `stall_timeout` for an answer that came).
     fn all_answered(&self) -> bool {
         self.agents
             .iter()
-            .zip(&self.got)
-            .all(|(a, g)| !matches!(a, Agent::Live { .. }) || g.is_some())
+            .zip(self.got.iter().zip(&self.garbage))
+            .all(|(a, (g, bad))| !matches!(a, Agent::Live { .. }) || g.is_some() || *bad)
     }
 
     fn record_contacts(&mut self, contacts: &[Contact]) {
@@ -590,7 +606,10 @@ pub fn run(
             if waited >= limit {
                 if !realtime {
                     for i in 0..n {
-                        if matches!(lp.agents[i], Agent::Live { .. }) && lp.got[i].is_none() {
+                        if matches!(lp.agents[i], Agent::Live { .. })
+                            && lp.got[i].is_none()
+                            && !lp.garbage[i]
+                        {
                             lp.lose(
                                 i,
                                 format!(
@@ -644,6 +663,9 @@ pub fn run(
             break;
         }
     }
+    // A termination request that came while the last tick ended the run
+    // (its agents stopped with it) still makes the run an interrupted one.
+    interrupted |= lp.link.termination_requested();
     lp.rec.tick(lp.tick, lp.time(), lp.world.states());
     let wall = wall_start.elapsed().as_secs_f64();
 

@@ -92,6 +92,34 @@ impl Namespace {
         removed
     }
 
+    /// Takes group and other permissions off every /dev/shm entry of the
+    /// run that has them. iceoryx2 0.10 creates its data segments, service
+    /// records and sockets user-only, but its 16-byte global management
+    /// segment (`*.global_mgmt`) world read-write
+    /// (`enable_global_access(true)`, not configurable): this closes it
+    /// right after the node that created it exists. Returns how many
+    /// entries were changed.
+    pub fn make_private(&self) -> usize {
+        use std::os::unix::fs::PermissionsExt;
+        let prefix = self.prefix();
+        let Ok(entries) = std::fs::read_dir("/dev/shm") else {
+            return 0;
+        };
+        let mut changed = 0;
+        for e in entries.flatten() {
+            if !e.file_name().to_string_lossy().starts_with(&prefix) {
+                continue;
+            }
+            let Ok(meta) = e.metadata() else { continue };
+            let mode = meta.permissions().mode();
+            if mode & 0o077 != 0 {
+                let private = std::fs::Permissions::from_mode(mode & 0o700);
+                changed += usize::from(std::fs::set_permissions(e.path(), private).is_ok());
+            }
+        }
+        changed
+    }
+
     /// Lists what the run has left in /dev/shm (for tests and `--check`).
     pub fn shm_leftovers(&self) -> Vec<String> {
         let prefix = self.prefix();

@@ -84,8 +84,14 @@ fn wait_on(listener: &Listener<S>, timeout: Duration) -> Result<(), TransportErr
     }
 }
 
-fn terminated(node: &Node<S>) -> bool {
-    node.wait(Duration::ZERO).is_err()
+/// True once SIGINT or SIGTERM arrived. iceoryx2 reports a termination
+/// request only once (its signal handler's last signal is taken when read),
+/// so the answer is kept in `seen`: asked twice, a loop must hear it twice.
+fn terminated(node: &Node<S>, seen: &std::cell::Cell<bool>) -> bool {
+    if !seen.get() && node.wait(Duration::ZERO).is_err() {
+        seen.set(true);
+    }
+    seen.get()
 }
 
 /// The world's side over iceoryx2.
@@ -99,6 +105,7 @@ pub struct ShmWorld {
     reply_pub: Publisher<S, JoinReply, ()>,
     wake: Listener<S>,
     max_bodies: usize,
+    terminated: std::cell::Cell<bool>,
 }
 
 impl ShmWorld {
@@ -112,6 +119,7 @@ impl ShmWorld {
     ) -> Result<Self, TransportError> {
         let cfg = config(ns)?;
         let node = node(&cfg, WORLD_NODE)?;
+        ns.make_private();
         // A crashed earlier run of the same id may have left dead nodes.
         let _ = node.try_cleanup_dead_nodes();
         let agents = cap.agents();
@@ -229,6 +237,7 @@ impl ShmWorld {
             reply_pub,
             wake,
             max_bodies,
+            terminated: std::cell::Cell::new(false),
         })
     }
 }
@@ -340,7 +349,7 @@ impl WorldTransport for ShmWorld {
     }
 
     fn termination_requested(&self) -> bool {
-        terminated(&self.node)
+        terminated(&self.node, &self.terminated)
     }
 
     fn cleanup_dead(&mut self) {
@@ -361,6 +370,8 @@ pub struct ShmAgent {
     wake: Notifier<S>,
     last_world_check: Instant,
     world_alive: bool,
+    world_missing: u32,
+    terminated: std::cell::Cell<bool>,
 }
 
 impl ShmAgent {
@@ -384,6 +395,7 @@ impl ShmAgent {
     fn try_connect(ns: &Namespace, node_name: &str) -> Result<Self, TransportError> {
         let cfg = config(ns)?;
         let node = node(&cfg, node_name)?;
+        ns.make_private();
         let setup_sub = node
             .service_builder(&service_name("mrsim/setup")?)
             .publish_subscribe::<[u8]>()
@@ -458,27 +470,48 @@ impl ShmAgent {
             wake,
             last_world_check: Instant::now(),
             world_alive: true,
+            world_missing: 0,
+            terminated: std::cell::Cell::new(false),
         })
     }
 
     fn check_world(&mut self) -> bool {
-        let mut alive = false;
-        let listed = Node::<S>::list(&self.cfg, |state| {
-            if let NodeState::Alive(view) = &state {
-                use iceoryx2::node::NodeView;
+        world_node_alive(&self.cfg).unwrap_or(true)
+    }
+}
+
+/// Whether a live world process holds run `ns` (its iceoryx2 node is
+/// listed alive). A crashed world's node is listed dead, so this is false
+/// for a run that only left stale shared memory behind.
+pub fn world_running(ns: &Namespace) -> Result<bool, TransportError> {
+    world_node_alive(&config(ns)?).ok_or_else(|| setup_err("node list", "cannot list nodes"))
+}
+
+/// Some(alive) if the node list could be read.
+fn world_node_alive(cfg: &Config) -> Option<bool> {
+    let mut alive = false;
+    let listed = Node::<S>::list(cfg, |state| {
+        use iceoryx2::node::NodeView;
+        match &state {
+            NodeState::Alive(view)
                 if view
                     .details()
                     .as_ref()
-                    .is_some_and(|d| d.name().as_str() == WORLD_NODE)
-                {
-                    alive = true;
-                    return CallbackProgression::Stop;
-                }
+                    .is_some_and(|d| d.name().as_str() == WORLD_NODE) =>
+            {
+                alive = true;
+                CallbackProgression::Stop
             }
-            CallbackProgression::Continue
-        });
-        listed.is_err() || alive
-    }
+            // A node whose state cannot be read (being created or cleaned
+            // up right now) may be the world: not proof that it is gone.
+            NodeState::Inaccessible(_) | NodeState::Undefined(_) => {
+                alive = true;
+                CallbackProgression::Stop
+            }
+            _ => CallbackProgression::Continue,
+        }
+    });
+    listed.ok().map(|_| alive)
 }
 
 impl AgentTransport for ShmAgent {
@@ -573,12 +606,18 @@ impl AgentTransport for ShmAgent {
     fn world_alive(&mut self) -> bool {
         if self.world_alive && self.last_world_check.elapsed() >= Duration::from_millis(200) {
             self.last_world_check = Instant::now();
-            self.world_alive = self.check_world();
+            // Gone only when two checks 200 ms apart both say so.
+            if self.check_world() {
+                self.world_missing = 0;
+            } else {
+                self.world_missing += 1;
+                self.world_alive = self.world_missing < 2;
+            }
         }
         self.world_alive
     }
 
     fn termination_requested(&self) -> bool {
-        terminated(&self.node)
+        terminated(&self.node, &self.terminated)
     }
 }
