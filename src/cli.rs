@@ -116,6 +116,10 @@ pub enum Command {
         /// Runs at once (default: the number of cores).
         #[arg(long)]
         jobs: Option<usize>,
+        /// Also report, per seed and other combination, the largest value
+        /// of this swept key whose run had no collision.
+        #[arg(long, value_name = "KEY")]
+        allowable: Option<String>,
     },
     /// Check a scenario file without running it.
     Check {
@@ -170,12 +174,14 @@ pub fn main(cli: Cli) -> i32 {
             seeds,
             out,
             jobs,
+            allowable,
         } => crate::sweep::sweep(&crate::sweep::SweepArgs {
             scenario,
             set,
             seeds,
             out,
             jobs,
+            allowable,
         }),
         Command::Planners => {
             for p in mrsim_planners::PLANNERS {

@@ -21,6 +21,12 @@
 //! and `--set 'robot.r0.goal=[1, 2],[3, 4]'` give two values each; a comma
 //! inside a plain value cannot be written (none of the scenario format's
 //! plain values needs one).
+//!
+//! `--allowable KEY` (a swept numeric key, e.g. `robot.*.max_speed`) also
+//! reports, per combination of the other keys, the mean over seeds of the
+//! largest value of KEY at which the run had no collision (0 if none;
+//! `allowable.csv`): our reading of Zhu & Loh's "average allowable maximum
+//! speed" when KEY is the robot's speed limit.
 
 use crate::cli::{ModeArg, ScenarioArgs};
 use crate::launch::{Invalid, load};
@@ -48,6 +54,9 @@ pub struct SweepArgs {
     pub out: Option<PathBuf>,
     /// Runs at once (default: the core count).
     pub jobs: Option<usize>,
+    /// A swept numeric key (e.g. `robot.*.max_speed`) whose largest
+    /// collision-free value is reported per seed and other combination.
+    pub allowable: Option<String>,
 }
 
 /// Splits `text` at commas outside brackets, braces and quotes.
@@ -122,32 +131,34 @@ pub fn combinations(axes: &[(String, Vec<String>)]) -> Vec<Vec<String>> {
     out
 }
 
-/// A folder-name-safe label of a combination: its index, then `key=value`
-/// pairs (last part of each key), shortened.
+/// A folder-name-safe label of a combination: its index (which makes it
+/// unique), then `key=value` pairs (last part of each key, values cleaned
+/// and cut to 24 characters).
 fn label(index: usize, axes: &[(String, Vec<String>)], combo: &[String]) -> String {
+    let clean = |s: &str| {
+        let mut out = String::new();
+        for c in s.chars() {
+            let c = if c.is_ascii_alphanumeric() || matches!(c, '.' | '-') {
+                c
+            } else {
+                '_'
+            };
+            if !(c == '_' && (out.is_empty() || out.ends_with('_'))) {
+                out.push(c);
+            }
+        }
+        out.truncate(24);
+        out.trim_end_matches('_').to_string()
+    };
     let mut s = format!("{index:03}");
     for ((k, _), v) in axes.iter().zip(combo) {
         let short = k.rsplit('.').next().unwrap_or(k);
         s.push('-');
-        s.push_str(short);
+        s.push_str(&clean(short));
         s.push('=');
-        s.push_str(v);
+        s.push_str(&clean(v));
     }
-    let mut safe: String = s
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || matches!(c, '.' | '-' | '_' | '=') {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect();
-    while safe.contains("__") {
-        safe = safe.replace("__", "_");
-    }
-    safe.truncate(60);
-    safe
+    s
 }
 
 /// One run's metrics, as sweep.csv reports them.
@@ -171,12 +182,17 @@ pub struct RunMetrics {
     pub ticks: f64,
 }
 
+/// How a metric column is read from a run's metrics.
+type Column = (&'static str, fn(&RunMetrics) -> Option<f64>);
+
 /// The metric columns of sweep.csv, in order, with how to get each.
-const METRICS: [(&str, fn(&RunMetrics) -> Option<f64>); 9] = [
+const METRICS: [Column; 9] = [
     ("success_rate", |m| Some(m.success_rate)),
     ("collisions_total", |m| Some(m.collisions_total)),
     // 1 if the run had any collision: its mean is the collision rate.
-    ("collided", |m| Some(f64::from(u8::from(m.collisions_total > 0.0)))),
+    ("collided", |m| {
+        Some(f64::from(u8::from(m.collisions_total > 0.0)))
+    }),
     ("makespan", |m| Some(m.makespan)),
     ("path_length_ratio", |m| m.path_ratio),
     ("min_clearance", |m| m.min_clearance),
@@ -189,7 +205,8 @@ const METRICS: [(&str, fn(&RunMetrics) -> Option<f64>); 9] = [
 pub fn read_run(dir: &Path) -> Result<RunMetrics> {
     let read = |f: &str| -> Result<serde_json::Value> {
         let p = dir.join(f);
-        let text = std::fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
+        let text =
+            std::fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
         serde_json::from_str(&text).with_context(|| format!("parsing {}", p.display()))
     };
     let m = read("metrics.json")?;
@@ -243,9 +260,9 @@ pub fn read_run(dir: &Path) -> Result<RunMetrics> {
 /// to 3 decimals from a table up to 30, Cornish-Fisher expansion beyond).
 pub fn t975(df: usize) -> f64 {
     const TABLE: [f64; 30] = [
-        12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179,
-        2.160, 2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060,
-        2.056, 2.052, 2.048, 2.045, 2.042,
+        12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160,
+        2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056,
+        2.052, 2.048, 2.045, 2.042,
     ];
     match df {
         0 => f64::NAN,
@@ -301,6 +318,21 @@ pub fn sweep(args: &SweepArgs) -> Result<i32> {
         return Err(invalid("--jobs must be at least 1"));
     }
     let axes = parse_axes(&args.set)?;
+    if let Some(key) = &args.allowable {
+        match axes.iter().find(|(k, _)| k == key) {
+            None => {
+                return Err(invalid(format!(
+                    "--allowable {key}: not a swept key (give it --set {key}=V1,V2,...)"
+                )));
+            }
+            Some((_, vs)) if vs.iter().any(|v| v.parse::<f64>().is_err()) => {
+                return Err(invalid(format!(
+                    "--allowable {key}: its values must be numbers"
+                )));
+            }
+            _ => {}
+        }
+    }
     let combos = combinations(&axes);
     let sets = |combo: &[String], seed: u64| -> Vec<String> {
         let mut s: Vec<String> = axes
@@ -339,13 +371,22 @@ pub fn sweep(args: &SweepArgs) -> Result<i32> {
                 .unwrap_or(0);
             let safe: String = name
                 .chars()
-                .map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '_' })
+                .map(|c| {
+                    if c.is_ascii_alphanumeric() || c == '-' {
+                        c
+                    } else {
+                        '_'
+                    }
+                })
                 .collect();
             PathBuf::from("runs").join(format!("sweep-{safe}-{secs}"))
         }
     };
     std::fs::create_dir_all(dir.join("runs")).map_err(|e| {
-        invalid(format!("output folder {}: cannot create it: {e}", dir.display()))
+        invalid(format!(
+            "output folder {}: cannot create it: {e}",
+            dir.display()
+        ))
     })?;
 
     let jobs: Vec<Job> = combos
@@ -498,7 +539,13 @@ pub fn sweep(args: &SweepArgs) -> Result<i32> {
     let mut table: Vec<Vec<String>> = Vec::new();
     let mut theader: Vec<String> = axes.iter().map(|(k, _)| k.clone()).collect();
     theader.push("runs".into());
-    theader.extend(shown.iter().map(|s| s.to_string()));
+    // In METRICS order, as the rows are filled.
+    theader.extend(
+        METRICS
+            .iter()
+            .filter(|(n, _)| shown.contains(n))
+            .map(|(n, _)| n.to_string()),
+    );
     table.push(theader);
     for (ci, combo) in combos.iter().enumerate() {
         let runs: Vec<&RunMetrics> = jobs
@@ -534,7 +581,13 @@ pub fn sweep(args: &SweepArgs) -> Result<i32> {
     std::fs::write(dir.join("summary.csv"), &summary)
         .with_context(|| format!("writing {}", dir.join("summary.csv").display()))?;
     let widths: Vec<usize> = (0..table[0].len())
-        .map(|c| table.iter().map(|r| r[c].chars().count()).max().unwrap_or(0))
+        .map(|c| {
+            table
+                .iter()
+                .map(|r| r[c].chars().count())
+                .max()
+                .unwrap_or(0)
+        })
         .collect();
     for (i, r) in table.iter().enumerate() {
         let cells: Vec<String> = r
@@ -544,11 +597,30 @@ pub fn sweep(args: &SweepArgs) -> Result<i32> {
             .collect();
         println!("{}", cells.join("  ").trim_end());
         if i == 0 {
-            println!("{}", widths.iter().map(|w| "-".repeat(*w)).collect::<Vec<_>>().join("  "));
+            println!(
+                "{}",
+                widths
+                    .iter()
+                    .map(|w| "-".repeat(*w))
+                    .collect::<Vec<_>>()
+                    .join("  ")
+            );
         }
     }
-    println!("(mean ± half-width of the 95 % interval, Student's t, over seeds 1..={})", args.seeds);
-    println!("sweep folder: {} (sweep.csv, summary.csv, runs/)", dir.display());
+    println!(
+        "(mean ± half-width of the 95 % interval, Student's t, over seeds 1..={})",
+        args.seeds
+    );
+    if let Some(key) = &args.allowable {
+        let text = allowable(key, &axes, &combos, &jobs, &results)?;
+        std::fs::write(dir.join("allowable.csv"), &text.0)
+            .with_context(|| format!("writing {}", dir.join("allowable.csv").display()))?;
+        print!("{}", text.1);
+    }
+    println!(
+        "sweep folder: {} (sweep.csv, summary.csv, runs/)",
+        dir.display()
+    );
     if failed > 0 {
         eprintln!("error: {failed} of {} runs failed (see above)", jobs.len());
         return Ok(crate::cli::EXIT_FAILED);
@@ -556,17 +628,138 @@ pub fn sweep(args: &SweepArgs) -> Result<i32> {
     Ok(0)
 }
 
+/// The largest value of `key` that is allowable for one seed: the largest
+/// tested value whose run had no collision (0 if every value collided).
+pub fn largest_allowable(runs: &[(f64, bool)]) -> f64 {
+    runs.iter()
+        .filter(|(_, collided)| !collided)
+        .map(|(v, _)| *v)
+        .fold(0.0, f64::max)
+}
+
+/// `--allowable KEY`: per combination of the other keys, the mean over
+/// seeds of the largest allowable value of KEY (allowable.csv, and a table).
+fn allowable(
+    key: &str,
+    axes: &[(String, Vec<String>)],
+    combos: &[Vec<String>],
+    jobs: &[Job],
+    results: &[Option<Result<RunMetrics, String>>],
+) -> Result<(String, String)> {
+    let k = axes
+        .iter()
+        .position(|(a, _)| a == key)
+        .ok_or_else(|| anyhow!("--allowable {key}: not a swept key"))?;
+    let others: Vec<&String> = axes
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| *i != k)
+        .map(|(_, (a, _))| a)
+        .collect();
+    // Group runs by (the other values, seed).
+    // (the other values, seed, [(value of key, collided)])
+    type Group = (Vec<String>, u64, Vec<(f64, bool)>);
+    let mut groups: Vec<Group> = Vec::new();
+    for (job, r) in jobs.iter().zip(results) {
+        let Some(Ok(m)) = r else { continue };
+        let combo = &combos[job.combo];
+        let rest: Vec<String> = combo
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| *i != k)
+            .map(|(_, v)| v.clone())
+            .collect();
+        let v: f64 = combo[k].parse().unwrap_or(f64::NAN);
+        let run = (v, m.collisions_total > 0.0);
+        match groups
+            .iter_mut()
+            .find(|(o, s, _)| *o == rest && *s == job.seed)
+        {
+            Some(g) => g.2.push(run),
+            None => groups.push((rest, job.seed, vec![run])),
+        }
+    }
+    let mut csv = String::new();
+    let mut header: Vec<String> = others.iter().map(|o| csv_field(o)).collect();
+    header.push("seeds".into());
+    header.push(format!("{key}_allowable_mean"));
+    header.push(format!("{key}_allowable_ci95"));
+    csv.push_str(&header.join(","));
+    csv.push('\n');
+    let mut table =
+        format!("\nlargest collision-free {key}, mean over seeds (0: every value collided):\n");
+    let mut keys: Vec<Vec<String>> = Vec::new();
+    for (rest, _, _) in &groups {
+        if !keys.contains(rest) {
+            keys.push(rest.clone());
+        }
+    }
+    for rest in &keys {
+        let xs: Vec<f64> = groups
+            .iter()
+            .filter(|(o, _, _)| o == rest)
+            .map(|(_, _, runs)| largest_allowable(runs))
+            .collect();
+        let (mean, hw) = mean_ci(&xs);
+        let mut row: Vec<String> = rest.iter().map(|v| csv_field(v)).collect();
+        row.push(xs.len().to_string());
+        row.push(fmt_opt(mean));
+        row.push(fmt_opt(hw));
+        csv.push_str(&row.join(","));
+        csv.push('\n');
+        let what: Vec<String> = others
+            .iter()
+            .zip(rest)
+            .map(|(o, v)| format!("{o}={v}"))
+            .collect();
+        table.push_str(&format!(
+            "  {}  {} ± {}  ({} seeds)\n",
+            if what.is_empty() {
+                "all".to_string()
+            } else {
+                what.join(" ")
+            },
+            mean.map_or("-".into(), |m| format!("{m:.3}")),
+            hw.map_or("-".into(), |h| format!("{h:.3}")),
+            xs.len()
+        ));
+    }
+    Ok((csv, table))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
+    fn labels_are_short_safe_and_numbered() {
+        let axes = vec![("obstacle.*.motion".to_string(), Vec::new())];
+        let l = label(
+            7,
+            &axes,
+            &[r#"{ model = "constant-velocity", velocity = [0.0, -0.5] }"#.into()],
+        );
+        assert_eq!(l, "007-motion=model_constant-velocity_v");
+    }
+
+    #[test]
+    fn the_allowable_value_is_the_largest_without_a_collision() {
+        assert_eq!(
+            largest_allowable(&[(2.0, false), (1.0, false), (3.0, true)]),
+            2.0
+        );
+        // Safe at a higher value though not at a lower one: the higher counts.
+        assert_eq!(
+            largest_allowable(&[(1.0, false), (2.0, true), (3.0, false)]),
+            3.0
+        );
+        assert_eq!(largest_allowable(&[(1.0, true), (2.0, true)]), 0.0);
+    }
+
+    #[test]
     fn values_split_at_top_level_commas_only() {
         assert_eq!(split_values("1, 2,3"), ["1", "2", "3"]);
-        assert_eq!(
-            split_values("[1, 2],[3, 4]"),
-            ["[1, 2]", "[3, 4]"]
-        );
+        assert_eq!(split_values("[1, 2],[3, 4]"), ["[1, 2]", "[3, 4]"]);
         assert_eq!(
             split_values(r#"{ model = "a", v = [1, 2] },"x,y""#),
             [r#"{ model = "a", v = [1, 2] }"#, r#""x,y""#]
@@ -577,7 +770,10 @@ mod tests {
     fn combinations_are_the_cartesian_product_first_axis_slowest() {
         let axes = vec![
             ("a".to_string(), vec!["1".to_string(), "2".to_string()]),
-            ("b".to_string(), vec!["x".to_string(), "y".to_string(), "z".to_string()]),
+            (
+                "b".to_string(),
+                vec!["x".to_string(), "y".to_string(), "z".to_string()],
+            ),
         ];
         let c = combinations(&axes);
         assert_eq!(c.len(), 6);

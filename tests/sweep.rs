@@ -27,7 +27,14 @@ fn sweep(dir: &std::path::Path, scenario: &std::path::Path) -> std::process::Out
     mrsim()
         .arg("sweep")
         .arg(scenario)
-        .args(["--set", "robot.r0.max_speed=0.5,1.5", "--seeds", "2", "--jobs", "2"])
+        .args([
+            "--set",
+            "robot.r0.max_speed=0.5,1.5",
+            "--seeds",
+            "2",
+            "--jobs",
+            "2",
+        ])
         .arg("--out")
         .arg(dir)
         .output()

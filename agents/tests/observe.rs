@@ -58,7 +58,12 @@ fn snapshot(k: u64) -> (SnapshotHeader, Vec<BodyState>) {
     };
     let bodies = vec![
         body(0, body_kind::ROBOT, [0.0, 0.0], [0.0, 0.0]),
-        body(1, body_kind::OBSTACLE, [3.0 + t, 2.0 * t + 2.0 * t * t], [9.0, 9.0]),
+        body(
+            1,
+            body_kind::OBSTACLE,
+            [3.0 + t, 2.0 * t + 2.0 * t * t],
+            [9.0, 9.0],
+        ),
         body(2, body_kind::OBSTACLE, [-3.0, 0.0], [0.0, 0.0]),
     ];
     (header, bodies)

@@ -152,13 +152,13 @@ impl MotionState {
         let mut behavior = None;
         let mut route = Vec::new();
         match model {
-            Motion::Random { distribution, .. } => {
-                if distribution != "gaussian" && distribution != "uniform" {
-                    return Err(MotionError::Unknown {
-                        what: "distribution",
-                        value: distribution.clone(),
-                    });
-                }
+            Motion::Random { distribution, .. }
+                if distribution != "gaussian" && distribution != "uniform" =>
+            {
+                return Err(MotionError::Unknown {
+                    what: "distribution",
+                    value: distribution.clone(),
+                });
             }
             Motion::Intentional {
                 behavior: b,
@@ -249,7 +249,8 @@ impl MotionState {
                 beta2,
                 ..
             } => {
-                let (max_speed, max_accel, alpha2, beta2) = (*max_speed, *max_accel, *alpha2, *beta2);
+                let (max_speed, max_accel, alpha2, beta2) =
+                    (*max_speed, *max_accel, *alpha2, *beta2);
                 let v_des = self.desired_velocity(bodies, max_speed, max_accel);
                 let e = cap(
                     [
@@ -515,9 +516,12 @@ mod tests {
     /// Sample variance of each component of the acceleration over `n` ticks
     /// after a burn-in, compared with beta² σ² / (1 - alpha²).
     fn check_ar_variance(distribution: &str, alpha1: f64, beta1: f64) {
-        let mut m =
-            MotionState::new(&random(distribution, alpha1, beta1), [0.0, 0.0], setup(1, None))
-                .unwrap();
+        let mut m = MotionState::new(
+            &random(distribution, alpha1, beta1),
+            [0.0, 0.0],
+            setup(1, None),
+        )
+        .unwrap();
         let n = 100_000;
         for _ in 0..200 {
             m.begin_tick(&[]);
@@ -604,9 +608,12 @@ mod tests {
 
     #[test]
     fn avoidance_increases_the_distance_and_then_settles() {
-        let mut m =
-            MotionState::new(&intentional("avoid", None, None), [0.8, 0.0], setup(1, None))
-                .unwrap();
+        let mut m = MotionState::new(
+            &intentional("avoid", None, None),
+            [0.8, 0.0],
+            setup(1, None),
+        )
+        .unwrap();
         let before = dist(m.position, [0.0, 0.0]);
         run(&mut m, [0.0, 0.0], 30);
         let after = dist(m.position, [0.0, 0.0]);
@@ -645,7 +652,9 @@ mod tests {
 
     #[test]
     fn a_pursuit_without_a_target_or_an_unknown_distribution_is_refused() {
-        assert!(MotionState::new(&intentional("pursue", None, None), [0.0; 2], setup(1, None)).is_err());
+        assert!(
+            MotionState::new(&intentional("pursue", None, None), [0.0; 2], setup(1, None)).is_err()
+        );
         assert!(MotionState::new(&random("cauchy", 0.0, 1.0), [0.0; 2], setup(1, None)).is_err());
     }
 }

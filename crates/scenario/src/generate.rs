@@ -25,8 +25,8 @@
 use crate::error::Fail;
 use crate::raw::{P, RawGenerate, S};
 use crate::resolve::{Rule, check, point};
-use crate::types::{Arena, ObstacleSpec, RobotSpec, WorldConfig};
 use crate::rng::Rng;
+use crate::types::{Arena, ObstacleSpec, RobotSpec, WorldConfig};
 use std::f64::consts::PI;
 
 /// The kind of generation.
