@@ -100,27 +100,7 @@ pub enum Command {
     /// Run every combination of values (x seeds 1..N) in lockstep and
     /// tabulate the metrics: sweep.csv, summary.csv, a table of means with
     /// 95 % intervals.
-    Sweep {
-        /// Scenario file (TOML).
-        scenario: PathBuf,
-        /// Values to sweep: KEY=V1,V2,... (KEY as for `run --set`; values
-        /// split at commas outside brackets, braces and quotes).
-        #[arg(long = "set", value_name = "KEY=V1,V2,...")]
-        set: Vec<String>,
-        /// Repeat each combination with world.seed = 1..=N.
-        #[arg(long, default_value_t = 1)]
-        seeds: u64,
-        /// Output folder (default: a fresh folder under runs/).
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// Runs at once (default: the number of cores).
-        #[arg(long)]
-        jobs: Option<usize>,
-        /// Also report, per seed and other combination, the largest value
-        /// of this swept key whose run had no collision.
-        #[arg(long, value_name = "KEY")]
-        allowable: Option<String>,
-    },
+    Sweep(crate::sweep::SweepArgs),
     /// Check a scenario file without running it.
     Check {
         /// Scenario and overrides.
@@ -168,21 +148,7 @@ pub fn main(cli: Cli) -> i32 {
                 0
             })
             .map_err(|e| anyhow::anyhow!("{e}")),
-        Command::Sweep {
-            scenario,
-            set,
-            seeds,
-            out,
-            jobs,
-            allowable,
-        } => crate::sweep::sweep(&crate::sweep::SweepArgs {
-            scenario,
-            set,
-            seeds,
-            out,
-            jobs,
-            allowable,
-        }),
+        Command::Sweep(args) => crate::sweep::sweep(&args),
         Command::Planners => {
             for p in mrsim_planners::PLANNERS {
                 println!("{:<20} {}", p.name, p.summary);

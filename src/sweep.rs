@@ -42,20 +42,26 @@ fn invalid(msg: impl Into<String>) -> anyhow::Error {
 }
 
 /// What `mrsim sweep` was asked.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, clap::Args)]
 pub struct SweepArgs {
-    /// The scenario file.
+    /// Scenario file (TOML).
     pub scenario: PathBuf,
-    /// `KEY=V1,V2,...` each.
+    /// Values to sweep: KEY=V1,V2,... (KEY as for `run --set`; values
+    /// split at commas outside brackets, braces and quotes).
+    #[arg(long = "set", value_name = "KEY=V1,V2,...")]
     pub set: Vec<String>,
-    /// Seeds 1..=seeds.
+    /// Repeat each combination with world.seed = 1..=N.
+    #[arg(long, default_value_t = 1)]
     pub seeds: u64,
     /// Output folder (default: a fresh folder under runs/).
+    #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Runs at once (default: the core count).
+    /// Runs at once (default: the number of cores).
+    #[arg(long)]
     pub jobs: Option<usize>,
-    /// A swept numeric key (e.g. `robot.*.max_speed`) whose largest
-    /// collision-free value is reported per seed and other combination.
+    /// Also report, per seed and other combination, the largest value of
+    /// this swept key whose run had no collision.
+    #[arg(long, value_name = "KEY")]
     pub allowable: Option<String>,
 }
 
@@ -362,29 +368,10 @@ pub fn sweep(args: &SweepArgs) -> Result<i32> {
         })?;
         name = loaded.scenario.name.clone();
     }
-    let dir = match &args.out {
-        Some(d) => d.clone(),
-        None => {
-            let secs = std::time::SystemTime::now()
-                .duration_since(std::time::UNIX_EPOCH)
-                .map(|d| d.as_secs())
-                .unwrap_or(0);
-            let safe: String = name
-                .chars()
-                .map(|c| {
-                    if c.is_ascii_alphanumeric() || c == '-' {
-                        c
-                    } else {
-                        '_'
-                    }
-                })
-                .collect();
-            PathBuf::from("runs").join(format!("sweep-{safe}-{secs}"))
-        }
-    };
+    let dir = crate::launch::prepare_out(&args.out, &format!("sweep-{name}"))?;
     std::fs::create_dir_all(dir.join("runs")).map_err(|e| {
         invalid(format!(
-            "output folder {}: cannot create it: {e}",
+            "output folder {}: cannot create runs/ in it: {e}",
             dir.display()
         ))
     })?;
@@ -739,7 +726,7 @@ mod tests {
             &axes,
             &[r#"{ model = "constant-velocity", velocity = [0.0, -0.5] }"#.into()],
         );
-        assert_eq!(l, "007-motion=model_constant-velocity_v");
+        assert_eq!(l, "007-motion=model_constant-velocity");
     }
 
     #[test]
