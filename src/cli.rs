@@ -109,6 +109,10 @@ pub enum Command {
     },
     /// List the planners.
     Planners,
+    /// Run every combination of values (x seeds 1..N) in lockstep and
+    /// tabulate the metrics: sweep.csv, summary.csv, a table of means with
+    /// 95 % intervals.
+    Sweep(crate::sweep::SweepArgs),
     /// Check a scenario file without running it.
     Check {
         /// Scenario and overrides.
@@ -169,6 +173,7 @@ pub fn main(cli: Cli) -> i32 {
                 0
             })
             .map_err(|e| anyhow::anyhow!("{e}")),
+        Command::Sweep(args) => crate::sweep::sweep(&args),
         Command::Planners => {
             for p in mrsim_planners::PLANNERS {
                 println!("{:<20} {}", p.name, p.summary);

@@ -85,7 +85,9 @@ pub fn load(args: &ScenarioArgs) -> Result<Loaded> {
     Ok(loaded)
 }
 
-fn prepare_out(out: &Option<PathBuf>, name: &str) -> Result<PathBuf> {
+/// The output folder: `out`, or a fresh folder under `runs/` named after
+/// `name`; created and checked writable.
+pub(crate) fn prepare_out(out: &Option<PathBuf>, name: &str) -> Result<PathBuf> {
     let dir = match out {
         Some(d) => d.clone(),
         None => {

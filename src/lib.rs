@@ -1,6 +1,7 @@
 //! The `mrsim` launcher: `run` (a whole run: world process, one agent
 //! process per robot, outputs, summary), `world` and `agent` (the parts by
-//! hand), `planners` (what is available).
+//! hand), `sweep` (experiments over many runs), `planners` (what is
+//! available).
 //!
 //! The binary is thin: it parses the command line and calls [`cli::main`];
 //! everything else lives in libraries (`mrsim-world`, `mrsim-agents`,
@@ -10,4 +11,5 @@
 
 pub mod cli;
 pub mod launch;
+pub mod sweep;
 pub mod table;

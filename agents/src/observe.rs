@@ -2,16 +2,32 @@
 //! the other bodies it can sense (within `sensing_range`, measured surface
 //! to surface, and within `field_of_view_deg` centred on its heading: the
 //! direction of its velocity, or towards its goal while it stands still).
+//!
+//! Then, in this order, as a camera would give them (Zhu & Loh section 2):
+//! the sensed positions get Gaussian noise of standard deviation
+//! `position_noise` per axis (drawn from the robot's own stream of the
+//! scenario's seed, so runs repeat), and with `velocity_source =
+//! "differenced"` every sensed body's velocity and acceleration are
+//! replaced by differences of its observed (noisy) positions, eqs 2.9-2.12
+//! ([`VelocityEstimator`]). With `"truth"` the velocity is the snapshot's and
+//! the acceleration zero.
 
+use mrsim_planners::estimate::VelocityEstimator;
 use mrsim_planners::{BodyKind, DesignatedPath, Observation, Segment, SelfState, Sensed, Vec2};
 use mrsim_proto::{BodyState, SnapshotHeader, body_kind};
-use mrsim_scenario::{RobotSpec, Scenario};
+use mrsim_scenario::rng::Rng;
+use mrsim_scenario::{RobotSpec, Scenario, VelocitySource};
 
 /// Turns snapshots into observations for one robot; keeps the buffers.
 pub struct Observer {
     me: usize,
     dt: f64,
     others: Vec<Sensed>,
+    /// Differenced velocities (eqs 2.9-2.12), if the robot asks for them.
+    estimator: Option<VelocityEstimator>,
+    /// Standard deviation of the position noise (0 = none).
+    noise: f64,
+    rng: Rng,
 }
 
 impl Observer {
@@ -21,6 +37,13 @@ impl Observer {
             me,
             dt: scenario.world.dt,
             others: Vec::with_capacity(scenario.robots.len() + scenario.obstacles.len()),
+            estimator: scenario
+                .robots
+                .get(me)
+                .is_some_and(|r| r.velocity_source == VelocitySource::Differenced)
+                .then(VelocityEstimator::new),
+            noise: scenario.robots.get(me).map_or(0.0, |r| r.position_noise),
+            rng: Rng::stream(scenario.world.seed, "position-noise", me as u64),
         }
     }
 
@@ -74,6 +97,15 @@ impl Observer {
                 acceleration: Vec2::zeros(),
                 radius: b.radius,
             });
+        }
+        if self.noise > 0.0 {
+            for o in &mut self.others {
+                o.position.x += self.noise * self.rng.gaussian();
+                o.position.y += self.noise * self.rng.gaussian();
+            }
+        }
+        if let Some(e) = &mut self.estimator {
+            e.apply(header.sim_time, &mut self.others);
         }
         Observation {
             tick: header.tick,

@@ -10,7 +10,7 @@
 //! model ourselves (rather than with rapier's damping) keeps the limits
 //! exact and the same as the planners' reference testkit.
 
-use crate::motion::{MotionError, MotionState};
+use crate::motion::{Body, MotionError, MotionSetup, MotionState};
 use mrsim_proto::{BodyState, body_kind};
 use mrsim_scenario::Scenario;
 use rapier2d::prelude::*;
@@ -76,6 +76,7 @@ pub struct World {
     robots: Vec<RigidBodyHandle>,
     obstacles: Vec<RigidBodyHandle>,
     motions: Vec<MotionState>,
+    bodies: Vec<Body>,
     owners: HashMap<ColliderHandle, Owner>,
     commands: Vec<Applied>,
     states: Vec<BodyState>,
@@ -113,6 +114,32 @@ pub fn clamp_norm(v: [f64; 2], max: f64) -> [f64; 2] {
     [dir[0] * max, dir[1] * max]
 }
 
+/// The motion setup of obstacle `i`: its noise stream, its body index
+/// (robots come first) and its target's.
+fn motion_setup(scenario: &Scenario, i: usize) -> MotionSetup {
+    let n = scenario.robots.len();
+    let target = match &scenario.obstacles[i].motion {
+        mrsim_scenario::Motion::Intentional {
+            target: Some(t), ..
+        } => scenario.robot_index(t).or_else(|| {
+            scenario
+                .obstacles
+                .iter()
+                .position(|o| &o.name == t)
+                .map(|k| n + k)
+        }),
+        _ => None,
+    };
+    MotionSetup {
+        seed: scenario.world.seed,
+        index: i,
+        body: n + i,
+        target,
+        radius: scenario.obstacles[i].radius,
+        dt: scenario.world.dt,
+    }
+}
+
 fn v2(p: [f64; 2]) -> Vector {
     Vector::new(p[0] as f32, p[1] as f32)
 }
@@ -148,11 +175,12 @@ impl World {
         let mut obstacles = Vec::with_capacity(scenario.obstacles.len());
         let mut motions = Vec::with_capacity(scenario.obstacles.len());
         for (i, o) in scenario.obstacles.iter().enumerate() {
-            let motion =
-                MotionState::new(&o.motion, o.start).map_err(|source| WorldError::Motion {
+            let motion = MotionState::new(&o.motion, o.start, motion_setup(scenario, i)).map_err(
+                |source| WorldError::Motion {
                     name: o.name.clone(),
                     source,
-                })?;
+                },
+            )?;
             let builder = if motion.is_static() {
                 RigidBodyBuilder::fixed()
             } else {
@@ -180,6 +208,7 @@ impl World {
             robots,
             obstacles,
             motions,
+            bodies: Vec::with_capacity(scenario.robots.len() + scenario.obstacles.len()),
             owners,
             commands: vec![Applied::BRAKE; scenario.robots.len()],
             states: Vec::with_capacity(scenario.robots.len() + scenario.obstacles.len()),
@@ -236,6 +265,17 @@ impl World {
         contacts.clear();
         let sub = self.scenario.world.substeps.max(1);
         let h = self.scenario.world.dt / sub as f64;
+        // Scripted obstacles choose this tick's acceleration from every
+        // body's state at its start (the intentional models need them).
+        self.bodies.clear();
+        self.bodies.extend(self.states.iter().map(|s| Body {
+            position: s.position,
+            velocity: s.velocity,
+            radius: s.radius,
+        }));
+        for m in &mut self.motions {
+            m.begin_tick(&self.bodies);
+        }
         for _ in 0..sub {
             for (i, handle) in self.robots.iter().enumerate() {
                 let spec = &self.scenario.robots[i];

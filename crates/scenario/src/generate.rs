@@ -25,6 +25,7 @@
 use crate::error::Fail;
 use crate::raw::{P, RawGenerate, S};
 use crate::resolve::{Rule, check, point};
+use crate::rng::Rng;
 use crate::types::{Arena, ObstacleSpec, RobotSpec, WorldConfig};
 use std::f64::consts::PI;
 
@@ -192,23 +193,6 @@ pub(crate) fn place(
         }
         Kind::Random => random(plan, g, world, robot_radius, robots, obstacles)?,
     })
-}
-
-/// SplitMix64: small, seeded, good enough to scatter robots.
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [0, 1).
-    fn unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
 }
 
 fn random(

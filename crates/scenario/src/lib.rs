@@ -24,6 +24,7 @@ mod generate;
 mod overrides;
 mod raw;
 mod resolve;
+pub mod rng;
 mod types;
 
 pub use error::ScenarioError;

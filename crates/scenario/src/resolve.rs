@@ -507,7 +507,8 @@ fn resolve_motion(m: &S<RawMotion>, what: &str) -> Result<Motion, Fail> {
             let b = behavior.get_ref().as_str();
             match b {
                 "pursue" | "avoid" => {
-                    if raw.target.is_none() {
+                    // `avoid` without a target keeps away from every other body.
+                    if b == "pursue" && raw.target.is_none() {
                         return Err(need("target"));
                     }
                     for (key, v) in [

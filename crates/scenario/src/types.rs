@@ -203,7 +203,8 @@ pub enum Motion {
     Intentional {
         /// `pursue`, `avoid` or `goal`.
         behavior: String,
-        /// Body pursued (for `pursue`).
+        /// Body pursued (`pursue`), or the only body avoided (`avoid`; without
+        /// one, every other body).
         target: Option<String>,
         /// Goal (for `goal`).
         goal: Option<[f64; 2]>,

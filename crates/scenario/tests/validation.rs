@@ -293,6 +293,16 @@ fn a_pursuit_without_a_target_is_refused() {
 }
 
 #[test]
+fn an_avoider_without_a_target_keeps_away_from_everyone_and_is_accepted() {
+    let src = with(
+        BASE,
+        "motion = { model = \"constant-velocity\", velocity = [1.0, 0.0] }",
+        "motion = { model = \"intentional\", behavior = \"avoid\", max_speed = 1.0, max_accel = 1.0 }",
+    );
+    accept(&src);
+}
+
+#[test]
 fn a_boundary_without_a_path_is_refused() {
     let src = with(BASE, "radius = 0.3", "radius = 0.3\nboundary = 1.0");
     refused_at(&src, "boundary = 1.0", "boundary needs a path");
