@@ -90,6 +90,16 @@ pub enum Command {
         #[arg(long, hide = true)]
         impersonate: Option<u32>,
     },
+    /// Watch a running world: a live dashboard of its bodies and agents
+    /// (read-only; never slows the world or counts as an agent).
+    Top {
+        /// The run id of the world.
+        #[arg(long, default_value = "default")]
+        run: String,
+        /// Seconds to wait for the world.
+        #[arg(long, default_value_t = 10.0)]
+        timeout: f64,
+    },
     /// Regenerate plot.svg, plot.png and replay.html of a run folder.
     Report {
         /// The run folder.
@@ -135,6 +145,7 @@ pub fn main(cli: Cli) -> i32 {
             timeout,
             impersonate,
         } => crate::launch::agent(&robot, &run, timeout, impersonate),
+        Command::Top { run, timeout } => crate::top::run(&run, timeout),
         Command::Report { dir } => mrsim_report::render_all(&dir)
             .map(|()| {
                 println!(

@@ -212,10 +212,12 @@ pub fn run(args: &ScenarioArgs, run_id: Option<String>, quiet: bool) -> Result<i
 
     // Wait for the world; forward a signal to everything we started.
     let mut forwarded = false;
+    let mut watch = crate::watch::RunWatch::new(&ns, scenario.max_ticks());
     let world_status = loop {
         if let Some(status) = world.try_wait().context("waiting for the world")? {
             break status;
         }
+        watch.update();
         let sig = SIGNALLED.load(Ordering::SeqCst);
         if sig != 0 && !forwarded {
             signal(&world, libc::SIGTERM);
@@ -229,6 +231,7 @@ pub fn run(args: &ScenarioArgs, run_id: Option<String>, quiet: bool) -> Result<i
         }
         std::thread::sleep(Duration::from_millis(20));
     };
+    watch.finish();
 
     // Agents end on the world's last snapshot; give them a moment, then stop them.
     let grace = Instant::now();

@@ -10,4 +10,7 @@
 
 pub mod cli;
 pub mod launch;
+pub mod progress;
 pub mod table;
+pub mod top;
+pub mod watch;

@@ -10,6 +10,7 @@
 //! everything a researcher needs afterwards ([`record`]).
 #![warn(missing_docs)]
 
+pub mod live;
 pub mod metrics;
 pub mod motion;
 pub mod physics;

@@ -11,19 +11,30 @@
 //! | `mrsim/join-reply` | publish-subscribe `JoinReply` | world -> agents |
 //! | `mrsim/command` | publish-subscribe `CommandMsg` | agents -> world |
 //! | `mrsim/wake` | event, notifier-dead event | agents -> world |
+//! | `mrsim/stats` | publish-subscribe `[RobotStats]` + `StatsHeader`, history 1 | world -> observers |
+//!
+//! An observer ([`ShmObserver`]) only subscribes to `setup`, `snapshot` and
+//! `stats`: it never joins, sends or listens to the tick event, and the
+//! world's publishers overwrite the oldest sample of a subscriber that falls
+//! behind (iceoryx2's safe overflow) instead of waiting for it.
 //!
 //! Limits (publishers, subscribers, listeners, notifiers, nodes) are raised
 //! from the scenario's robot count, with room to spare for restarted agents,
 //! strangers and observers. Waiting is event driven (no busy polling).
 
-use crate::{AgentTransport, Capacity, Namespace, TransportError, WorldTransport};
+use crate::{
+    AgentTransport, Capacity, Namespace, ObserverTransport, TransportError, WorldTransport,
+};
 use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::port::update_connections::UpdateConnections;
 use iceoryx2::prelude::*;
-use mrsim_proto::{BodyState, CommandMsg, JoinReply, JoinRequest, SnapshotHeader, events, now_ns};
+use mrsim_proto::{
+    BodyState, CommandMsg, JoinReply, JoinRequest, RobotStats, SnapshotHeader, StatsHeader, events,
+    now_ns,
+};
 use std::os::unix::fs::PermissionsExt;
 use std::time::{Duration, Instant};
 
@@ -99,6 +110,8 @@ pub struct ShmWorld {
     reply_pub: Publisher<S, JoinReply, ()>,
     wake: Listener<S>,
     max_bodies: usize,
+    stats_pub: Publisher<S, [RobotStats], StatsHeader>,
+    max_robots: usize,
 }
 
 impl ShmWorld {
@@ -219,6 +232,23 @@ impl ShmWorld {
             .create()
             .map_err(|e| setup_err("wake listener", e))?;
 
+        let stats = node
+            .service_builder(&service_name("mrsim/stats")?)
+            .publish_subscribe::<[RobotStats]>()
+            .user_header::<StatsHeader>()
+            .history_size(1)
+            .subscriber_max_buffer_size(1)
+            .max_publishers(1)
+            .max_subscribers(agents + 2)
+            .max_nodes(nodes)
+            .create()
+            .map_err(|e| setup_err("service mrsim/stats", e))?;
+        let stats_pub = stats
+            .publisher_builder()
+            .initial_max_slice_len(cap.robots.max(1))
+            .create()
+            .map_err(|e| setup_err("stats publisher", e))?;
+
         Ok(Self {
             node,
             setup_pub,
@@ -229,6 +259,8 @@ impl ShmWorld {
             reply_pub,
             wake,
             max_bodies,
+            stats_pub,
+            max_robots: cap.robots,
         })
     }
 }
@@ -346,6 +378,35 @@ impl WorldTransport for ShmWorld {
     fn cleanup_dead(&mut self) {
         let _ = self.node.try_cleanup_dead_nodes();
     }
+
+    fn publish_stats(
+        &mut self,
+        header: &StatsHeader,
+        robots: &[RobotStats],
+    ) -> Result<(), TransportError> {
+        let n = robots.len().min(self.max_robots);
+        let mut sample =
+            self.stats_pub
+                .loan_slice_uninit(n)
+                .map_err(|e| TransportError::Send {
+                    what: "stats",
+                    detail: format!("{e:?}"),
+                })?;
+        *sample.user_header_mut() = StatsHeader {
+            robot_count: n as u32,
+            ..*header
+        };
+        // Observers that subscribed since the last call get the setup's
+        // history only when its publisher updates its connections (cheap
+        // when nobody new came).
+        let _ = self.setup_pub.update_connections();
+        let sample = sample.write_from_slice(&robots[..n]);
+        sample.send().map_err(|e| TransportError::Send {
+            what: "stats",
+            detail: format!("{e:?}"),
+        })?;
+        Ok(())
+    }
 }
 
 /// An agent's side over iceoryx2.
@@ -462,23 +523,29 @@ impl ShmAgent {
     }
 
     fn check_world(&mut self) -> bool {
-        let mut alive = false;
-        let listed = Node::<S>::list(&self.cfg, |state| {
-            if let NodeState::Alive(view) = &state {
-                use iceoryx2::node::NodeView;
-                if view
-                    .details()
-                    .as_ref()
-                    .is_some_and(|d| d.name().as_str() == WORLD_NODE)
-                {
-                    alive = true;
-                    return CallbackProgression::Stop;
-                }
-            }
-            CallbackProgression::Continue
-        });
-        listed.is_err() || alive
+        world_node_alive(&self.cfg)
     }
+}
+
+/// True unless the run's world node is known to be gone (a failure to list
+/// the nodes counts as alive).
+fn world_node_alive(cfg: &Config) -> bool {
+    let mut alive = false;
+    let listed = Node::<S>::list(cfg, |state| {
+        if let NodeState::Alive(view) = &state {
+            use iceoryx2::node::NodeView;
+            if view
+                .details()
+                .as_ref()
+                .is_some_and(|d| d.name().as_str() == WORLD_NODE)
+            {
+                alive = true;
+                return CallbackProgression::Stop;
+            }
+        }
+        CallbackProgression::Continue
+    });
+    listed.is_err() || alive
 }
 
 impl AgentTransport for ShmAgent {
@@ -580,5 +647,173 @@ impl AgentTransport for ShmAgent {
 
     fn termination_requested(&self) -> bool {
         terminated(&self.node)
+    }
+}
+
+/// A read-only observer over iceoryx2: subscribes to the setup, the
+/// snapshots and the live statistics of a run, nothing else.
+pub struct ShmObserver {
+    cfg: Config,
+    _node: Node<S>,
+    setup_sub: Subscriber<S, [u8], ()>,
+    snap_sub: Option<Subscriber<S, [BodyState], SnapshotHeader>>,
+    stats_sub: Subscriber<S, [RobotStats], StatsHeader>,
+    last_world_check: Instant,
+    world_alive: bool,
+}
+
+impl ShmObserver {
+    /// Opens the run's services as the observer called `node_name`,
+    /// retrying until `timeout` if the world has not created them yet.
+    /// Without `snapshots` only the setup and the statistics are read (the
+    /// launcher's progress bar needs no more).
+    pub fn connect(
+        ns: &Namespace,
+        node_name: &str,
+        snapshots: bool,
+        timeout: Duration,
+    ) -> Result<Self, TransportError> {
+        let start = Instant::now();
+        loop {
+            match Self::try_connect(ns, node_name, snapshots) {
+                Ok(o) => return Ok(o),
+                Err(e) if start.elapsed() >= timeout => return Err(e),
+                Err(_) => std::thread::sleep(Duration::from_millis(50)),
+            }
+        }
+    }
+
+    /// One attempt of [`ShmObserver::connect`].
+    pub fn try_connect(
+        ns: &Namespace,
+        node_name: &str,
+        snapshots: bool,
+    ) -> Result<Self, TransportError> {
+        let cfg = config(ns)?;
+        let node = node(&cfg, node_name)?;
+        let setup_sub = node
+            .service_builder(&service_name("mrsim/setup")?)
+            .publish_subscribe::<[u8]>()
+            .open()
+            .map_err(|e| {
+                setup_err(
+                    "service mrsim/setup (is a world running with this run id?)",
+                    e,
+                )
+            })?
+            .subscriber_builder()
+            .create()
+            .map_err(|e| setup_err("setup subscriber", e))?;
+        let stats_sub = node
+            .service_builder(&service_name("mrsim/stats")?)
+            .publish_subscribe::<[RobotStats]>()
+            .user_header::<StatsHeader>()
+            .open()
+            .map_err(|e| setup_err("service mrsim/stats", e))?
+            .subscriber_builder()
+            .create()
+            .map_err(|e| setup_err("stats subscriber", e))?;
+        let snap_sub = if snapshots {
+            Some(
+                node.service_builder(&service_name("mrsim/snapshot")?)
+                    .publish_subscribe::<[BodyState]>()
+                    .user_header::<SnapshotHeader>()
+                    .open()
+                    .map_err(|e| setup_err("service mrsim/snapshot", e))?
+                    .subscriber_builder()
+                    .create()
+                    .map_err(|e| setup_err("snapshot subscriber", e))?,
+            )
+        } else {
+            None
+        };
+        Ok(Self {
+            cfg,
+            _node: node,
+            setup_sub,
+            snap_sub,
+            stats_sub,
+            last_world_check: Instant::now(),
+            world_alive: true,
+        })
+    }
+}
+
+impl ObserverTransport for ShmObserver {
+    fn setup(&mut self) -> Result<Option<Vec<u8>>, TransportError> {
+        let mut newest = None;
+        loop {
+            match self.setup_sub.receive() {
+                Ok(Some(s)) => newest = Some(s.payload().to_vec()),
+                Ok(None) => return Ok(newest),
+                Err(e) => {
+                    return Err(TransportError::Receive {
+                        what: "setup",
+                        detail: format!("{e:?}"),
+                    });
+                }
+            }
+        }
+    }
+
+    fn latest_snapshot(
+        &mut self,
+        header: &mut SnapshotHeader,
+        bodies: &mut Vec<BodyState>,
+    ) -> Result<bool, TransportError> {
+        let Some(sub) = &self.snap_sub else {
+            return Ok(false);
+        };
+        let mut got = false;
+        loop {
+            match sub.receive() {
+                Ok(Some(s)) => {
+                    *header = *s.user_header();
+                    bodies.clear();
+                    bodies.extend_from_slice(s.payload());
+                    got = true;
+                }
+                Ok(None) => return Ok(got),
+                Err(e) => {
+                    return Err(TransportError::Receive {
+                        what: "snapshot",
+                        detail: format!("{e:?}"),
+                    });
+                }
+            }
+        }
+    }
+
+    fn latest_stats(
+        &mut self,
+        header: &mut StatsHeader,
+        robots: &mut Vec<RobotStats>,
+    ) -> Result<bool, TransportError> {
+        let mut got = false;
+        loop {
+            match self.stats_sub.receive() {
+                Ok(Some(s)) => {
+                    *header = *s.user_header();
+                    robots.clear();
+                    robots.extend_from_slice(s.payload());
+                    got = true;
+                }
+                Ok(None) => return Ok(got),
+                Err(e) => {
+                    return Err(TransportError::Receive {
+                        what: "stats",
+                        detail: format!("{e:?}"),
+                    });
+                }
+            }
+        }
+    }
+
+    fn world_alive(&mut self) -> bool {
+        if self.world_alive && self.last_world_check.elapsed() >= Duration::from_millis(250) {
+            self.last_world_check = Instant::now();
+            self.world_alive = world_node_alive(&self.cfg);
+        }
+        self.world_alive
     }
 }
