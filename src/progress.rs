@@ -45,7 +45,7 @@ pub struct Progress {
     message: String,
     last_tenth: Option<u64>,
     last_line: Option<Instant>,
-    printed: bool,
+    printed: Option<String>,
     finished: bool,
 }
 
@@ -80,7 +80,7 @@ impl Progress {
             message: String::new(),
             last_tenth: None,
             last_line: None,
-            printed: false,
+            printed: None,
             finished: false,
         }
     }
@@ -141,8 +141,11 @@ impl Progress {
         if let Some(b) = &self.bar {
             b.finish();
         }
-        if self.style == Style::Lines && self.printed {
-            eprintln!("{}", self.line());
+        if self.style == Style::Lines && self.printed.is_some() {
+            let line = self.line();
+            if self.printed.as_deref() != Some(line.as_str()) {
+                eprintln!("{line}");
+            }
         }
     }
 
@@ -186,8 +189,9 @@ impl Progress {
         }
         self.last_tenth = Some(tenth);
         self.last_line = Some(now);
-        self.printed = true;
-        Some(self.line())
+        let line = self.line();
+        self.printed = Some(line.clone());
+        Some(line)
     }
 
     fn maybe_line(&mut self, now: Instant) {
@@ -229,13 +233,21 @@ mod tests {
         p.set_message("2 at goal");
         let lines = lines_over(
             &mut p,
-            &[(0, 0), (5, 500), (12, 1200), (15, 1500), (25, 1900), (35, 2400), (40, 3000)],
+            &[
+                (0, 0),
+                (5, 500),
+                (12, 1200),
+                (15, 1500),
+                (25, 1900),
+                (35, 2400),
+                (40, 3000),
+            ],
         );
         assert_eq!(
             lines,
             vec!["run: 12/100 (12%) 2 at goal", "run: 35/100 (35%) 2 at goal"]
         );
-        assert!(p.printed);
+        assert_eq!(p.printed.as_deref(), Some("run: 35/100 (35%) 2 at goal"));
     }
 
     #[test]
@@ -243,7 +255,7 @@ mod tests {
         let mut p = Progress::with_style(100, "run", Style::Lines);
         let lines = lines_over(&mut p, &[(0, 0), (50, 300), (100, 900)]);
         assert!(lines.is_empty(), "{lines:?}");
-        assert!(!p.printed);
+        assert!(p.printed.is_none());
     }
 
     #[test]

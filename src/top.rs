@@ -80,7 +80,8 @@ impl TopModel {
             bounds = [[-1.0, -1.0], [1.0, 1.0]];
         }
         // A margin of a tenth of the extent (at least one unit).
-        let margin = ((bounds[1][0] - bounds[0][0]).max(bounds[1][1] - bounds[0][1]) * 0.1).max(1.0);
+        let margin =
+            ((bounds[1][0] - bounds[0][0]).max(bounds[1][1] - bounds[0][1]) * 0.1).max(1.0);
         let bounds = [
             [bounds[0][0] - margin, bounds[0][1] - margin],
             [bounds[1][0] + margin, bounds[1][1] + margin],
@@ -222,7 +223,10 @@ fn status_line(m: &TopModel) -> Line<'static> {
     };
     Line::from(vec![
         Span::styled(
-            format!(" mrsim top  run {}  {}  {mode}  ", m.run_id, m.scenario.name),
+            format!(
+                " mrsim top  run {}  {}  {mode}  ",
+                m.run_id, m.scenario.name
+            ),
             Style::default().add_modifier(Modifier::BOLD),
         ),
         Span::raw(what),
@@ -233,99 +237,118 @@ fn draw_map(f: &mut Frame, area: Rect, m: &TopModel) {
     let (xb, yb) = m.map_bounds(area);
     let n = m.scenario.robots.len();
     let label_names = n <= 16;
-    let canvas = Canvas::default()
-        .block(Block::default().borders(Borders::ALL).title(" map "))
-        .marker(Marker::Braille)
-        .x_bounds(xb)
-        .y_bounds(yb)
-        .paint(|ctx| {
-            let grey = Color::Gray;
-            if let Some(a) = &m.scenario.world.arena {
-                let (lo, hi) = (a.min, a.max);
-                for (p, q) in [
-                    (lo, [hi[0], lo[1]]),
-                    ([hi[0], lo[1]], hi),
-                    (hi, [lo[0], hi[1]]),
-                    ([lo[0], hi[1]], lo),
-                ] {
-                    ctx.draw(&Segment::new(p[0], p[1], q[0], q[1], grey));
-                }
-            }
-            for w in &m.scenario.walls {
-                let [p, q] = w.segment;
-                ctx.draw(&Segment::new(p[0], p[1], q[0], q[1], grey));
-            }
-            // Goals as small crosses in the robot's colour.
-            let s = (xb[1] - xb[0]) / 120.0;
-            for (i, r) in m.scenario.robots.iter().enumerate() {
-                let [gx, gy] = r.goal;
-                let c = robot_color(i);
-                ctx.draw(&Segment::new(gx - s, gy - s, gx + s, gy + s, c));
-                ctx.draw(&Segment::new(gx - s, gy + s, gx + s, gy - s, c));
-            }
-            ctx.layer();
-            // Bodies: where the newest snapshot has them, else where they start.
-            let starts: Vec<BodyState> = if m.bodies.is_empty() {
-                m.scenario
-                    .robots
-                    .iter()
-                    .enumerate()
-                    .map(|(i, r)| BodyState {
-                        id: i as u32,
-                        kind: body_kind::ROBOT,
-                        position: r.start,
-                        radius: r.radius,
-                        ..Default::default()
-                    })
-                    .chain(m.scenario.obstacles.iter().enumerate().map(|(k, o)| {
-                        BodyState {
-                            id: (n + k) as u32,
-                            kind: body_kind::OBSTACLE,
-                            position: o.start,
-                            radius: o.radius,
-                            ..Default::default()
-                        }
-                    }))
-                    .collect()
-            } else {
-                Vec::new()
-            };
-            let bodies = if m.bodies.is_empty() {
-                &starts
-            } else {
-                &m.bodies
-            };
-            for b in bodies {
-                let color = if b.kind == body_kind::ROBOT {
-                    robot_color(b.id as usize)
-                } else {
-                    Color::DarkGray
-                };
-                let [x, y] = b.position;
-                if b.radius > s {
-                    ctx.draw(&Circle::new(x, y, b.radius, color));
-                }
-                ctx.draw(&Points::new(&[(x, y)], color));
-            }
-            if label_names {
-                ctx.layer();
-                for b in bodies.iter().filter(|b| b.kind == body_kind::ROBOT) {
-                    if let Some(r) = m.scenario.robots.get(b.id as usize) {
-                        let [x, y] = b.position;
-                        ctx.print(
-                            x + s * 2.0,
-                            y,
-                            Span::styled(r.name.clone(), Style::default().fg(color_of(b))),
-                        );
+    let canvas =
+        Canvas::default()
+            .block(Block::default().borders(Borders::ALL).title(" map "))
+            .marker(Marker::Braille)
+            .x_bounds(xb)
+            .y_bounds(yb)
+            .paint(|ctx| {
+                let grey = Color::Gray;
+                if let Some(a) = &m.scenario.world.arena {
+                    let (lo, hi) = (a.min, a.max);
+                    for (p, q) in [
+                        (lo, [hi[0], lo[1]]),
+                        ([hi[0], lo[1]], hi),
+                        (hi, [lo[0], hi[1]]),
+                        ([lo[0], hi[1]], lo),
+                    ] {
+                        ctx.draw(&Segment::new(p[0], p[1], q[0], q[1], grey));
                     }
                 }
-            }
-        });
+                for w in &m.scenario.walls {
+                    let [p, q] = w.segment;
+                    ctx.draw(&Segment::new(p[0], p[1], q[0], q[1], grey));
+                }
+                // Goals as small crosses in the robot's colour.
+                let s = (xb[1] - xb[0]) / 120.0;
+                for (i, r) in m.scenario.robots.iter().enumerate() {
+                    let [gx, gy] = r.goal;
+                    let c = robot_color(i);
+                    ctx.draw(&Segment::new(gx - s, gy - s, gx + s, gy + s, c));
+                    ctx.draw(&Segment::new(gx - s, gy + s, gx + s, gy - s, c));
+                }
+                ctx.layer();
+                // Bodies: where the newest snapshot has them, else where they start.
+                let starts: Vec<BodyState> =
+                    if m.bodies.is_empty() {
+                        m.scenario
+                            .robots
+                            .iter()
+                            .enumerate()
+                            .map(|(i, r)| BodyState {
+                                id: i as u32,
+                                kind: body_kind::ROBOT,
+                                position: r.start,
+                                radius: r.radius,
+                                ..Default::default()
+                            })
+                            .chain(m.scenario.obstacles.iter().enumerate().map(|(k, o)| {
+                                BodyState {
+                                    id: (n + k) as u32,
+                                    kind: body_kind::OBSTACLE,
+                                    position: o.start,
+                                    radius: o.radius,
+                                    ..Default::default()
+                                }
+                            }))
+                            .collect()
+                    } else {
+                        Vec::new()
+                    };
+                let bodies = if m.bodies.is_empty() {
+                    &starts
+                } else {
+                    &m.bodies
+                };
+                for b in bodies {
+                    let color = if b.kind == body_kind::ROBOT {
+                        robot_color(b.id as usize)
+                    } else {
+                        Color::DarkGray
+                    };
+                    let [x, y] = b.position;
+                    if b.radius > s {
+                        ctx.draw(&Circle::new(x, y, b.radius, color));
+                    }
+                    ctx.draw(&Points::new(&[(x, y)], color));
+                }
+                if label_names {
+                    ctx.layer();
+                    for b in bodies.iter().filter(|b| b.kind == body_kind::ROBOT) {
+                        if let Some(r) = m.scenario.robots.get(b.id as usize) {
+                            let [x, y] = b.position;
+                            ctx.print(
+                                x + s * 2.0,
+                                y,
+                                Span::styled(r.name.clone(), Style::default().fg(color_of(b))),
+                            );
+                        }
+                    }
+                }
+            });
     f.render_widget(canvas, area);
 }
 
 fn color_of(b: &BodyState) -> Color {
     robot_color(b.id as usize)
+}
+
+/// Width of the name column: the longest name, 5 to 24 characters.
+fn name_width(m: &TopModel) -> u16 {
+    let longest = m
+        .scenario
+        .robots
+        .iter()
+        .map(|r| r.name.chars().count())
+        .max()
+        .unwrap_or(0);
+    longest.clamp(5, 24) as u16
+}
+
+/// Width of the table: its columns, the gaps between them and the border.
+fn table_width(m: &TopModel) -> u16 {
+    name_width(m) + (17 + 7 + 8 + 8 + 6 + 5 + 8) + 7 + 2
 }
 
 fn draw_table(f: &mut Frame, area: Rect, m: &TopModel) {
@@ -385,7 +408,7 @@ fn draw_table(f: &mut Frame, area: Rect, m: &TopModel) {
         ))]));
     }
     let widths = [
-        Constraint::Min(8),
+        Constraint::Length(name_width(m)),
         Constraint::Length(17),
         Constraint::Length(7),
         Constraint::Length(8),
@@ -413,7 +436,7 @@ pub fn draw(f: &mut Frame, m: &TopModel) {
         ])
         .areas(f.area());
     f.render_widget(Paragraph::new(status_line(m)), status);
-    let table_width = 72;
+    let table_width = table_width(m);
     let [map, table] = if body.width >= table_width + 30 {
         Layout::default()
             .direction(Direction::Horizontal)
@@ -487,13 +510,18 @@ pub fn run(run_id: &str, timeout: f64) -> Result<i32> {
     let mut obs = ShmObserver::connect(&ns, &node, true, timeout).map_err(|e| {
         anyhow!("no world is running with run id `{run_id}` (start one with `mrsim world --run {run_id}` or `mrsim run --run {run_id}`): {e}")
     })?;
-    let mut model = wait_for_setup(&mut obs, timeout)
-        .with_context(|| format!("run `{run_id}`"))?;
+    let mut model = wait_for_setup(&mut obs, timeout).with_context(|| format!("run `{run_id}`"))?;
 
     // SAFETY: the handler only stores into an atomic (async-signal-safe).
     unsafe {
-        libc::signal(libc::SIGINT, on_terminate as *const () as libc::sighandler_t);
-        libc::signal(libc::SIGTERM, on_terminate as *const () as libc::sighandler_t);
+        libc::signal(
+            libc::SIGINT,
+            on_terminate as *const () as libc::sighandler_t,
+        );
+        libc::signal(
+            libc::SIGTERM,
+            on_terminate as *const () as libc::sighandler_t,
+        );
     }
     let mut terminal = ratatui::try_init().context("cannot take over the terminal")?;
     let guard = TerminalGuard;

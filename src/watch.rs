@@ -57,13 +57,20 @@ impl RunWatch {
         let Some(obs) = self.obs.as_mut() else {
             return;
         };
-        if !matches!(obs.latest_stats(&mut self.stats, &mut self.robots), Ok(true)) {
+        if !matches!(
+            obs.latest_stats(&mut self.stats, &mut self.robots),
+            Ok(true)
+        ) {
             return;
         }
         let s = self.stats;
         let n = self.robots.len();
         if s.phase == run_phase::JOINING {
-            let joined = self.robots.iter().filter(|r| r.state != agent_state::WAITING).count();
+            let joined = self
+                .robots
+                .iter()
+                .filter(|r| r.state != agent_state::WAITING)
+                .count();
             self.progress
                 .set_message(format!("waiting for agents: {joined}/{n} joined"));
         } else {

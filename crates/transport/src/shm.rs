@@ -385,13 +385,13 @@ impl WorldTransport for ShmWorld {
         robots: &[RobotStats],
     ) -> Result<(), TransportError> {
         let n = robots.len().min(self.max_robots);
-        let mut sample =
-            self.stats_pub
-                .loan_slice_uninit(n)
-                .map_err(|e| TransportError::Send {
-                    what: "stats",
-                    detail: format!("{e:?}"),
-                })?;
+        let mut sample = self
+            .stats_pub
+            .loan_slice_uninit(n)
+            .map_err(|e| TransportError::Send {
+                what: "stats",
+                detail: format!("{e:?}"),
+            })?;
         *sample.user_header_mut() = StatsHeader {
             robot_count: n as u32,
             ..*header
