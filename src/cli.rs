@@ -146,15 +146,7 @@ pub fn main(cli: Cli) -> i32 {
             impersonate,
         } => crate::launch::agent(&robot, &run, timeout, impersonate),
         Command::Top { run, timeout } => crate::top::run(&run, timeout),
-        Command::Report { dir } => mrsim_report::render_all(&dir)
-            .map(|()| {
-                println!(
-                    "wrote {0}/plot.svg, {0}/plot.png, {0}/replay.html",
-                    dir.display()
-                );
-                0
-            })
-            .map_err(|e| anyhow::anyhow!("{e}")),
+        Command::Report { dir } => crate::report_cmd::run(&dir),
         Command::Planners => {
             for p in mrsim_planners::PLANNERS {
                 println!("{:<20} {}", p.name, p.summary);

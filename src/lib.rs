@@ -11,6 +11,7 @@
 pub mod cli;
 pub mod launch;
 pub mod progress;
+pub mod report_cmd;
 pub mod table;
 pub mod top;
 pub mod watch;
