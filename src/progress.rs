@@ -150,19 +150,13 @@ impl Progress {
     }
 
     fn tenth(&self) -> u64 {
-        if self.len == 0 {
-            10
-        } else {
-            (self.pos.min(self.len) * 10) / self.len
-        }
+        (self.pos.min(self.len) * 10)
+            .checked_div(self.len)
+            .unwrap_or(10)
     }
 
     fn line(&self) -> String {
-        let pct = if self.len == 0 {
-            100
-        } else {
-            self.pos * 100 / self.len
-        };
+        let pct = (self.pos * 100).checked_div(self.len).unwrap_or(100);
         let mut s = format!("{}: {}/{} ({pct}%)", self.label, self.pos, self.len);
         if !self.message.is_empty() {
             s.push(' ');

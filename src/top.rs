@@ -211,7 +211,7 @@ fn status_line(m: &TopModel) -> Line<'static> {
                 "running"
             };
             format!(
-                "{state}  tick {}/{}  t = {:.2} s  x{:.2} realtime  {at_goal}/{n} at goal  {} collisions  {} lost",
+                "{state}  tick {}/{}  t {:.2} s  x{:.2}  {at_goal}/{n} at goal  {} collisions  {} lost",
                 m.tick(),
                 s.max_ticks,
                 s.sim_time.max(m.snapshot.sim_time),
@@ -223,10 +223,7 @@ fn status_line(m: &TopModel) -> Line<'static> {
     };
     Line::from(vec![
         Span::styled(
-            format!(
-                " mrsim top  run {}  {}  {mode}  ",
-                m.run_id, m.scenario.name
-            ),
+            format!(" mrsim top  {} · {} · {mode}  ", m.run_id, m.scenario.name),
             Style::default().add_modifier(Modifier::BOLD),
         ),
         Span::raw(what),

@@ -267,7 +267,10 @@ fn mrsim_top_in_tmux_shows_every_robot_and_ends_with_the_run() {
             .iter()
             .all(|r| row(&lines, r).is_some_and(|l| l.contains("waiting")))
     });
-    assert!(screen.contains(&format!("run {id}")), "{screen}");
+    assert!(
+        screen.contains(&format!("mrsim top  {id} · three")),
+        "{screen}"
+    );
 
     // The agents run it to the end; top leaves on its own and says so.
     let mut agents = start_agents(&id);
