@@ -146,22 +146,7 @@ impl ShmWorld {
             .create()
             .map_err(|e| setup_err("setup publisher", e))?;
 
-        let snap = node
-            .service_builder(&service_name("mrsim/snapshot")?)
-            .publish_subscribe::<[BodyState]>()
-            .user_header::<SnapshotHeader>()
-            .history_size(1)
-            .subscriber_max_buffer_size(2)
-            .max_publishers(1)
-            .max_subscribers(agents + 2)
-            .max_nodes(nodes)
-            .create()
-            .map_err(|e| setup_err("service mrsim/snapshot", e))?;
-        let snap_pub = snap
-            .publisher_builder()
-            .initial_max_slice_len(max_bodies.max(1))
-            .create()
-            .map_err(|e| setup_err("snapshot publisher", e))?;
+        let snap_pub = slice_publisher(&node, "snapshot", 2, agents + 2, nodes, max_bodies)?;
 
         let tick_service = node
             .service_builder(&service_name("mrsim/tick")?)
@@ -232,22 +217,7 @@ impl ShmWorld {
             .create()
             .map_err(|e| setup_err("wake listener", e))?;
 
-        let stats = node
-            .service_builder(&service_name("mrsim/stats")?)
-            .publish_subscribe::<[RobotStats]>()
-            .user_header::<StatsHeader>()
-            .history_size(1)
-            .subscriber_max_buffer_size(1)
-            .max_publishers(1)
-            .max_subscribers(agents + 2)
-            .max_nodes(nodes)
-            .create()
-            .map_err(|e| setup_err("service mrsim/stats", e))?;
-        let stats_pub = stats
-            .publisher_builder()
-            .initial_max_slice_len(cap.robots.max(1))
-            .create()
-            .map_err(|e| setup_err("stats publisher", e))?;
+        let stats_pub = slice_publisher(&node, "stats", 1, agents + 2, nodes, cap.robots)?;
 
         Ok(Self {
             node,
@@ -288,19 +258,7 @@ impl WorldTransport for ShmWorld {
         bodies: &[BodyState],
     ) -> Result<(), TransportError> {
         let n = bodies.len().min(self.max_bodies);
-        let mut sample = self
-            .snap_pub
-            .loan_slice_uninit(n)
-            .map_err(|e| TransportError::Send {
-                what: "snapshot",
-                detail: format!("{e:?}"),
-            })?;
-        *sample.user_header_mut() = *header;
-        let sample = sample.write_from_slice(&bodies[..n]);
-        sample.send().map_err(|e| TransportError::Send {
-            what: "snapshot",
-            detail: format!("{e:?}"),
-        })?;
+        send_slice(&self.snap_pub, "snapshot", header, &bodies[..n])?;
         self.tick
             .notify_with_custom_event_id(EventId::new(events::SNAPSHOT))
             .map_err(|e| TransportError::Send {
@@ -385,14 +343,7 @@ impl WorldTransport for ShmWorld {
         robots: &[RobotStats],
     ) -> Result<(), TransportError> {
         let n = robots.len().min(self.max_robots);
-        let mut sample = self
-            .stats_pub
-            .loan_slice_uninit(n)
-            .map_err(|e| TransportError::Send {
-                what: "stats",
-                detail: format!("{e:?}"),
-            })?;
-        *sample.user_header_mut() = StatsHeader {
+        let header = StatsHeader {
             robot_count: n as u32,
             ..*header
         };
@@ -400,12 +351,7 @@ impl WorldTransport for ShmWorld {
         // history only when its publisher updates its connections (cheap
         // when nobody new came).
         let _ = self.setup_pub.update_connections();
-        let sample = sample.write_from_slice(&robots[..n]);
-        sample.send().map_err(|e| TransportError::Send {
-            what: "stats",
-            detail: format!("{e:?}"),
-        })?;
-        Ok(())
+        send_slice(&self.stats_pub, "stats", &header, &robots[..n])
     }
 }
 
@@ -445,28 +391,8 @@ impl ShmAgent {
     fn try_connect(ns: &Namespace, node_name: &str) -> Result<Self, TransportError> {
         let cfg = config(ns)?;
         let node = node(&cfg, node_name)?;
-        let setup_sub = node
-            .service_builder(&service_name("mrsim/setup")?)
-            .publish_subscribe::<[u8]>()
-            .open()
-            .map_err(|e| {
-                setup_err(
-                    "service mrsim/setup (is the world running with this run id?)",
-                    e,
-                )
-            })?
-            .subscriber_builder()
-            .create()
-            .map_err(|e| setup_err("setup subscriber", e))?;
-        let snap_sub = node
-            .service_builder(&service_name("mrsim/snapshot")?)
-            .publish_subscribe::<[BodyState]>()
-            .user_header::<SnapshotHeader>()
-            .open()
-            .map_err(|e| setup_err("service mrsim/snapshot", e))?
-            .subscriber_builder()
-            .create()
-            .map_err(|e| setup_err("snapshot subscriber", e))?;
+        let setup_sub = setup_subscriber(&node)?;
+        let snap_sub = snapshot_subscriber(&node)?;
         let tick = node
             .service_builder(&service_name("mrsim/tick")?)
             .event()
@@ -524,6 +450,124 @@ impl ShmAgent {
 
     fn check_world(&mut self) -> bool {
         world_node_alive(&self.cfg)
+    }
+}
+
+/// Creates the world's publisher of `mrsim/NAME`: a slice of `T` of up to
+/// `max_len` items after a header `H`, history 1 (late subscribers get the
+/// newest), `buffer` samples per subscriber.
+fn slice_publisher<T, H>(
+    node: &Node<S>,
+    name: &str,
+    buffer: usize,
+    max_subscribers: usize,
+    max_nodes: usize,
+    max_len: usize,
+) -> Result<Publisher<S, [T], H>, TransportError>
+where
+    T: std::fmt::Debug + ZeroCopySend + 'static,
+    H: std::fmt::Debug + ZeroCopySend + 'static,
+{
+    node.service_builder(&service_name(&format!("mrsim/{name}"))?)
+        .publish_subscribe::<[T]>()
+        .user_header::<H>()
+        .history_size(1)
+        .subscriber_max_buffer_size(buffer)
+        .max_publishers(1)
+        .max_subscribers(max_subscribers)
+        .max_nodes(max_nodes)
+        .create()
+        .map_err(|e| setup_err(format!("service mrsim/{name}"), e))?
+        .publisher_builder()
+        .initial_max_slice_len(max_len.max(1))
+        .create()
+        .map_err(|e| setup_err(format!("{name} publisher"), e))
+}
+
+/// Sends `header` and `items` as one sample (no allocation: the sample is
+/// loaned from shared memory).
+fn send_slice<T, H>(
+    publisher: &Publisher<S, [T], H>,
+    what: &'static str,
+    header: &H,
+    items: &[T],
+) -> Result<(), TransportError>
+where
+    T: std::fmt::Debug + ZeroCopySend + Copy + 'static,
+    H: std::fmt::Debug + ZeroCopySend + Copy + Default + 'static,
+{
+    let send_err = |e: &dyn std::fmt::Debug| TransportError::Send {
+        what,
+        detail: format!("{e:?}"),
+    };
+    let mut sample = publisher
+        .loan_slice_uninit(items.len())
+        .map_err(|e| send_err(&e))?;
+    *sample.user_header_mut() = *header;
+    let sample = sample.write_from_slice(items);
+    sample.send().map_err(|e| send_err(&e))?;
+    Ok(())
+}
+
+/// Subscribes to the run's setup.
+fn setup_subscriber(node: &Node<S>) -> Result<Subscriber<S, [u8], ()>, TransportError> {
+    node.service_builder(&service_name("mrsim/setup")?)
+        .publish_subscribe::<[u8]>()
+        .open()
+        .map_err(|e| {
+            setup_err(
+                "service mrsim/setup (is a world running with this run id?)",
+                e,
+            )
+        })?
+        .subscriber_builder()
+        .create()
+        .map_err(|e| setup_err("setup subscriber", e))
+}
+
+/// Subscribes to the run's snapshots.
+fn snapshot_subscriber(
+    node: &Node<S>,
+) -> Result<Subscriber<S, [BodyState], SnapshotHeader>, TransportError> {
+    node.service_builder(&service_name("mrsim/snapshot")?)
+        .publish_subscribe::<[BodyState]>()
+        .user_header::<SnapshotHeader>()
+        .open()
+        .map_err(|e| setup_err("service mrsim/snapshot", e))?
+        .subscriber_builder()
+        .create()
+        .map_err(|e| setup_err("snapshot subscriber", e))
+}
+
+/// Copies the newest sample waiting on `sub` (header and slice) and
+/// drops the older ones; false if none was waiting.
+fn receive_newest<T, H>(
+    sub: &Subscriber<S, [T], H>,
+    what: &'static str,
+    header: &mut H,
+    out: &mut Vec<T>,
+) -> Result<bool, TransportError>
+where
+    T: std::fmt::Debug + ZeroCopySend + Copy + 'static,
+    H: std::fmt::Debug + ZeroCopySend + Copy + 'static,
+{
+    let mut got = false;
+    loop {
+        match sub.receive() {
+            Ok(Some(s)) => {
+                *header = *s.user_header();
+                out.clear();
+                out.extend_from_slice(s.payload());
+                got = true;
+            }
+            Ok(None) => return Ok(got),
+            Err(e) => {
+                return Err(TransportError::Receive {
+                    what,
+                    detail: format!("{e:?}"),
+                });
+            }
+        }
     }
 }
 
@@ -601,24 +645,7 @@ impl AgentTransport for ShmAgent {
         header: &mut SnapshotHeader,
         bodies: &mut Vec<BodyState>,
     ) -> Result<bool, TransportError> {
-        let mut got = false;
-        loop {
-            match self.snap_sub.receive() {
-                Ok(Some(s)) => {
-                    *header = *s.user_header();
-                    bodies.clear();
-                    bodies.extend_from_slice(s.payload());
-                    got = true;
-                }
-                Ok(None) => return Ok(got),
-                Err(e) => {
-                    return Err(TransportError::Receive {
-                        what: "snapshot",
-                        detail: format!("{e:?}"),
-                    });
-                }
-            }
-        }
+        receive_newest(&self.snap_sub, "snapshot", header, bodies)
     }
 
     fn send_command(&mut self, cmd: &CommandMsg) -> Result<(), TransportError> {
@@ -691,19 +718,7 @@ impl ShmObserver {
     ) -> Result<Self, TransportError> {
         let cfg = config(ns)?;
         let node = node(&cfg, node_name)?;
-        let setup_sub = node
-            .service_builder(&service_name("mrsim/setup")?)
-            .publish_subscribe::<[u8]>()
-            .open()
-            .map_err(|e| {
-                setup_err(
-                    "service mrsim/setup (is a world running with this run id?)",
-                    e,
-                )
-            })?
-            .subscriber_builder()
-            .create()
-            .map_err(|e| setup_err("setup subscriber", e))?;
+        let setup_sub = setup_subscriber(&node)?;
         let stats_sub = node
             .service_builder(&service_name("mrsim/stats")?)
             .publish_subscribe::<[RobotStats]>()
@@ -714,16 +729,7 @@ impl ShmObserver {
             .create()
             .map_err(|e| setup_err("stats subscriber", e))?;
         let snap_sub = if snapshots {
-            Some(
-                node.service_builder(&service_name("mrsim/snapshot")?)
-                    .publish_subscribe::<[BodyState]>()
-                    .user_header::<SnapshotHeader>()
-                    .open()
-                    .map_err(|e| setup_err("service mrsim/snapshot", e))?
-                    .subscriber_builder()
-                    .create()
-                    .map_err(|e| setup_err("snapshot subscriber", e))?,
-            )
+            Some(snapshot_subscriber(&node)?)
         } else {
             None
         };
@@ -764,24 +770,7 @@ impl ObserverTransport for ShmObserver {
         let Some(sub) = &self.snap_sub else {
             return Ok(false);
         };
-        let mut got = false;
-        loop {
-            match sub.receive() {
-                Ok(Some(s)) => {
-                    *header = *s.user_header();
-                    bodies.clear();
-                    bodies.extend_from_slice(s.payload());
-                    got = true;
-                }
-                Ok(None) => return Ok(got),
-                Err(e) => {
-                    return Err(TransportError::Receive {
-                        what: "snapshot",
-                        detail: format!("{e:?}"),
-                    });
-                }
-            }
-        }
+        receive_newest(sub, "snapshot", header, bodies)
     }
 
     fn latest_stats(
@@ -789,24 +778,7 @@ impl ObserverTransport for ShmObserver {
         header: &mut StatsHeader,
         robots: &mut Vec<RobotStats>,
     ) -> Result<bool, TransportError> {
-        let mut got = false;
-        loop {
-            match self.stats_sub.receive() {
-                Ok(Some(s)) => {
-                    *header = *s.user_header();
-                    robots.clear();
-                    robots.extend_from_slice(s.payload());
-                    got = true;
-                }
-                Ok(None) => return Ok(got),
-                Err(e) => {
-                    return Err(TransportError::Receive {
-                        what: "stats",
-                        detail: format!("{e:?}"),
-                    });
-                }
-            }
-        }
+        receive_newest(&self.stats_sub, "stats", header, robots)
     }
 
     fn world_alive(&mut self) -> bool {
