@@ -198,9 +198,11 @@ fn the_dashboard_shows_every_robot_of_a_real_world_waiting_then_at_goal() {
     assert_clean(&id);
 }
 
-fn tmux(socket: &str, args: &[&str]) -> std::process::Output {
+/// tmux on its own server, whose socket lives in the test's folder.
+fn tmux(socket: &Path, args: &[&str]) -> std::process::Output {
     Command::new("tmux")
-        .args(["-L", socket])
+        .arg("-S")
+        .arg(socket)
         .args(args)
         .output()
         .expect("run tmux")
@@ -221,7 +223,7 @@ fn mrsim_top_in_tmux_shows_every_robot_and_ends_with_the_run() {
     let out = dir.join("run");
     let mut world = start_world(&scen, &out, &id);
 
-    let socket = format!("mrsim-test-{id}");
+    let socket = dir.join("tmux.sock");
     let cmd = format!(
         "{} top --run {id} --timeout 30; echo top-exit-status=$?; sleep 60",
         env!("CARGO_BIN_EXE_mrsim")
