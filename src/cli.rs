@@ -102,6 +102,16 @@ pub enum Command {
         #[arg(long, hide = true)]
         protocol_version: Option<u32>,
     },
+    /// Watch a running world: a live dashboard of its bodies and agents
+    /// (read-only; never slows the world or counts as an agent).
+    Top {
+        /// The run id of the world.
+        #[arg(long, default_value = "default")]
+        run: String,
+        /// Seconds to wait for the world.
+        #[arg(long, default_value_t = 10.0)]
+        timeout: f64,
+    },
     /// Regenerate plot.svg, plot.png and replay.html of a run folder.
     Report {
         /// The run folder.
@@ -164,15 +174,8 @@ pub fn main(cli: Cli) -> i32 {
                 protocol_version,
             },
         ),
-        Command::Report { dir } => mrsim_report::render_all(&dir)
-            .map(|()| {
-                println!(
-                    "wrote {0}/plot.svg, {0}/plot.png, {0}/replay.html",
-                    dir.display()
-                );
-                0
-            })
-            .map_err(|e| anyhow::anyhow!("{e}")),
+        Command::Top { run, timeout } => crate::top::run(&run, timeout),
+        Command::Report { dir } => crate::report_cmd::run(&dir),
         Command::Sweep(args) => crate::sweep::sweep(&args),
         Command::Planners => {
             for p in mrsim_planners::PLANNERS {

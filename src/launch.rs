@@ -273,10 +273,12 @@ pub fn run(
 
     // Wait for the world; forward a signal to everything we started.
     let mut forwarded: Option<Instant> = None;
+    let mut watch = crate::watch::RunWatch::new(&ns, scenario.max_ticks());
     let world_status = loop {
         if let Some(status) = world.try_wait().context("waiting for the world")? {
             break status;
         }
+        watch.update();
         // Stop the world first: it writes what it has and tells the agents
         // the run is over, so they end by themselves (the ones that do not
         // are stopped below); a world that does not end in 5 s is killed.
@@ -306,6 +308,7 @@ pub fn run(
         }
         std::thread::sleep(Duration::from_millis(20));
     };
+    watch.finish();
 
     // Agents end on the world's last snapshot; give them a moment, then stop them.
     let grace = Instant::now();

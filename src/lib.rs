@@ -11,5 +11,9 @@
 
 pub mod cli;
 pub mod launch;
+pub mod progress;
+pub mod report_cmd;
 pub mod sweep;
 pub mod table;
+pub mod top;
+pub mod watch;

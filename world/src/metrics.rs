@@ -61,6 +61,22 @@ impl DurationHistogram {
     }
 }
 
+impl DurationHistogram {
+    /// Median and 99th percentile in µs, and the sample count (zeros when
+    /// empty): the live view's numbers, cheaper than [`Self::percentiles`].
+    pub fn p50_p99_us(&self) -> (f64, f64, u64) {
+        if self.0.is_empty() {
+            return (0.0, 0.0, 0);
+        }
+        let us = |ns: u64| ns as f64 / 1000.0;
+        (
+            us(self.0.value_at_quantile(0.5)),
+            us(self.0.value_at_quantile(0.99)),
+            self.0.len(),
+        )
+    }
+}
+
 /// Everything measured about one robot.
 #[derive(Debug, Clone, Default)]
 pub struct RobotAccumulator {

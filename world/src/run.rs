@@ -8,12 +8,13 @@
 //! token, for another tick, with non-finite values, or a second one in a
 //! tick, is rejected, counted and logged, and never drives a robot.
 
+use crate::live::LiveStats;
 use crate::metrics::{RobotAccumulator, RobotMetrics, RunMetrics};
 use crate::physics::{Applied, Contact, Owner, World};
 use crate::record::Recorder;
 use mrsim_proto::{
-    CommandMsg, FixedStr, JoinReply, JoinRequest, PROTOCOL_VERSION, SnapshotHeader, command_kind,
-    flags, now_ns,
+    CommandMsg, FixedStr, JoinReply, JoinRequest, PROTOCOL_VERSION, SnapshotHeader, StatsHeader,
+    agent_state, command_kind, flags, now_ns, run_phase,
 };
 use mrsim_scenario::{MissPolicy, Mode};
 use mrsim_transport::{TransportError, WorldTransport};
@@ -120,6 +121,8 @@ struct Loop<'a> {
     tick: u64,
     published_ns: u64,
     last_pid_check: Instant,
+    live: LiveStats,
+    clock_start: Option<Instant>,
 }
 
 impl Loop<'_> {
@@ -444,6 +447,47 @@ impl Loop<'_> {
         }
     }
 
+    /// Publishes the live statistics for observers when due (or now, with
+    /// `force`): no allocation, and a failure never stops the run.
+    fn publish_stats(&mut self, phase: u32, force: bool) {
+        let now = Instant::now();
+        if !force && !self.live.due(now) {
+            return;
+        }
+        for (i, row) in self.live.robots_mut().iter_mut().enumerate() {
+            let acc = &self.acc[i];
+            let (p50, p99, commands) = acc.latency.p50_p99_us();
+            row.state = match self.agents[i] {
+                Agent::Waiting => agent_state::WAITING,
+                Agent::Live { .. } => agent_state::LIVE,
+                Agent::Lost { .. } => agent_state::LOST,
+            };
+            row.reached_goal = u32::from(acc.reached_goal);
+            row.agent_pid = acc.agent_pid.unwrap_or(0);
+            row.latency_p50_us = p50;
+            row.latency_p99_us = p99;
+            row.commands = commands;
+            row.deadline_misses = acc.deadline_misses;
+            row.collisions = acc.collisions;
+            row.commands_rejected = acc.rejected;
+        }
+        let wall = self.clock_start.map_or(0.0, |t| t.elapsed().as_secs_f64());
+        let header = StatsHeader {
+            tick: self.tick,
+            max_ticks: self.world.scenario.max_ticks(),
+            sim_time: self.time(),
+            realtime_factor: if wall > 0.0 { self.time() / wall } else { 0.0 },
+            published_ns: now_ns(),
+            collisions_total: self.collisions_total,
+            agents_lost: self.agents_lost,
+            phase,
+            realtime: u32::from(self.world.scenario.world.mode == Mode::Realtime),
+            robot_count: self.agents.len() as u32,
+            world_pid: std::process::id(),
+        };
+        let _ = self.live.publish(&mut *self.link, &header, now);
+    }
+
     fn done(&self) -> bool {
         self.acc
             .iter()
@@ -512,6 +556,8 @@ pub fn run(
         tick: 0,
         published_ns: 0,
         last_pid_check: Instant::now(),
+        live: LiveStats::new(n),
+        clock_start: None,
     };
 
     // Join: every robot's agent must be there before the clock starts.
@@ -552,6 +598,7 @@ pub fn run(
         // Commands before the first tick are from nobody we know yet.
         lp.got.iter_mut().for_each(|g| *g = None);
         lp.check_pids();
+        lp.publish_stats(run_phase::JOINING, false);
     }
     lp.log("all agents joined; running");
 
@@ -560,6 +607,8 @@ pub fn run(
     let deadline_after = Duration::from_secs_f64(dt * scenario.world.deadline);
     let stall = Duration::from_secs_f64(scenario.world.stall_timeout);
     let wall_start = Instant::now();
+    lp.clock_start = Some(wall_start);
+    lp.publish_stats(run_phase::RUNNING, true);
     let mut contacts = Vec::new();
     let mut prev: Vec<[f64; 2]> = lp.world.states()[..n].iter().map(|s| s.position).collect();
     while !interrupted && lp.tick < max_ticks {
@@ -659,6 +708,7 @@ pub fn run(
         for (p, s) in prev.iter_mut().zip(lp.world.states()) {
             *p = s.position;
         }
+        lp.publish_stats(run_phase::RUNNING, false);
         if lp.done() {
             break;
         }
@@ -669,6 +719,7 @@ pub fn run(
     lp.rec.tick(lp.tick, lp.time(), lp.world.states());
     let wall = wall_start.elapsed().as_secs_f64();
 
+    lp.publish_stats(run_phase::FINISHED, true);
     // Tell every agent the run is over (twice, in case one is mid-read).
     let header = SnapshotHeader {
         tick: lp.tick,

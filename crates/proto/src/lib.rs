@@ -194,6 +194,83 @@ pub mod events {
     pub const NOTIFIER_DEAD: usize = 5;
 }
 
+/// A robot's agent as the world sees it, the `state` field of a
+/// [`RobotStats`].
+pub mod agent_state {
+    /// No agent has joined for this robot yet.
+    pub const WAITING: u32 = 0;
+    /// An agent drives the robot.
+    pub const LIVE: u32 = 1;
+    /// The robot's agent died or stalled; the world brakes the robot.
+    pub const LOST: u32 = 2;
+}
+
+/// Phases of a run, the `phase` field of a [`StatsHeader`].
+pub mod run_phase {
+    /// The world waits for every robot's agent to join.
+    pub const JOINING: u32 = 0;
+    /// The clock runs.
+    pub const RUNNING: u32 = 1;
+    /// The run is over (its outputs are being written).
+    pub const FINISHED: u32 = 2;
+}
+
+/// One robot's live statistics, as the world last computed them. Published
+/// a few times per second for observers (`mrsim top`, the launcher's
+/// progress bar); never read by agents.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Default)]
+pub struct RobotStats {
+    /// The robot's index in the scenario.
+    pub robot_id: u32,
+    /// Its agent's state, one of [`agent_state`].
+    pub state: u32,
+    /// 1 once the robot has reached its goal (held for `goal_hold_ticks`).
+    pub reached_goal: u32,
+    /// Process id of the agent that last drove it (0 if none yet).
+    pub agent_pid: u32,
+    /// Median latency, snapshot published -> command received, µs.
+    pub latency_p50_us: f64,
+    /// 99th percentile of the same latency, µs.
+    pub latency_p99_us: f64,
+    /// Commands counted so far (the latency histogram's sample count).
+    pub commands: u64,
+    /// Ticks whose command came late or never (realtime).
+    pub deadline_misses: u64,
+    /// Contacts started with anything.
+    pub collisions: u64,
+    /// Commands rejected that named this robot.
+    pub commands_rejected: u64,
+}
+
+/// Header of every stats message, followed by one [`RobotStats`] per robot.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Default)]
+pub struct StatsHeader {
+    /// Ticks simulated so far.
+    pub tick: u64,
+    /// The run's last tick (`duration / dt`): the run ends there at the latest.
+    pub max_ticks: u64,
+    /// Simulated time, s.
+    pub sim_time: f64,
+    /// Simulated seconds per wall-clock second since the clock started.
+    pub realtime_factor: f64,
+    /// The world's clock when it published this message (CLOCK_MONOTONIC, ns).
+    pub published_ns: u64,
+    /// Contacts started, all robots.
+    pub collisions_total: u64,
+    /// Agents lost so far.
+    pub agents_lost: u64,
+    /// One of [`run_phase`].
+    pub phase: u32,
+    /// 1 for realtime, 0 for lockstep.
+    pub realtime: u32,
+    /// Number of [`RobotStats`] that follow.
+    pub robot_count: u32,
+    /// The world's process id.
+    pub world_pid: u32,
+}
+
 /// Monotonic clock in ns (CLOCK_MONOTONIC), comparable across processes
 /// on one machine.
 pub fn now_ns() -> u64 {

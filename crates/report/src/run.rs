@@ -278,9 +278,13 @@ impl RunData {
                 }
             })?;
         let trajectory_path = dir.join(TRAJECTORY_FILE);
-        let trajectory = parse_trajectory(&trajectory_path, &read_required(&trajectory_path)?)?;
+        let trajectory = cut_short(
+            &trajectory_path,
+            &read_required(&trajectory_path)?,
+            parse_trajectory,
+        )?;
         let events_path = dir.join(EVENTS_FILE);
-        let events = parse_events(&events_path, &read_required(&events_path)?)?;
+        let events = cut_short(&events_path, &read_required(&events_path)?, parse_events)?;
         let metrics_path = dir.join(METRICS_FILE);
         let metrics = match read_optional(&metrics_path)? {
             Some(text) => {
@@ -433,6 +437,26 @@ fn parse_error(path: &Path, line: usize, reason: String) -> RenderError {
         path: path.to_path_buf(),
         line,
         reason,
+    }
+}
+
+/// Parses `text` with `parse`; if that fails on the last line and the text
+/// does not end with a newline, the line was cut by a writer that was
+/// killed (the world flushes its files about once a second): it is dropped
+/// and the rest parsed.
+fn cut_short<T>(
+    path: &Path,
+    text: &str,
+    parse: impl Fn(&Path, &str) -> Result<T, RenderError>,
+) -> Result<T, RenderError> {
+    match parse(path, text) {
+        Err(RenderError::Parse { line, .. })
+            if !text.ends_with('\n') && line == text.lines().count() =>
+        {
+            let whole = text.rfind('\n').map_or("", |i| &text[..=i]);
+            parse(path, whole)
+        }
+        r => r,
     }
 }
 

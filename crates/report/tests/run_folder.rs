@@ -376,3 +376,44 @@ fn a_256_robot_run_gets_plots_and_a_replay_with_cycling_colours() {
     let page = std::fs::read_to_string(dir.join("replay.html")).unwrap();
     assert!(page.contains(r#""name":"r255""#));
 }
+
+/// Cuts `file` in `dir` `chars` characters before its end (a writer killed
+/// mid-line).
+fn cut_end(dir: &Path, file: &str, chars: usize) -> usize {
+    let path = dir.join(file);
+    let body = std::fs::read_to_string(&path).unwrap();
+    let cut = &body[..body.len() - chars];
+    std::fs::write(&path, cut).unwrap();
+    cut.lines().count()
+}
+
+#[test]
+fn a_last_line_cut_by_a_killed_writer_is_dropped_and_the_rest_kept() {
+    let dir = temp_dir("cut");
+    write_run(&dir, 2, false);
+    let whole = RunData::load(&dir).unwrap();
+    let samples = |r: &RunData| {
+        r.trajectory
+            .bodies
+            .iter()
+            .map(|b| b.samples.len())
+            .sum::<usize>()
+    };
+    cut_end(&dir, "trajectory.csv", 5);
+    cut_end(&dir, "events.jsonl", 3);
+    let cut = RunData::load(&dir).unwrap();
+    assert_eq!(samples(&cut), samples(&whole) - 1);
+    assert_eq!(cut.events.len(), whole.events.len() - 1);
+}
+
+#[test]
+fn a_bad_line_in_the_middle_is_still_an_error_even_without_a_final_newline() {
+    let dir = temp_dir("cutmid");
+    write_run(&dir, 2, false);
+    replace_line(&dir, "trajectory.csv", 3, "3,0.3,r0,robot,1,2,x,4");
+    let lines = cut_end(&dir, "trajectory.csv", 1);
+    let (path, line, _) = parse_error(&dir);
+    assert_eq!(path, dir.join("trajectory.csv"));
+    assert_eq!(line, 3);
+    assert!(lines > 3);
+}

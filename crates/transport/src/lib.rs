@@ -15,7 +15,9 @@
 //! late joiners.
 #![warn(missing_docs)]
 
-use mrsim_proto::{BodyState, CommandMsg, JoinReply, JoinRequest, SnapshotHeader};
+use mrsim_proto::{
+    BodyState, CommandMsg, JoinReply, JoinRequest, RobotStats, SnapshotHeader, StatsHeader,
+};
 use std::time::Duration;
 
 pub mod inproc;
@@ -85,6 +87,16 @@ pub trait WorldTransport {
     /// Frees what dead agent processes left behind, so a restarted agent can
     /// join again. Cheap when nothing died.
     fn cleanup_dead(&mut self) {}
+    /// Publishes the run's live statistics for observers (a few times per
+    /// second at most). Must not block; a transport without observers
+    /// ignores it.
+    fn publish_stats(
+        &mut self,
+        _header: &StatsHeader,
+        _robots: &[RobotStats],
+    ) -> Result<(), TransportError> {
+        Ok(())
+    }
 }
 
 /// An agent's side of the channels.
@@ -111,6 +123,31 @@ pub trait AgentTransport {
     fn world_alive(&mut self) -> bool;
     /// True once the process was asked to terminate (SIGINT, SIGTERM).
     fn termination_requested(&self) -> bool;
+}
+
+/// A read-only observer of a running world (`mrsim top`, the launcher's
+/// progress bar): it reads the setup, the snapshots and the live
+/// statistics, never joins, never sends, and never wakes the world, so it
+/// cannot slow it down or count as an agent.
+pub trait ObserverTransport {
+    /// The run's setup (the resolved scenario as JSON), once available.
+    fn setup(&mut self) -> Result<Option<Vec<u8>>, TransportError>;
+    /// Copies the newest snapshot received since the last call into
+    /// `header` and `bodies`; false if none arrived.
+    fn latest_snapshot(
+        &mut self,
+        header: &mut SnapshotHeader,
+        bodies: &mut Vec<BodyState>,
+    ) -> Result<bool, TransportError>;
+    /// Copies the newest statistics received since the last call into
+    /// `header` and `robots`; false if none arrived.
+    fn latest_stats(
+        &mut self,
+        header: &mut StatsHeader,
+        robots: &mut Vec<RobotStats>,
+    ) -> Result<bool, TransportError>;
+    /// False once the world is known to be gone.
+    fn world_alive(&mut self) -> bool;
 }
 
 /// How many participants the channels must hold.

@@ -11,19 +11,30 @@
 //! | `mrsim/join-reply` | publish-subscribe `JoinReply` | world -> agents |
 //! | `mrsim/command` | publish-subscribe `CommandMsg` | agents -> world |
 //! | `mrsim/wake` | event, notifier-dead event | agents -> world |
+//! | `mrsim/stats` | publish-subscribe `[RobotStats]` + `StatsHeader`, history 1 | world -> observers |
+//!
+//! An observer ([`ShmObserver`]) only subscribes to `setup`, `snapshot` and
+//! `stats`: it never joins, sends or listens to the tick event, and the
+//! world's publishers overwrite the oldest sample of a subscriber that falls
+//! behind (iceoryx2's safe overflow) instead of waiting for it.
 //!
 //! Limits (publishers, subscribers, listeners, notifiers, nodes) are raised
 //! from the scenario's robot count, with room to spare for restarted agents,
 //! strangers and observers. Waiting is event driven (no busy polling).
 
-use crate::{AgentTransport, Capacity, Namespace, TransportError, WorldTransport};
+use crate::{
+    AgentTransport, Capacity, Namespace, ObserverTransport, TransportError, WorldTransport,
+};
 use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::port::update_connections::UpdateConnections;
 use iceoryx2::prelude::*;
-use mrsim_proto::{BodyState, CommandMsg, JoinReply, JoinRequest, SnapshotHeader, events, now_ns};
+use mrsim_proto::{
+    BodyState, CommandMsg, JoinReply, JoinRequest, RobotStats, SnapshotHeader, StatsHeader, events,
+    now_ns,
+};
 use std::os::unix::fs::PermissionsExt;
 use std::time::{Duration, Instant};
 
@@ -106,6 +117,8 @@ pub struct ShmWorld {
     wake: Listener<S>,
     max_bodies: usize,
     terminated: std::cell::Cell<bool>,
+    stats_pub: Publisher<S, [RobotStats], StatsHeader>,
+    max_robots: usize,
 }
 
 impl ShmWorld {
@@ -141,22 +154,7 @@ impl ShmWorld {
             .create()
             .map_err(|e| setup_err("setup publisher", e))?;
 
-        let snap = node
-            .service_builder(&service_name("mrsim/snapshot")?)
-            .publish_subscribe::<[BodyState]>()
-            .user_header::<SnapshotHeader>()
-            .history_size(1)
-            .subscriber_max_buffer_size(2)
-            .max_publishers(1)
-            .max_subscribers(agents + 2)
-            .max_nodes(nodes)
-            .create()
-            .map_err(|e| setup_err("service mrsim/snapshot", e))?;
-        let snap_pub = snap
-            .publisher_builder()
-            .initial_max_slice_len(max_bodies.max(1))
-            .create()
-            .map_err(|e| setup_err("snapshot publisher", e))?;
+        let snap_pub = slice_publisher(&node, "snapshot", 2, agents + 2, nodes, max_bodies)?;
 
         let tick_service = node
             .service_builder(&service_name("mrsim/tick")?)
@@ -227,6 +225,8 @@ impl ShmWorld {
             .create()
             .map_err(|e| setup_err("wake listener", e))?;
 
+        let stats_pub = slice_publisher(&node, "stats", 1, agents + 2, nodes, cap.robots)?;
+
         Ok(Self {
             node,
             setup_pub,
@@ -238,6 +238,8 @@ impl ShmWorld {
             wake,
             max_bodies,
             terminated: std::cell::Cell::new(false),
+            stats_pub,
+            max_robots: cap.robots,
         })
     }
 }
@@ -265,19 +267,7 @@ impl WorldTransport for ShmWorld {
         bodies: &[BodyState],
     ) -> Result<(), TransportError> {
         let n = bodies.len().min(self.max_bodies);
-        let mut sample = self
-            .snap_pub
-            .loan_slice_uninit(n)
-            .map_err(|e| TransportError::Send {
-                what: "snapshot",
-                detail: format!("{e:?}"),
-            })?;
-        *sample.user_header_mut() = *header;
-        let sample = sample.write_from_slice(&bodies[..n]);
-        sample.send().map_err(|e| TransportError::Send {
-            what: "snapshot",
-            detail: format!("{e:?}"),
-        })?;
+        send_slice(&self.snap_pub, "snapshot", header, &bodies[..n])?;
         self.tick
             .notify_with_custom_event_id(EventId::new(events::SNAPSHOT))
             .map_err(|e| TransportError::Send {
@@ -355,6 +345,23 @@ impl WorldTransport for ShmWorld {
     fn cleanup_dead(&mut self) {
         let _ = self.node.try_cleanup_dead_nodes();
     }
+
+    fn publish_stats(
+        &mut self,
+        header: &StatsHeader,
+        robots: &[RobotStats],
+    ) -> Result<(), TransportError> {
+        let n = robots.len().min(self.max_robots);
+        let header = StatsHeader {
+            robot_count: n as u32,
+            ..*header
+        };
+        // Observers that subscribed since the last call get the setup's
+        // history only when its publisher updates its connections (cheap
+        // when nobody new came).
+        let _ = self.setup_pub.update_connections();
+        send_slice(&self.stats_pub, "stats", &header, &robots[..n])
+    }
 }
 
 /// An agent's side over iceoryx2.
@@ -396,28 +403,8 @@ impl ShmAgent {
         let cfg = config(ns)?;
         let node = node(&cfg, node_name)?;
         ns.make_private();
-        let setup_sub = node
-            .service_builder(&service_name("mrsim/setup")?)
-            .publish_subscribe::<[u8]>()
-            .open()
-            .map_err(|e| {
-                setup_err(
-                    "service mrsim/setup (is the world running with this run id?)",
-                    e,
-                )
-            })?
-            .subscriber_builder()
-            .create()
-            .map_err(|e| setup_err("setup subscriber", e))?;
-        let snap_sub = node
-            .service_builder(&service_name("mrsim/snapshot")?)
-            .publish_subscribe::<[BodyState]>()
-            .user_header::<SnapshotHeader>()
-            .open()
-            .map_err(|e| setup_err("service mrsim/snapshot", e))?
-            .subscriber_builder()
-            .create()
-            .map_err(|e| setup_err("snapshot subscriber", e))?;
+        let setup_sub = setup_subscriber(&node)?;
+        let snap_sub = snapshot_subscriber(&node)?;
         let tick = node
             .service_builder(&service_name("mrsim/tick")?)
             .event()
@@ -514,6 +501,124 @@ fn world_node_alive(cfg: &Config) -> Option<bool> {
     listed.ok().map(|_| alive)
 }
 
+/// Creates the world's publisher of `mrsim/NAME`: a slice of `T` of up to
+/// `max_len` items after a header `H`, history 1 (late subscribers get the
+/// newest), `buffer` samples per subscriber.
+fn slice_publisher<T, H>(
+    node: &Node<S>,
+    name: &str,
+    buffer: usize,
+    max_subscribers: usize,
+    max_nodes: usize,
+    max_len: usize,
+) -> Result<Publisher<S, [T], H>, TransportError>
+where
+    T: std::fmt::Debug + ZeroCopySend + 'static,
+    H: std::fmt::Debug + ZeroCopySend + 'static,
+{
+    node.service_builder(&service_name(&format!("mrsim/{name}"))?)
+        .publish_subscribe::<[T]>()
+        .user_header::<H>()
+        .history_size(1)
+        .subscriber_max_buffer_size(buffer)
+        .max_publishers(1)
+        .max_subscribers(max_subscribers)
+        .max_nodes(max_nodes)
+        .create()
+        .map_err(|e| setup_err(format!("service mrsim/{name}"), e))?
+        .publisher_builder()
+        .initial_max_slice_len(max_len.max(1))
+        .create()
+        .map_err(|e| setup_err(format!("{name} publisher"), e))
+}
+
+/// Sends `header` and `items` as one sample (no allocation: the sample is
+/// loaned from shared memory).
+fn send_slice<T, H>(
+    publisher: &Publisher<S, [T], H>,
+    what: &'static str,
+    header: &H,
+    items: &[T],
+) -> Result<(), TransportError>
+where
+    T: std::fmt::Debug + ZeroCopySend + Copy + 'static,
+    H: std::fmt::Debug + ZeroCopySend + Copy + Default + 'static,
+{
+    let send_err = |e: &dyn std::fmt::Debug| TransportError::Send {
+        what,
+        detail: format!("{e:?}"),
+    };
+    let mut sample = publisher
+        .loan_slice_uninit(items.len())
+        .map_err(|e| send_err(&e))?;
+    *sample.user_header_mut() = *header;
+    let sample = sample.write_from_slice(items);
+    sample.send().map_err(|e| send_err(&e))?;
+    Ok(())
+}
+
+/// Subscribes to the run's setup.
+fn setup_subscriber(node: &Node<S>) -> Result<Subscriber<S, [u8], ()>, TransportError> {
+    node.service_builder(&service_name("mrsim/setup")?)
+        .publish_subscribe::<[u8]>()
+        .open()
+        .map_err(|e| {
+            setup_err(
+                "service mrsim/setup (is a world running with this run id?)",
+                e,
+            )
+        })?
+        .subscriber_builder()
+        .create()
+        .map_err(|e| setup_err("setup subscriber", e))
+}
+
+/// Subscribes to the run's snapshots.
+fn snapshot_subscriber(
+    node: &Node<S>,
+) -> Result<Subscriber<S, [BodyState], SnapshotHeader>, TransportError> {
+    node.service_builder(&service_name("mrsim/snapshot")?)
+        .publish_subscribe::<[BodyState]>()
+        .user_header::<SnapshotHeader>()
+        .open()
+        .map_err(|e| setup_err("service mrsim/snapshot", e))?
+        .subscriber_builder()
+        .create()
+        .map_err(|e| setup_err("snapshot subscriber", e))
+}
+
+/// Copies the newest sample waiting on `sub` (header and slice) and
+/// drops the older ones; false if none was waiting.
+fn receive_newest<T, H>(
+    sub: &Subscriber<S, [T], H>,
+    what: &'static str,
+    header: &mut H,
+    out: &mut Vec<T>,
+) -> Result<bool, TransportError>
+where
+    T: std::fmt::Debug + ZeroCopySend + Copy + 'static,
+    H: std::fmt::Debug + ZeroCopySend + Copy + 'static,
+{
+    let mut got = false;
+    loop {
+        match sub.receive() {
+            Ok(Some(s)) => {
+                *header = *s.user_header();
+                out.clear();
+                out.extend_from_slice(s.payload());
+                got = true;
+            }
+            Ok(None) => return Ok(got),
+            Err(e) => {
+                return Err(TransportError::Receive {
+                    what,
+                    detail: format!("{e:?}"),
+                });
+            }
+        }
+    }
+}
+
 impl AgentTransport for ShmAgent {
     fn request_join(&mut self, req: &JoinRequest) -> Result<(), TransportError> {
         self.join_pub
@@ -567,24 +672,7 @@ impl AgentTransport for ShmAgent {
         header: &mut SnapshotHeader,
         bodies: &mut Vec<BodyState>,
     ) -> Result<bool, TransportError> {
-        let mut got = false;
-        loop {
-            match self.snap_sub.receive() {
-                Ok(Some(s)) => {
-                    *header = *s.user_header();
-                    bodies.clear();
-                    bodies.extend_from_slice(s.payload());
-                    got = true;
-                }
-                Ok(None) => return Ok(got),
-                Err(e) => {
-                    return Err(TransportError::Receive {
-                        what: "snapshot",
-                        detail: format!("{e:?}"),
-                    });
-                }
-            }
-        }
+        receive_newest(&self.snap_sub, "snapshot", header, bodies)
     }
 
     fn send_command(&mut self, cmd: &CommandMsg) -> Result<(), TransportError> {
@@ -619,5 +707,118 @@ impl AgentTransport for ShmAgent {
 
     fn termination_requested(&self) -> bool {
         terminated(&self.node, &self.terminated)
+    }
+}
+
+/// A read-only observer over iceoryx2: subscribes to the setup, the
+/// snapshots and the live statistics of a run, nothing else.
+pub struct ShmObserver {
+    cfg: Config,
+    _node: Node<S>,
+    setup_sub: Subscriber<S, [u8], ()>,
+    snap_sub: Option<Subscriber<S, [BodyState], SnapshotHeader>>,
+    stats_sub: Subscriber<S, [RobotStats], StatsHeader>,
+    last_world_check: Instant,
+    world_alive: bool,
+}
+
+impl ShmObserver {
+    /// Opens the run's services as the observer called `node_name`,
+    /// retrying until `timeout` if the world has not created them yet.
+    /// Without `snapshots` only the setup and the statistics are read (the
+    /// launcher's progress bar needs no more).
+    pub fn connect(
+        ns: &Namespace,
+        node_name: &str,
+        snapshots: bool,
+        timeout: Duration,
+    ) -> Result<Self, TransportError> {
+        let start = Instant::now();
+        loop {
+            match Self::try_connect(ns, node_name, snapshots) {
+                Ok(o) => return Ok(o),
+                Err(e) if start.elapsed() >= timeout => return Err(e),
+                Err(_) => std::thread::sleep(Duration::from_millis(50)),
+            }
+        }
+    }
+
+    /// One attempt of [`ShmObserver::connect`].
+    pub fn try_connect(
+        ns: &Namespace,
+        node_name: &str,
+        snapshots: bool,
+    ) -> Result<Self, TransportError> {
+        let cfg = config(ns)?;
+        let node = node(&cfg, node_name)?;
+        let setup_sub = setup_subscriber(&node)?;
+        let stats_sub = node
+            .service_builder(&service_name("mrsim/stats")?)
+            .publish_subscribe::<[RobotStats]>()
+            .user_header::<StatsHeader>()
+            .open()
+            .map_err(|e| setup_err("service mrsim/stats", e))?
+            .subscriber_builder()
+            .create()
+            .map_err(|e| setup_err("stats subscriber", e))?;
+        let snap_sub = if snapshots {
+            Some(snapshot_subscriber(&node)?)
+        } else {
+            None
+        };
+        Ok(Self {
+            cfg,
+            _node: node,
+            setup_sub,
+            snap_sub,
+            stats_sub,
+            last_world_check: Instant::now(),
+            world_alive: true,
+        })
+    }
+}
+
+impl ObserverTransport for ShmObserver {
+    fn setup(&mut self) -> Result<Option<Vec<u8>>, TransportError> {
+        let mut newest = None;
+        loop {
+            match self.setup_sub.receive() {
+                Ok(Some(s)) => newest = Some(s.payload().to_vec()),
+                Ok(None) => return Ok(newest),
+                Err(e) => {
+                    return Err(TransportError::Receive {
+                        what: "setup",
+                        detail: format!("{e:?}"),
+                    });
+                }
+            }
+        }
+    }
+
+    fn latest_snapshot(
+        &mut self,
+        header: &mut SnapshotHeader,
+        bodies: &mut Vec<BodyState>,
+    ) -> Result<bool, TransportError> {
+        let Some(sub) = &self.snap_sub else {
+            return Ok(false);
+        };
+        receive_newest(sub, "snapshot", header, bodies)
+    }
+
+    fn latest_stats(
+        &mut self,
+        header: &mut StatsHeader,
+        robots: &mut Vec<RobotStats>,
+    ) -> Result<bool, TransportError> {
+        receive_newest(&self.stats_sub, "stats", header, robots)
+    }
+
+    fn world_alive(&mut self) -> bool {
+        if self.world_alive && self.last_world_check.elapsed() >= Duration::from_millis(250) {
+            self.last_world_check = Instant::now();
+            self.world_alive = world_node_alive(&self.cfg).unwrap_or(true);
+        }
+        self.world_alive
     }
 }

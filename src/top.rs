@@ -1,0 +1,560 @@
+//! `mrsim top`: a live terminal dashboard of a running world.
+//!
+//! It attaches as a read-only observer ([`ObserverTransport`]): it reads the
+//! run's setup (robot names, planners, walls), the newest snapshot (where
+//! every body is) and the world's live statistics (each agent's state,
+//! latency p50/p99, deadline misses, collisions), and never joins, sends
+//! or wakes the world. It redraws about 8 times a second and ends on `q`,
+//! Esc or Ctrl-C, or when the run finishes.
+//!
+//! [`TopModel`] holds what is known about the run and [`draw`] renders it
+//! on any ratatui backend, so the screen can be tested without a terminal.
+
+use anyhow::{Context, Result, anyhow, bail};
+use mrsim_proto::{
+    BodyState, RobotStats, SnapshotHeader, StatsHeader, agent_state, body_kind, run_phase,
+};
+use mrsim_scenario::Scenario;
+use mrsim_transport::shm::ShmObserver;
+use mrsim_transport::{Namespace, ObserverTransport, TransportError};
+use ratatui::Frame;
+use ratatui::layout::{Constraint, Direction, Layout, Rect};
+use ratatui::style::{Color, Modifier, Style};
+use ratatui::symbols::Marker;
+use ratatui::text::{Line, Span};
+use ratatui::widgets::canvas::{Canvas, Circle, Line as Segment, Points};
+use ratatui::widgets::{Block, Borders, Cell, Paragraph, Row, Table};
+use std::io::IsTerminal;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+/// Time between two screen updates.
+pub const REFRESH: Duration = Duration::from_millis(125);
+
+/// Everything `top` knows about a run: the setup, and the newest snapshot
+/// and statistics.
+#[derive(Debug, Clone)]
+pub struct TopModel {
+    /// The run id.
+    pub run_id: String,
+    /// The run's output folder, as the world reported it.
+    pub out_dir: String,
+    /// The resolved scenario.
+    pub scenario: Scenario,
+    /// Newest snapshot header (default until the first tick).
+    pub snapshot: SnapshotHeader,
+    /// Newest snapshot's bodies (empty until the first tick).
+    pub bodies: Vec<BodyState>,
+    /// Newest statistics header, if any arrived.
+    pub stats: Option<StatsHeader>,
+    /// Newest statistics, one per robot.
+    pub robots: Vec<RobotStats>,
+    bounds: [[f64; 2]; 2],
+}
+
+impl TopModel {
+    /// A model from the world's setup message (JSON with `run_id`,
+    /// `out_dir` and `scenario`).
+    pub fn from_setup(setup: &[u8]) -> Result<Self> {
+        let v: serde_json::Value =
+            serde_json::from_slice(setup).context("the world's setup is not JSON")?;
+        let scenario: Scenario = serde_json::from_value(v["scenario"].clone())
+            .context("the world's setup has no readable scenario")?;
+        let mut points: Vec<[f64; 2]> = Vec::new();
+        if let Some(a) = &scenario.world.arena {
+            points.extend([a.min, a.max]);
+        } else {
+            for r in &scenario.robots {
+                points.extend([r.start, r.goal]);
+            }
+            points.extend(scenario.obstacles.iter().map(|o| o.start));
+            for w in &scenario.walls {
+                points.extend(w.segment);
+            }
+        }
+        let mut bounds = [[f64::INFINITY; 2], [f64::NEG_INFINITY; 2]];
+        for p in &points {
+            grow(&mut bounds, *p, 0.0);
+        }
+        if !bounds[0][0].is_finite() {
+            bounds = [[-1.0, -1.0], [1.0, 1.0]];
+        }
+        // A margin of a tenth of the extent (at least one unit).
+        let margin =
+            ((bounds[1][0] - bounds[0][0]).max(bounds[1][1] - bounds[0][1]) * 0.1).max(1.0);
+        let bounds = [
+            [bounds[0][0] - margin, bounds[0][1] - margin],
+            [bounds[1][0] + margin, bounds[1][1] + margin],
+        ];
+        Ok(Self {
+            run_id: v["run_id"].as_str().unwrap_or("").to_string(),
+            out_dir: v["out_dir"].as_str().unwrap_or("").to_string(),
+            scenario,
+            snapshot: SnapshotHeader::default(),
+            bodies: Vec::new(),
+            stats: None,
+            robots: Vec::new(),
+            bounds,
+        })
+    }
+
+    /// Takes in the newest snapshot and statistics, if any arrived.
+    pub fn poll(&mut self, obs: &mut dyn ObserverTransport) -> Result<(), TransportError> {
+        let mut header = SnapshotHeader::default();
+        if obs.latest_snapshot(&mut header, &mut self.bodies)? {
+            self.snapshot = header;
+            for b in &self.bodies {
+                let r = b.radius.max(0.0);
+                grow(&mut self.bounds, b.position, r);
+            }
+        }
+        let mut stats = StatsHeader::default();
+        if obs.latest_stats(&mut stats, &mut self.robots)? {
+            self.stats = Some(stats);
+        }
+        Ok(())
+    }
+
+    /// True once the world has said the run is over.
+    pub fn finished(&self) -> bool {
+        self.snapshot.finished == 1 || self.stats.is_some_and(|s| s.phase == run_phase::FINISHED)
+    }
+
+    /// Newest tick the world reported.
+    pub fn tick(&self) -> u64 {
+        self.stats
+            .map_or(self.snapshot.tick, |s| s.tick.max(self.snapshot.tick))
+    }
+
+    /// A robot's state as shown: `waiting`, `live`, `lost`, `at goal`, or
+    /// `?` before the first statistics.
+    pub fn state_of(&self, robot: usize) -> &'static str {
+        match self.robots.get(robot) {
+            None => "?",
+            Some(r) if r.state == agent_state::LOST => "lost",
+            Some(r) if r.reached_goal == 1 => "at goal",
+            Some(r) if r.state == agent_state::LIVE => "live",
+            Some(_) => "waiting",
+        }
+    }
+
+    /// One line for the end: where the run got to.
+    pub fn summary(&self) -> String {
+        let n = self.scenario.robots.len();
+        let at_goal = self.robots.iter().filter(|r| r.reached_goal == 1).count();
+        let collisions = self.stats.map_or(0, |s| s.collisions_total);
+        format!(
+            "run `{}` finished at tick {}: {at_goal}/{n} robots at goal, {collisions} collisions; outputs in {}",
+            self.run_id,
+            self.tick(),
+            self.out_dir
+        )
+    }
+
+    /// The map's bounds, widened so one unit is as long across as up
+    /// (a terminal cell is about twice as tall as wide).
+    fn map_bounds(&self, area: Rect) -> ([f64; 2], [f64; 2]) {
+        let [lo, hi] = self.bounds;
+        let (w, h) = (hi[0] - lo[0], hi[1] - lo[1]);
+        let cols = f64::from(area.width.saturating_sub(2).max(1));
+        let rows = f64::from(area.height.saturating_sub(2).max(1)) * 2.0;
+        let scale = (w / cols).max(h / rows);
+        let (cx, cy) = ((lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0);
+        let (hw, hh) = (scale * cols / 2.0, scale * rows / 2.0);
+        ([cx - hw, cx + hw], [cy - hh, cy + hh])
+    }
+}
+
+fn grow(b: &mut [[f64; 2]; 2], p: [f64; 2], r: f64) {
+    if !(p[0].is_finite() && p[1].is_finite()) {
+        return;
+    }
+    b[0][0] = b[0][0].min(p[0] - r);
+    b[0][1] = b[0][1].min(p[1] - r);
+    b[1][0] = b[1][0].max(p[0] + r);
+    b[1][1] = b[1][1].max(p[1] + r);
+}
+
+fn robot_color(i: usize) -> Color {
+    let [r, g, b] = mrsim_report::robot_color(i);
+    Color::Rgb(r, g, b)
+}
+
+fn micros(us: f64, commands: u64) -> String {
+    if commands == 0 {
+        "-".to_string()
+    } else if us >= 100.0 {
+        format!("{us:.0}")
+    } else {
+        format!("{us:.1}")
+    }
+}
+
+fn status_line(m: &TopModel) -> Line<'static> {
+    let n = m.scenario.robots.len();
+    let mode = m.scenario.world.mode.to_string();
+    let what = match m.stats {
+        None => "waiting for the world's statistics".to_string(),
+        Some(s) if s.phase == run_phase::JOINING => {
+            let joined = m
+                .robots
+                .iter()
+                .filter(|r| r.state != agent_state::WAITING)
+                .count();
+            format!("waiting for agents: {joined}/{n} joined")
+        }
+        Some(s) => {
+            let at_goal = m.robots.iter().filter(|r| r.reached_goal == 1).count();
+            let state = if s.phase == run_phase::FINISHED || m.finished() {
+                "finished"
+            } else {
+                "running"
+            };
+            format!(
+                "{state}  tick {}/{}  t {:.2} s  x{:.2}  {at_goal}/{n} at goal  {} collisions  {} lost",
+                m.tick(),
+                s.max_ticks,
+                s.sim_time.max(m.snapshot.sim_time),
+                s.realtime_factor,
+                s.collisions_total,
+                s.agents_lost
+            )
+        }
+    };
+    Line::from(vec![
+        Span::styled(
+            format!(" mrsim top  {} · {} · {mode}  ", m.run_id, m.scenario.name),
+            Style::default().add_modifier(Modifier::BOLD),
+        ),
+        Span::raw(what),
+    ])
+}
+
+fn draw_map(f: &mut Frame, area: Rect, m: &TopModel) {
+    let (xb, yb) = m.map_bounds(area);
+    let n = m.scenario.robots.len();
+    let label_names = n <= 16;
+    let canvas =
+        Canvas::default()
+            .block(Block::default().borders(Borders::ALL).title(" map "))
+            .marker(Marker::Braille)
+            .x_bounds(xb)
+            .y_bounds(yb)
+            .paint(|ctx| {
+                let grey = Color::Gray;
+                if let Some(a) = &m.scenario.world.arena {
+                    let (lo, hi) = (a.min, a.max);
+                    for (p, q) in [
+                        (lo, [hi[0], lo[1]]),
+                        ([hi[0], lo[1]], hi),
+                        (hi, [lo[0], hi[1]]),
+                        ([lo[0], hi[1]], lo),
+                    ] {
+                        ctx.draw(&Segment::new(p[0], p[1], q[0], q[1], grey));
+                    }
+                }
+                for w in &m.scenario.walls {
+                    let [p, q] = w.segment;
+                    ctx.draw(&Segment::new(p[0], p[1], q[0], q[1], grey));
+                }
+                // Goals as small crosses in the robot's colour.
+                let s = (xb[1] - xb[0]) / 120.0;
+                for (i, r) in m.scenario.robots.iter().enumerate() {
+                    let [gx, gy] = r.goal;
+                    let c = robot_color(i);
+                    ctx.draw(&Segment::new(gx - s, gy - s, gx + s, gy + s, c));
+                    ctx.draw(&Segment::new(gx - s, gy + s, gx + s, gy - s, c));
+                }
+                ctx.layer();
+                // Bodies: where the newest snapshot has them, else where they start.
+                let starts: Vec<BodyState> =
+                    if m.bodies.is_empty() {
+                        m.scenario
+                            .robots
+                            .iter()
+                            .enumerate()
+                            .map(|(i, r)| BodyState {
+                                id: i as u32,
+                                kind: body_kind::ROBOT,
+                                position: r.start,
+                                radius: r.radius,
+                                ..Default::default()
+                            })
+                            .chain(m.scenario.obstacles.iter().enumerate().map(|(k, o)| {
+                                BodyState {
+                                    id: (n + k) as u32,
+                                    kind: body_kind::OBSTACLE,
+                                    position: o.start,
+                                    radius: o.radius,
+                                    ..Default::default()
+                                }
+                            }))
+                            .collect()
+                    } else {
+                        Vec::new()
+                    };
+                let bodies = if m.bodies.is_empty() {
+                    &starts
+                } else {
+                    &m.bodies
+                };
+                for b in bodies {
+                    let color = if b.kind == body_kind::ROBOT {
+                        robot_color(b.id as usize)
+                    } else {
+                        Color::DarkGray
+                    };
+                    let [x, y] = b.position;
+                    if b.radius > s {
+                        ctx.draw(&Circle::new(x, y, b.radius, color));
+                    }
+                    ctx.draw(&Points::new(&[(x, y)], color));
+                }
+                if label_names {
+                    ctx.layer();
+                    for b in bodies.iter().filter(|b| b.kind == body_kind::ROBOT) {
+                        if let Some(r) = m.scenario.robots.get(b.id as usize) {
+                            let [x, y] = b.position;
+                            ctx.print(
+                                x + s * 2.0,
+                                y,
+                                Span::styled(r.name.clone(), Style::default().fg(color_of(b))),
+                            );
+                        }
+                    }
+                }
+            });
+    f.render_widget(canvas, area);
+}
+
+fn color_of(b: &BodyState) -> Color {
+    robot_color(b.id as usize)
+}
+
+/// Width of the name column: the longest name, 5 to 24 characters.
+fn name_width(m: &TopModel) -> u16 {
+    let longest = m
+        .scenario
+        .robots
+        .iter()
+        .map(|r| r.name.chars().count())
+        .max()
+        .unwrap_or(0);
+    longest.clamp(5, 24) as u16
+}
+
+/// Width of the table: its columns, the gaps between them and the border.
+fn table_width(m: &TopModel) -> u16 {
+    name_width(m) + (17 + 7 + 8 + 8 + 6 + 5 + 8) + 7 + 2
+}
+
+fn draw_table(f: &mut Frame, area: Rect, m: &TopModel) {
+    let header = Row::new(
+        [
+            "robot", "planner", "agent", "p50 µs", "p99 µs", "misses", "coll", "pid",
+        ]
+        .map(|h| Cell::from(h).style(Style::default().add_modifier(Modifier::BOLD))),
+    );
+    let visible = usize::from(area.height.saturating_sub(3));
+    let n = m.scenario.robots.len();
+    let shown = if n > visible {
+        visible.saturating_sub(1)
+    } else {
+        n
+    };
+    let mut rows: Vec<Row> = m
+        .scenario
+        .robots
+        .iter()
+        .enumerate()
+        .take(shown)
+        .map(|(i, r)| {
+            let st = m.robots.get(i).copied().unwrap_or_default();
+            let state = m.state_of(i);
+            let state_style = match state {
+                "lost" => Style::default().fg(Color::Red),
+                "at goal" => Style::default().fg(Color::Green),
+                "waiting" | "?" => Style::default().fg(Color::Yellow),
+                _ => Style::default(),
+            };
+            let misses_style = if st.deadline_misses > 0 {
+                Style::default().fg(Color::Red)
+            } else {
+                Style::default()
+            };
+            Row::new(vec![
+                Cell::from(r.name.clone()).style(Style::default().fg(robot_color(i))),
+                Cell::from(r.planner.clone()),
+                Cell::from(state).style(state_style),
+                Cell::from(micros(st.latency_p50_us, st.commands)),
+                Cell::from(micros(st.latency_p99_us, st.commands)),
+                Cell::from(st.deadline_misses.to_string()).style(misses_style),
+                Cell::from(st.collisions.to_string()),
+                Cell::from(if st.agent_pid == 0 {
+                    "-".to_string()
+                } else {
+                    st.agent_pid.to_string()
+                }),
+            ])
+        })
+        .collect();
+    if shown < n {
+        rows.push(Row::new(vec![Cell::from(format!(
+            "... {} more",
+            n - shown
+        ))]));
+    }
+    let widths = [
+        Constraint::Length(name_width(m)),
+        Constraint::Length(17),
+        Constraint::Length(7),
+        Constraint::Length(8),
+        Constraint::Length(8),
+        Constraint::Length(6),
+        Constraint::Length(5),
+        Constraint::Length(8),
+    ];
+    let table = Table::new(rows, widths)
+        .header(header)
+        .column_spacing(1)
+        .block(Block::default().borders(Borders::ALL).title(" agents "));
+    f.render_widget(table, area);
+}
+
+/// Draws the dashboard: a status line, the map, one row per robot, and the
+/// keys. Side by side on a wide screen, map above table on a narrow one.
+pub fn draw(f: &mut Frame, m: &TopModel) {
+    let [status, body, keys] = Layout::default()
+        .direction(Direction::Vertical)
+        .constraints([
+            Constraint::Length(1),
+            Constraint::Min(4),
+            Constraint::Length(1),
+        ])
+        .areas(f.area());
+    f.render_widget(Paragraph::new(status_line(m)), status);
+    let table_width = table_width(m);
+    let [map, table] = if body.width >= table_width + 30 {
+        Layout::default()
+            .direction(Direction::Horizontal)
+            .constraints([Constraint::Min(30), Constraint::Length(table_width)])
+            .areas(body)
+    } else {
+        let rows = (m.scenario.robots.len() as u16 + 3).min(body.height / 2);
+        Layout::default()
+            .direction(Direction::Vertical)
+            .constraints([Constraint::Min(4), Constraint::Length(rows)])
+            .areas(body)
+    };
+    draw_map(f, map, m);
+    draw_table(f, table, m);
+    f.render_widget(
+        Paragraph::new(Line::from(Span::styled(
+            " q quit   latency: snapshot published -> command received at the world",
+            Style::default().fg(Color::DarkGray),
+        ))),
+        keys,
+    );
+}
+
+static TERMINATE: AtomicBool = AtomicBool::new(false);
+
+extern "C" fn on_terminate(_: libc::c_int) {
+    TERMINATE.store(true, Ordering::SeqCst);
+}
+
+/// Restores the terminal however `top` ends.
+struct TerminalGuard;
+
+impl Drop for TerminalGuard {
+    fn drop(&mut self) {
+        ratatui::restore();
+    }
+}
+
+/// Waits until the world's setup arrives over `obs`.
+pub fn wait_for_setup(obs: &mut dyn ObserverTransport, timeout: Duration) -> Result<TopModel> {
+    let start = Instant::now();
+    loop {
+        if let Some(setup) = obs.setup()? {
+            return TopModel::from_setup(&setup);
+        }
+        if start.elapsed() >= timeout {
+            bail!(
+                "the world did not publish its setup within {:.0} s",
+                timeout.as_secs_f64()
+            );
+        }
+        if !obs.world_alive() {
+            bail!("the world is gone");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// `mrsim top`: attaches to run `run_id` and shows the dashboard until `q`,
+/// Ctrl-C, or the end of the run. Returns the exit status.
+pub fn run(run_id: &str, timeout: f64) -> Result<i32> {
+    let ns = Namespace::new(run_id)
+        .map_err(|e| anyhow::Error::new(crate::launch::Invalid(e.to_string())))?;
+    if !std::io::stdout().is_terminal() {
+        return Err(anyhow::Error::new(crate::launch::Invalid(
+            "mrsim top draws on a terminal, and stdout is not one".to_string(),
+        )));
+    }
+    let timeout = Duration::from_secs_f64(timeout.max(0.0));
+    let node = format!("mrsim-top-{}", std::process::id());
+    let mut obs = ShmObserver::connect(&ns, &node, true, timeout).map_err(|e| {
+        anyhow!("no world is running with run id `{run_id}` (start one with `mrsim world --run {run_id}` or `mrsim run --run {run_id}`): {e}")
+    })?;
+    let mut model = wait_for_setup(&mut obs, timeout).with_context(|| format!("run `{run_id}`"))?;
+
+    // SAFETY: the handler only stores into an atomic (async-signal-safe).
+    unsafe {
+        libc::signal(
+            libc::SIGINT,
+            on_terminate as *const () as libc::sighandler_t,
+        );
+        libc::signal(
+            libc::SIGTERM,
+            on_terminate as *const () as libc::sighandler_t,
+        );
+    }
+    let mut terminal = ratatui::try_init().context("cannot take over the terminal")?;
+    let guard = TerminalGuard;
+    use ratatui::crossterm::event::{self, Event, KeyCode, KeyEventKind, KeyModifiers};
+    let end = loop {
+        model.poll(&mut obs)?;
+        terminal
+            .draw(|f| draw(f, &model))
+            .context("cannot draw on the terminal")?;
+        if model.finished() {
+            break Ok(0);
+        }
+        if !obs.world_alive() {
+            break Err(anyhow!(
+                "the world of run `{run_id}` is gone without finishing the run (tick {})",
+                model.tick()
+            ));
+        }
+        if TERMINATE.load(Ordering::SeqCst) {
+            break Ok(0);
+        }
+        if event::poll(REFRESH).context("cannot read the keyboard")?
+            && let Event::Key(k) = event::read().context("cannot read the keyboard")?
+            && k.kind == KeyEventKind::Press
+        {
+            let quit = matches!(k.code, KeyCode::Char('q') | KeyCode::Esc)
+                || (k.code == KeyCode::Char('c') && k.modifiers.contains(KeyModifiers::CONTROL));
+            if quit {
+                break Ok(0);
+            }
+        }
+    };
+    drop(guard);
+    drop(terminal);
+    if model.finished() {
+        println!("{}", model.summary());
+    }
+    end
+}
