@@ -104,9 +104,10 @@ fn ko_choi_case_2_moves_back_and_forth_then_passes_behind_the_obstacle() {
     let c = ko_choi_crossing(&dir);
     assert!(c.offset < 0.0, "offset {}", c.offset);
     assert!(c.reversals >= 2, "reversals {}", c.reversals);
-    // No overlap at any tick. The world logs a contact here at a gap of
-    // about 0.6 cm (rapier's contact prediction), which is not a touch.
+    // No overlap at any tick and no contact in any substep (the closest
+    // tick-sampled gap is about 0.6 cm).
     assert!(c.min_gap > 0.0, "gap {}", c.min_gap);
+    assert_eq!(metrics(&dir)["collisions_total"], 0);
     assert_eq!(robot_metrics(&dir, "robot")["reached_goal"], false);
 }
 
@@ -116,8 +117,9 @@ fn ko_choi_case_3_detours_behind_the_obstacle_without_reversing() {
     let c = ko_choi_crossing(&dir);
     assert!(c.offset < 0.0, "offset {}", c.offset);
     assert_eq!(c.reversals, 0);
-    // No overlap at any tick (the world logs a contact at a 1.9 cm gap).
+    // No overlap at any tick and no contact in any substep.
     assert!(c.min_gap > 0.0, "gap {}", c.min_gap);
+    assert_eq!(metrics(&dir)["collisions_total"], 0);
     assert_eq!(robot_metrics(&dir, "robot")["reached_goal"], false);
 }
 
@@ -138,13 +140,18 @@ fn starts_avoiding(dir: &Path) -> u64 {
         .expect("the robot never turns away from its goal line")
 }
 
-/// Ticks of the robot's collisions with `body`, from events.jsonl.
-fn collision_ticks(dir: &Path, body: &str) -> Vec<u64> {
+/// The robot's collision events with `body`: (tick, surface gap).
+fn robot_collisions_with(dir: &Path, body: &str) -> Vec<(u64, f64)> {
     events(dir)
         .iter()
-        .filter(|e| e["type"] == "collision" && (e["a"] == body || e["b"] == body))
-        .filter(|e| e["a"] == "robot" || e["b"] == "robot")
-        .map(|e| e["tick"].as_u64().expect("tick"))
+        .filter(|e| e["type"] == "collision")
+        .filter(|e| (e["a"] == "robot" && e["b"] == body) || (e["a"] == body && e["b"] == "robot"))
+        .map(|e| {
+            (
+                e["tick"].as_u64().expect("tick"),
+                e["gap"].as_f64().expect("gap"),
+            )
+        })
         .collect()
 }
 
@@ -153,20 +160,24 @@ fn ko_choi_case_5_collides_with_obstacle_1_where_case_4_avoids_every_obstacle() 
     let case4 = run_paper("ko-choi-case-4");
     let case5 = run_paper("ko-choi-case-5");
     assert_eq!(metrics(&case4)["collisions_total"], 0);
-    assert!(
-        !collision_ticks(&case5, "o1").is_empty(),
-        "case 5 misses o1"
-    );
-    // And it really comes closer to o1 than case 4 does.
-    let closest = |dir: &Path| {
-        let rows = trajectory(dir);
-        let (r, o) = (track(&rows, "robot"), track(&rows, "o1"));
-        r.iter()
-            .zip(&o)
-            .map(|(r, o)| norm(r.x - o.x, r.y - o.y) - 2.0)
-            .fold(f64::INFINITY, f64::min)
-    };
-    assert!(closest(&case5) < 0.5 * closest(&case4));
+    assert!(events(&case4).iter().all(|e| e["type"] != "collision"));
+    // Case 5 touches o1 (a surface gap within the world's 1 mm), and o1 is
+    // the only body it collides with.
+    let hits = robot_collisions_with(&case5, "o1");
+    assert!(!hits.is_empty(), "case 5 misses o1");
+    assert!(hits.iter().all(|&(_, gap)| gap <= 0.1), "{hits:?}");
+    let m5 = metrics(&case5);
+    assert_eq!(m5["collisions_total"].as_u64(), Some(hits.len() as u64));
+    assert_eq!(m5["robots"]["robot"]["collisions"], m5["collisions_total"]);
+    // Case 4 passes o1 at a positive gap at every tick and never touches.
+    let rows = trajectory(&case4);
+    let (r, o) = (track(&rows, "robot"), track(&rows, "o1"));
+    let closest4 = r
+        .iter()
+        .zip(&o)
+        .map(|(r, o)| norm(r.x - o.x, r.y - o.y) - 2.0)
+        .fold(f64::INFINITY, f64::min);
+    assert!(closest4 > 0.1, "case 4 comes {closest4} cm from o1");
 }
 
 #[test]
@@ -178,38 +189,63 @@ fn ko_choi_case_6_starts_avoiding_earlier_than_case_4() {
     assert_eq!(metrics(&case6)["collisions_total"], 0);
 }
 
-#[test]
-fn ko_choi_case_7_does_not_respond_to_obstacle_3_until_it_is_hit() {
-    // The same scenario without o3: any response to o3 shows as a
-    // difference between the two robot paths.
-    let file = root().join("scenarios/papers/ko-choi-case-7.toml");
-    let text = std::fs::read_to_string(&file).expect("case 7");
+/// Runs case 7's scenario text with and without o3 (the last obstacle
+/// block) and checks that the robot does not respond to o3 until o3 hits
+/// it: before the tick of the hit its path stays within 0.1 cm of the path
+/// without o3, while o3 closes from beyond eps_vd (40 cm) to a few cm.
+fn ko_choi_case_7_ignores_obstacle_3(text: &str, tag: &str) {
     let start = text.find("[[obstacle]]\nname = \"o3\"").expect("o3 block");
-    let without = fresh_dir("ko7-no-o3").join("ko-choi-case-7-without-o3.toml");
+    assert!(
+        !text[start + 1..].contains("[[obstacle]]"),
+        "o3 is not last"
+    );
+    let dir = fresh_dir(tag);
+    let (with, without) = (dir.join("with-o3.toml"), dir.join("without-o3.toml"));
+    std::fs::write(&with, text).expect("write");
     std::fs::write(&without, &text[..start]).expect("write");
-    let with_o3 = run_file(&file, "ko-choi-case-7");
-    let no_o3 = run_file(&without, "ko-choi-case-7-no-o3");
-    let hit = *collision_ticks(&with_o3, "o3")
+    let with_o3 = run_file(&with, tag);
+    let no_o3 = run_file(&without, &format!("{tag}-no-o3"));
+    let hit = robot_collisions_with(&with_o3, "o3")
         .first()
+        .map(|&(tick, _)| tick)
         .expect("case 7 runs into o3");
     let rows = trajectory(&with_o3);
     let rows0 = trajectory(&no_o3);
     let (a, b) = (track(&rows, "robot"), track(&rows0, "robot"));
-    // Before the tick it is hit, the robot's path stays within 0.1 cm of
-    // the path without o3, while o3 closes from beyond eps_vd (40 cm) to a
-    // few cm.
-    let o3 = track(&rows, "o3");
-    let gap = |t: usize| norm(a[t].x - o3[t].x, a[t].y - o3[t].y) - 2.0;
     for (r, r0) in a.iter().zip(&b).take_while(|(r, _)| r.tick < hit) {
         let dev = norm(r.x - r0.x, r.y - r0.y);
         assert!(
             dev < 0.1,
-            "responds by {dev} cm at tick {} (o3 hits at {hit})",
+            "{tag}: responds by {dev} cm at tick {} (o3 hits at {hit})",
             r.tick
         );
     }
+    let o3 = track(&rows, "o3");
+    let gap = |t: usize| norm(a[t].x - o3[t].x, a[t].y - o3[t].y) - 2.0;
     let hit = hit as usize;
-    assert!(gap(hit - 10) > 40.0 && gap(hit - 1) < 5.0);
+    assert!(
+        gap(hit - 10) > 40.0 && gap(hit - 1) < 5.0,
+        "{tag}: gaps {} and {}",
+        gap(hit - 10),
+        gap(hit - 1)
+    );
+}
+
+#[test]
+fn ko_choi_case_7_does_not_respond_to_obstacle_3_until_it_is_hit() {
+    let file = root().join("scenarios/papers/ko-choi-case-7.toml");
+    let text = std::fs::read_to_string(&file).expect("case 7");
+    ko_choi_case_7_ignores_obstacle_3(&text, "ko-choi-case-7");
+}
+
+#[test]
+fn khatib_the_limit_of_case_7_does_not_respond_to_obstacle_3_either() {
+    let file = root().join("scenarios/papers/ko-choi-case-7.toml");
+    let text = std::fs::read_to_string(&file).expect("case 7");
+    let vdf = "planner = \"vdf\"\nparams = { alpha = 100000000.0, beta = 100000000.0, eta = 1e4, zeta = 2.0, eps_vd = 40.0 }";
+    let khatib = "planner = \"khatib\"\nparams = { eta = 1e4, zeta = 2.0, eps_d = 40.0 }";
+    assert!(text.contains(vdf), "case 7's robot block changed");
+    ko_choi_case_7_ignores_obstacle_3(&text.replace(vdf, khatib), "ko-choi-case-7-khatib");
 }
 
 /// Robot rows at or after `t0` seconds.
