@@ -152,7 +152,10 @@ impl World {
         let sub = scenario.world.substeps.max(1);
         phys.integration_parameters.dt = (scenario.world.dt / sub as f64) as f32;
         phys.integration_parameters.length_unit = scenario.length_unit.per_metre() as f32;
-        let min_radius = 1e-3 * scenario.length_unit.per_metre();
+        // A point robot (radius 0) still needs a collider: a disc ten times
+        // smaller than the touch tolerance, so that a point robot stopped
+        // against a body measures a gap well inside the tolerance.
+        let min_radius = 1e-4 * scenario.length_unit.per_metre();
 
         let mut owners = HashMap::new();
         let mut robots = Vec::with_capacity(scenario.robots.len());
@@ -358,10 +361,12 @@ impl World {
         self.touching = now;
     }
 
+    /// The radius of `o`'s collider (a point body's is the small minimum).
     fn owner_radius(&self, o: Owner) -> f64 {
+        let min = 1e-4 * self.scenario.length_unit.per_metre();
         match o {
-            Owner::Robot(i) => self.scenario.robots[i].radius,
-            Owner::Obstacle(i) => self.scenario.obstacles[i].radius,
+            Owner::Robot(i) => self.scenario.robots[i].radius.max(min),
+            Owner::Obstacle(i) => self.scenario.obstacles[i].radius.max(min),
             Owner::Wall(_) => 0.0,
         }
     }
