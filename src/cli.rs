@@ -58,7 +58,26 @@ pub enum Command {
         /// Print only the output folder, not the table.
         #[arg(long)]
         quiet: bool,
+        /// World and agents as processes over iceoryx2 (shm) or as threads
+        /// of one process over crossbeam channels (inproc).
+        #[arg(long, value_enum, default_value = "shm")]
+        transport: crate::launch::Transport,
+        /// Scheduling: --cpus LIST, --rt.
+        #[command(flatten)]
+        sched: crate::sched::SchedArgs,
+        /// Do not draw plot.svg/png and replay.html.
+        #[arg(long, hide = true)]
+        no_report: bool,
     },
+    /// Measure timing under true concurrency: realtime runs of generated
+    /// crossing scenes for each agent count and transport (see BENCHMARKS.md).
+    Bench(crate::bench::BenchArgs),
+    /// Raw iceoryx2 fan-out baseline, world side (started by `bench --baseline`).
+    #[command(hide = true)]
+    BaselineWorld(crate::baseline::WorldArgs),
+    /// Raw iceoryx2 fan-out baseline, agent side (started by `baseline-world`).
+    #[command(hide = true)]
+    BaselineAgent(crate::baseline::AgentArgs),
     /// Start a world by hand; agents join with `mrsim agent --robot NAME --run ID`.
     World {
         /// Scenario and overrides.
@@ -89,6 +108,9 @@ pub enum Command {
         /// Fault injection for tests: put this robot id in every command.
         #[arg(long, hide = true)]
         impersonate: Option<u32>,
+        /// Write CPU time and peak RSS here at the end (set by `mrsim run`).
+        #[arg(long, hide = true)]
+        usage_out: Option<PathBuf>,
     },
     /// Regenerate plot.svg, plot.png and replay.html of a run folder.
     Report {
@@ -116,13 +138,31 @@ pub fn main(cli: Cli) -> i32 {
         },
         run: None,
         quiet: false,
+        transport: crate::launch::Transport::Shm,
+        sched: crate::sched::SchedArgs::default(),
+        no_report: false,
     });
     let result = match command {
         Command::Run {
             scenario,
             run,
             quiet,
-        } => crate::launch::run(&scenario, run, quiet),
+            transport,
+            sched,
+            no_report,
+        } => crate::launch::run(
+            &scenario,
+            run,
+            quiet,
+            &crate::launch::RunHow {
+                transport,
+                sched,
+                no_report,
+            },
+        ),
+        Command::Bench(args) => crate::bench::main(&args),
+        Command::BaselineWorld(args) => crate::baseline::world(&args),
+        Command::BaselineAgent(args) => crate::baseline::agent(&args),
         Command::World {
             scenario,
             run,
@@ -134,7 +174,8 @@ pub fn main(cli: Cli) -> i32 {
             run,
             timeout,
             impersonate,
-        } => crate::launch::agent(&robot, &run, timeout, impersonate),
+            usage_out,
+        } => crate::launch::agent(&robot, &run, timeout, impersonate, usage_out.as_deref()),
         Command::Report { dir } => mrsim_report::render_all(&dir)
             .map(|()| {
                 println!(

@@ -8,6 +8,11 @@
 //! be tested without processes.
 #![warn(missing_docs)]
 
+pub mod baseline;
+pub mod bench;
 pub mod cli;
+pub mod inproc;
 pub mod launch;
+pub mod sched;
 pub mod table;
+pub mod usage;

@@ -168,6 +168,60 @@ pub struct RunMetrics {
     pub transport: String,
     /// True if the run was stopped early by a signal.
     pub interrupted: bool,
+    /// How the run kept time and what the world process used.
+    pub timing: TimingMetrics,
+}
+
+/// metrics.json's `timing`: the run as a real-time system.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct TimingMetrics {
+    /// Wall-clock duration of the tick loop, s.
+    pub wall_s: f64,
+    /// Every robot's snapshot published -> command received, µs.
+    pub latency_us: Percentiles,
+    /// Every robot's snapshot published -> agent awake, µs.
+    pub wake_us: Percentiles,
+    /// Every robot's planner compute time, µs.
+    pub compute_us: Percentiles,
+    /// Realtime: actual tick start (snapshot published) minus scheduled, µs.
+    pub jitter_us: Percentiles,
+    /// Snapshot published -> last command in, on ticks where every live
+    /// agent answered in time, µs.
+    pub allin_us: Percentiles,
+    /// The world's own work per tick (publish, record, apply, physics,
+    /// metrics; not the wait for commands), µs.
+    pub world_tick_us: Percentiles,
+    /// CPU seconds of the world's process during the tick loop (with the
+    /// in-process transport this includes the agent threads).
+    pub process_cpu_s: f64,
+    /// Peak resident set size of the world's process at the end, KiB.
+    pub process_maxrss_kb: u64,
+}
+
+/// CPU seconds (user + system) and peak resident set size (KiB) of this
+/// process so far (getrusage: the same counters as /proc/self/stat's utime +
+/// stime and /proc/self/status's VmHWM).
+pub fn process_usage() -> (f64, u64) {
+    rusage(libc::RUSAGE_SELF)
+}
+
+/// CPU seconds of the calling thread so far, and the process's peak
+/// resident set size (KiB).
+pub fn thread_usage() -> (f64, u64) {
+    rusage(libc::RUSAGE_THREAD)
+}
+
+fn rusage(who: libc::c_int) -> (f64, u64) {
+    // SAFETY: getrusage writes into the struct we own.
+    let mut ru: libc::rusage = unsafe { std::mem::zeroed() };
+    if unsafe { libc::getrusage(who, &mut ru) } != 0 {
+        return (0.0, 0);
+    }
+    let secs = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+    (
+        secs(ru.ru_utime) + secs(ru.ru_stime),
+        ru.ru_maxrss.max(0) as u64,
+    )
 }
 
 /// Distance from `p` to the segment `w`.

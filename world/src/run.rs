@@ -8,7 +8,9 @@
 //! token, for another tick, with non-finite values, or a second one in a
 //! tick, is rejected, counted and logged, and never drives a robot.
 
-use crate::metrics::{RobotAccumulator, RobotMetrics, RunMetrics};
+use crate::metrics::{
+    DurationHistogram, RobotAccumulator, RobotMetrics, RunMetrics, TimingMetrics, process_usage,
+};
 use crate::physics::{Applied, Contact, Owner, World};
 use crate::record::Recorder;
 use mrsim_proto::{
@@ -119,6 +121,10 @@ struct Loop<'a> {
     late: u64,
     tick: u64,
     published_ns: u64,
+    /// Latest receive time of a command accepted this tick.
+    last_in_ns: u64,
+    /// Every robot's round trip, wake-up and compute, together.
+    all: [DurationHistogram; 3],
     last_pid_check: Instant,
 }
 
@@ -290,6 +296,11 @@ impl Loop<'_> {
             .record_ns(cmd.woke_ns.saturating_sub(self.published_ns));
         acc.compute.record_ns(cmd.compute_ns);
         self.got[i] = Some(cmd);
+        self.last_in_ns = self.last_in_ns.max(received_ns);
+        let [lat, wake, compute] = &mut self.all;
+        lat.record_ns(received_ns.saturating_sub(self.published_ns));
+        wake.record_ns(cmd.woke_ns.saturating_sub(self.published_ns));
+        compute.record_ns(cmd.compute_ns);
     }
 
     fn lose(&mut self, i: usize, reason: String) {
@@ -433,6 +444,28 @@ impl Loop<'_> {
     }
 }
 
+/// Below this much time left, [`wait_until`] stops relying on the
+/// transport's timed wait: iceoryx2's listener times out through a socket
+/// receive timeout, which the kernel rounds up to whole jiffies (4 ms at
+/// HZ = 250), so a tick would start or close up to two jiffies late.
+const COARSE_WAIT: Duration = Duration::from_millis(9);
+/// Polling step for the last [`COARSE_WAIT`] before a deadline.
+const FINE_WAIT: Duration = Duration::from_micros(200);
+
+/// Waits for a wake-up from an agent or until about `until`, whichever
+/// comes first, without overshooting `until` by more than [`FINE_WAIT`]
+/// (plus scheduling delay): far from it, the transport's wait (woken by
+/// agents at once); close to it, short precise sleeps.
+fn wait_until(link: &mut dyn WorldTransport, until: Instant) -> Result<(), TransportError> {
+    let left = until.saturating_duration_since(Instant::now());
+    if left > COARSE_WAIT {
+        link.wait((left - COARSE_WAIT).min(Duration::from_millis(20)))
+    } else {
+        std::thread::sleep(left.min(FINE_WAIT));
+        Ok(())
+    }
+}
+
 /// Runs `world` to the end over `link`, writing the outputs into
 /// `opts.out_dir`.
 pub fn run(
@@ -485,8 +518,13 @@ pub fn run(
         late: 0,
         tick: 0,
         published_ns: 0,
+        last_in_ns: 0,
+        all: Default::default(),
         last_pid_check: Instant::now(),
     };
+    let mut jitter = DurationHistogram::default();
+    let mut allin = DurationHistogram::default();
+    let mut tick_cost = DurationHistogram::default();
 
     // Join: every robot's agent must be there before the clock starts.
     let join_start = Instant::now();
@@ -534,6 +572,7 @@ pub fn run(
     let deadline_after = Duration::from_secs_f64(dt * scenario.world.deadline);
     let stall = Duration::from_secs_f64(scenario.world.stall_timeout);
     let wall_start = Instant::now();
+    let (cpu_start, _) = process_usage();
     let mut contacts = Vec::new();
     let mut prev: Vec<[f64; 2]> = lp.world.states()[..n].iter().map(|s| s.position).collect();
     while !interrupted && lp.tick < max_ticks {
@@ -541,17 +580,23 @@ pub fn run(
             interrupted = true;
             break;
         }
+        let mut scheduled = None;
         if realtime {
-            let scheduled = wall_start + Duration::from_secs_f64(lp.tick as f64 * dt);
-            while Instant::now() < scheduled {
-                let left = scheduled.saturating_duration_since(Instant::now());
-                lp.link.wait(left.min(Duration::from_millis(20)))?;
+            let at = wall_start + Duration::from_secs_f64(lp.tick as f64 * dt);
+            while Instant::now() < at {
+                wait_until(lp.link, at)?;
                 lp.drain(true)?;
             }
+            scheduled = Some(at);
         }
         lp.got.iter_mut().for_each(|g| *g = None);
         lp.garbage.iter_mut().for_each(|g| *g = false);
+        lp.last_in_ns = 0;
         let pub_instant = Instant::now();
+        if let Some(at) = scheduled {
+            // Tick jitter: actual start of the tick minus its scheduled time.
+            jitter.record_ns(pub_instant.saturating_duration_since(at).as_nanos() as u64);
+        }
         lp.published_ns = now_ns();
         let header = SnapshotHeader {
             tick: lp.tick,
@@ -567,6 +612,7 @@ pub fn run(
         };
         lp.link.publish_snapshot(&header, lp.world.states())?;
         lp.rec.tick(lp.tick, lp.time(), lp.world.states());
+        let mut own = pub_instant.elapsed();
 
         // Collect this tick's commands.
         loop {
@@ -593,9 +639,19 @@ pub fn run(
                 }
                 break;
             }
-            lp.link
-                .wait((limit - waited).min(Duration::from_millis(20)))?;
+            if realtime {
+                wait_until(lp.link, pub_instant + limit)?;
+            } else {
+                lp.link
+                    .wait((limit - waited).min(Duration::from_millis(20)))?;
+            }
         }
+        // All in: published -> the last command in, on ticks where every
+        // live agent answered in time.
+        if lp.all_answered() && lp.got.iter().any(Option::is_some) {
+            allin.record_ns(lp.last_in_ns.saturating_sub(lp.published_ns));
+        }
+        let work_start = Instant::now();
 
         // Apply: a valid command, or the policy for a miss, or brake.
         for i in 0..n {
@@ -630,12 +686,26 @@ pub fn run(
         for (p, s) in prev.iter_mut().zip(lp.world.states()) {
             *p = s.position;
         }
+        own += work_start.elapsed();
+        tick_cost.record_ns(own.as_nanos() as u64);
         if lp.done() {
             break;
         }
     }
     lp.rec.tick(lp.tick, lp.time(), lp.world.states());
     let wall = wall_start.elapsed().as_secs_f64();
+    let (cpu_end, maxrss_kb) = process_usage();
+    let timing = TimingMetrics {
+        wall_s: wall,
+        latency_us: lp.all[0].percentiles(),
+        wake_us: lp.all[1].percentiles(),
+        compute_us: lp.all[2].percentiles(),
+        jitter_us: jitter.percentiles(),
+        allin_us: allin.percentiles(),
+        world_tick_us: tick_cost.percentiles(),
+        process_cpu_s: (cpu_end - cpu_start).max(0.0),
+        process_maxrss_kb: maxrss_kb,
+    };
 
     // Tell every agent the run is over (twice, in case one is mid-read).
     let header = SnapshotHeader {
@@ -701,6 +771,7 @@ pub fn run(
         run_id: lp.opts.run_id.clone(),
         transport: lp.opts.transport.clone(),
         interrupted,
+        timing,
     };
     lp.rec.finish().map_err(out_err("trajectory.csv"))?;
     let text =

@@ -35,6 +35,9 @@ pub struct InprocAgent {
     rx: Receiver<ToAgent>,
     setup: Arc<std::sync::Mutex<Option<Vec<u8>>>>,
     replies: Vec<JoinReply>,
+    /// Nonces of this agent's join requests: replies are broadcast to every
+    /// agent, and only those answering one of these are kept.
+    asked: Vec<u64>,
     pending: Option<(SnapshotHeader, Arc<[BodyState]>)>,
     stop: Arc<AtomicBool>,
     world_alive: Arc<AtomicBool>,
@@ -56,6 +59,7 @@ pub fn channels(agents: usize, stop: Arc<AtomicBool>) -> (InprocWorld, Vec<Inpro
             rx: arx,
             setup: setup.clone(),
             replies: Vec::new(),
+            asked: Vec::new(),
             pending: None,
             stop: stop.clone(),
             world_alive: alive.clone(),
@@ -164,7 +168,8 @@ impl InprocAgent {
         for m in first.into_iter().chain(self.rx.try_iter()) {
             match m {
                 ToAgent::Snapshot(h, b) => self.pending = Some((h, b)),
-                ToAgent::Reply(r) => self.replies.push(r),
+                ToAgent::Reply(r) if self.asked.contains(&r.nonce) => self.replies.push(r),
+                ToAgent::Reply(_) => {}
             }
         }
     }
@@ -172,6 +177,9 @@ impl InprocAgent {
 
 impl AgentTransport for InprocAgent {
     fn request_join(&mut self, req: &JoinRequest) -> Result<(), TransportError> {
+        if !self.asked.contains(&req.nonce) {
+            self.asked.push(req.nonce);
+        }
         self.tx
             .send(ToWorld::Join(*req))
             .map_err(|_| TransportError::Disconnected)
