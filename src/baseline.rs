@@ -200,8 +200,7 @@ fn world_inner(args: &WorldArgs, ns: &Namespace) -> Result<i32> {
     for tick in 0..ticks {
         let at = t0 + period.mul_f64(tick as f64);
         while Instant::now() < at {
-            let left = at.saturating_duration_since(Instant::now());
-            let _ = wake.timed_wait(|_| {}, left);
+            wait_until(&wake, at);
             while let Ok(Some(_)) = reply_sub.receive() {}
         }
         let published = now_ns();
@@ -225,12 +224,11 @@ fn world_inner(args: &WorldArgs, ns: &Namespace) -> Result<i32> {
                 allin.record_ns(last_in.saturating_sub(published));
                 break;
             }
-            let waited = pub_at.elapsed();
-            if waited >= deadline {
+            if pub_at.elapsed() >= deadline {
                 misses += (n - answered) as u64;
                 break;
             }
-            let _ = wake.timed_wait(|_| {}, deadline - waited);
+            wait_until(&wake, pub_at + deadline);
         }
     }
     for _ in 0..2 {
@@ -246,6 +244,21 @@ fn world_inner(args: &WorldArgs, ns: &Namespace) -> Result<i32> {
     std::fs::write(&args.out, format!("{v:#}\n"))
         .with_context(|| format!("writing {}", args.out.display()))?;
     Ok(0)
+}
+
+/// Waits as the world's tick loop does (`mrsim_world::run`): on the
+/// listener while far from `until` (its socket timeout is rounded up to
+/// whole jiffies), in short sleeps in the last few milliseconds.
+fn wait_until(listener: &iceoryx2::port::listener::Listener<S>, until: Instant) {
+    let left = until.saturating_duration_since(Instant::now());
+    if left > Duration::from_millis(9) {
+        let _ = listener.timed_wait(
+            |_| {},
+            (left - Duration::from_millis(9)).min(Duration::from_millis(20)),
+        );
+    } else {
+        std::thread::sleep(left.min(Duration::from_micros(200)));
+    }
 }
 
 /// The agent side: answers every tick at once.

@@ -199,11 +199,16 @@ pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentEx
         boundary: spec.boundary.unwrap_or(f64::INFINITY),
     });
     let mut observer = observe::Observer::new(&scenario, me);
+    let capacity = scenario.robots.len() + scenario.obstacles.len();
+    // The whole scenario (every robot's spec) is no longer needed: with a
+    // thousand robots it is megabytes per agent.
+    drop(scenario);
+    drop(value);
+    drop(setup);
 
     // Control loop.
     let mut header = SnapshotHeader::default();
-    let mut bodies: Vec<BodyState> =
-        Vec::with_capacity(scenario.robots.len() + scenario.obstacles.len());
+    let mut bodies: Vec<BodyState> = Vec::with_capacity(capacity);
     let mut answered: Option<u64> = None;
     let mut last_heard = Instant::now();
     loop {

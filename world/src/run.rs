@@ -9,7 +9,8 @@
 //! tick, is rejected, counted and logged, and never drives a robot.
 
 use crate::metrics::{
-    DurationHistogram, RobotAccumulator, RobotMetrics, RunMetrics, TimingMetrics, process_usage,
+    ClearanceGrid, DurationHistogram, RobotAccumulator, RobotMetrics, RunMetrics, TimingMetrics,
+    process_usage,
 };
 use crate::physics::{Applied, Contact, Owner, World};
 use crate::record::Recorder;
@@ -111,6 +112,10 @@ struct Loop<'a> {
     opts: RunOptions,
     names: Vec<String>,
     agents: Vec<Agent>,
+    /// Per robot: the nonce and reply of the join that made it live, so a
+    /// repeated request (an agent re-asking while the reply was on its way)
+    /// gets the same token instead of a new one that would orphan the first.
+    joined: Vec<Option<(u64, JoinReply)>>,
     acc: Vec<RobotAccumulator>,
     got: Vec<Option<CommandMsg>>,
     garbage: Vec<bool>,
@@ -125,6 +130,8 @@ struct Loop<'a> {
     last_in_ns: u64,
     /// Every robot's round trip, wake-up and compute, together.
     all: [DurationHistogram; 3],
+    grid: ClearanceGrid,
+    clearance: Vec<f64>,
     last_pid_check: Instant,
 }
 
@@ -159,6 +166,14 @@ impl Loop<'_> {
             reason: FixedStr::new(&reason),
         };
         let idx = self.world.scenario.robot_index(&name);
+        if let Some(i) = idx
+            && let (Agent::Live { pid, .. }, Some((nonce, reply))) =
+                (self.agents[i], self.joined[i])
+            && pid == req.pid
+            && nonce == req.nonce
+        {
+            return self.link.reply_join(&reply);
+        }
         let reply = if req.protocol_version != PROTOCOL_VERSION {
             refuse(format!(
                 "protocol version {} refused: this world speaks version {PROTOCOL_VERSION}",
@@ -187,7 +202,7 @@ impl Loop<'_> {
                     } else {
                         self.event(json!({"type": "agent_joined", "robot": name, "pid": req.pid}));
                     }
-                    JoinReply {
+                    let reply = JoinReply {
                         nonce: req.nonce,
                         accepted: 1,
                         robot_id: i as u32,
@@ -195,7 +210,9 @@ impl Loop<'_> {
                         protocol_version: PROTOCOL_VERSION,
                         _pad: 0,
                         reason: FixedStr::default(),
-                    }
+                    };
+                    self.joined[i] = Some((req.nonce, reply));
+                    reply
                 }
             }
         } else {
@@ -394,19 +411,14 @@ impl Loop<'_> {
         let time = self.time();
         let walls = self.world.walls();
         let mut reached = Vec::new();
+        self.grid.clearances(states, n, &mut self.clearance);
         for i in 0..n {
             let s = &states[i];
             let spec = &self.world.scenario.robots[i];
             let acc = &mut self.acc[i];
             acc.path_length += (s.position[0] - prev[i][0]).hypot(s.position[1] - prev[i][1]);
             acc.max_speed = acc.max_speed.max(s.velocity[0].hypot(s.velocity[1]));
-            let mut clear = f64::INFINITY;
-            for (j, o) in states.iter().enumerate() {
-                if j != i {
-                    let d = (o.position[0] - s.position[0]).hypot(o.position[1] - s.position[1]);
-                    clear = clear.min(d - o.radius - s.radius);
-                }
-            }
+            let mut clear = self.clearance[i];
             for w in walls {
                 clear = clear.min(crate::metrics::segment_distance(*w, s.position) - s.radius);
             }
@@ -503,6 +515,7 @@ pub fn run(
         opts,
         names,
         agents: vec![Agent::Waiting; n],
+        joined: vec![None; n],
         acc: (0..n)
             .map(|_| RobotAccumulator {
                 min_clearance: f64::INFINITY,
@@ -520,6 +533,8 @@ pub fn run(
         published_ns: 0,
         last_in_ns: 0,
         all: Default::default(),
+        grid: ClearanceGrid::default(),
+        clearance: Vec::with_capacity(n),
         last_pid_check: Instant::now(),
     };
     let mut jitter = DurationHistogram::default();
