@@ -73,7 +73,8 @@ fn make_node(ns: &Namespace, node: &str) -> Result<Node<S>> {
 /// The world side: starts the agents, ticks, measures tick published -> last
 /// reply in.
 pub fn world(args: &WorldArgs) -> Result<i32> {
-    if args.agents == 0 || !(args.rate > 0.0) || !(args.duration > 0.0) {
+    let positive = |x: f64| x.is_finite() && x > 0.0;
+    if args.agents == 0 || !positive(args.rate) || !positive(args.duration) {
         return Err(anyhow!(
             "baseline-world: --agents, --rate and --duration must be positive"
         ));
@@ -251,7 +252,9 @@ fn world_inner(args: &WorldArgs, ns: &Namespace) -> Result<i32> {
 /// whole jiffies), in short sleeps in the last few milliseconds.
 fn wait_until(listener: &iceoryx2::port::listener::Listener<S>, until: Instant) {
     let left = until.saturating_duration_since(Instant::now());
-    if left > Duration::from_millis(9) {
+    // At least a millisecond: a socket timeout below a microsecond reads as
+    // zero, which means "wait forever".
+    if left >= Duration::from_millis(10) {
         let _ = listener.timed_wait(
             |_| {},
             (left - Duration::from_millis(9)).min(Duration::from_millis(20)),

@@ -405,7 +405,8 @@ pub fn main(args: &BenchArgs) -> Result<i32> {
             "--agents: give positive counts, e.g. 8,32,64",
         ));
     }
-    if !(args.rate > 0.0 && args.rate.is_finite()) || !(args.duration > 0.0) {
+    let positive = |x: f64| x.is_finite() && x > 0.0;
+    if !positive(args.rate) || !positive(args.duration) {
         return Err(crate::launch::invalid(
             "--rate and --duration must be positive",
         ));

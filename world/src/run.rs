@@ -470,7 +470,9 @@ const FINE_WAIT: Duration = Duration::from_micros(200);
 /// agents at once); close to it, short precise sleeps.
 fn wait_until(link: &mut dyn WorldTransport, until: Instant) -> Result<(), TransportError> {
     let left = until.saturating_duration_since(Instant::now());
-    if left > COARSE_WAIT {
+    // At least a millisecond: a socket timeout below a microsecond reads as
+    // zero, which means "wait forever".
+    if left >= COARSE_WAIT + Duration::from_millis(1) {
         link.wait((left - COARSE_WAIT).min(Duration::from_millis(20)))
     } else {
         std::thread::sleep(left.min(FINE_WAIT));

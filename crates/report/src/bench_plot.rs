@@ -26,6 +26,9 @@ fn draw_err(path: &Path, e: impl std::fmt::Display) -> RenderError {
     }
 }
 
+/// A panel's y label and the value it plots.
+type Panel = (&'static str, fn(&Point) -> f64);
+
 /// Writes the two panels to `path` (SVG).
 pub fn write(points: &[Point], path: &Path) -> Result<(), RenderError> {
     crate::plot::register_font().map_err(|e| draw_err(path, e))?;
@@ -36,7 +39,7 @@ pub fn write(points: &[Point], path: &Path) -> Result<(), RenderError> {
         }
     }
     let x_max = points.iter().map(|p| p.agents).fold(1.0, f64::max) * 1.05;
-    let panels: [(&str, fn(&Point) -> f64); 2] = [
+    let panels: [Panel; 2] = [
         ("p99 round trip, ms", |p| p.roundtrip_p99_ms),
         ("deadline misses, %", |p| p.miss_pct),
     ];
