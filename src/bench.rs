@@ -199,9 +199,12 @@ impl Progress {
         let _ = err.flush();
     }
 
-    fn finish(&self) {
+    fn finish(&mut self) {
         if self.tty {
+            self.step("done");
             eprintln!();
+        } else {
+            eprintln!("bench: done in {:.0} s", self.start.elapsed().as_secs_f64());
         }
     }
 }
@@ -496,7 +499,6 @@ pub fn main(args: &BenchArgs) -> Result<i32> {
         }
         rows.extend(batch);
     }
-    progress.step("done");
     progress.finish();
 
     let doc = json!({"rows": rows});
