@@ -444,16 +444,7 @@ pub fn main(args: &BenchArgs) -> Result<i32> {
     }
     let applied = crate::sched::apply(&sched).map_err(crate::launch::invalid)?;
 
-    let out = match &args.out {
-        Some(d) => d.clone(),
-        None => {
-            let secs = std::time::SystemTime::now()
-                .duration_since(std::time::UNIX_EPOCH)
-                .map(|d| d.as_secs())
-                .unwrap_or(0);
-            PathBuf::from("runs").join(format!("bench-{secs}"))
-        }
-    };
+    let out = crate::launch::prepare_out(&args.out, "bench")?;
     std::fs::create_dir_all(out.join("runs"))
         .map_err(|e| crate::launch::invalid(format!("output folder {}: {e}", out.display())))?;
     let exe = std::env::current_exe().context("cannot find the mrsim executable")?;

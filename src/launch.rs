@@ -85,7 +85,7 @@ pub fn load(args: &ScenarioArgs) -> Result<Loaded> {
     Ok(loaded)
 }
 
-fn prepare_out(out: &Option<PathBuf>, name: &str) -> Result<PathBuf> {
+pub(crate) fn prepare_out(out: &Option<PathBuf>, name: &str) -> Result<PathBuf> {
     let dir = match out {
         Some(d) => d.clone(),
         None => {
