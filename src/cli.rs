@@ -62,7 +62,26 @@ pub enum Command {
         /// command line); it rejoins and drives its robot from where it is.
         #[arg(long)]
         restart_agents: bool,
+        /// World and agents as processes over iceoryx2 (shm) or as threads
+        /// of one process over crossbeam channels (inproc).
+        #[arg(long, value_enum, default_value = "shm")]
+        transport: crate::launch::Transport,
+        /// Scheduling: --cpus LIST, --rt.
+        #[command(flatten)]
+        sched: crate::sched::SchedArgs,
+        /// Do not draw plot.svg/png and replay.html.
+        #[arg(long, hide = true)]
+        no_report: bool,
     },
+    /// Measure timing under true concurrency: realtime runs of generated
+    /// crossing scenes for each agent count and transport (see BENCHMARKS.md).
+    Bench(crate::bench::BenchArgs),
+    /// Raw iceoryx2 fan-out baseline, world side (started by `bench --baseline`).
+    #[command(hide = true)]
+    BaselineWorld(crate::baseline::WorldArgs),
+    /// Raw iceoryx2 fan-out baseline, agent side (started by `baseline-world`).
+    #[command(hide = true)]
+    BaselineAgent(crate::baseline::AgentArgs),
     /// Start a world by hand; agents join with `mrsim agent --robot NAME --run ID`.
     World {
         /// Scenario and overrides.
@@ -101,6 +120,9 @@ pub enum Command {
         /// For tests of strangers: announce this protocol version.
         #[arg(long, hide = true)]
         protocol_version: Option<u32>,
+        /// Write CPU time and peak RSS here at the end (set by `mrsim run`).
+        #[arg(long, hide = true)]
+        usage_out: Option<PathBuf>,
     },
     /// Watch a running world: a live dashboard of its bodies and agents
     /// (read-only; never slows the world or counts as an agent).
@@ -143,6 +165,9 @@ pub fn main(cli: Cli) -> i32 {
         run: None,
         quiet: false,
         restart_agents: false,
+        transport: crate::launch::Transport::Shm,
+        sched: crate::sched::SchedArgs::default(),
+        no_report: false,
     });
     let result = match command {
         Command::Run {
@@ -150,7 +175,23 @@ pub fn main(cli: Cli) -> i32 {
             run,
             quiet,
             restart_agents,
-        } => crate::launch::run(&scenario, run, quiet, restart_agents),
+            transport,
+            sched,
+            no_report,
+        } => crate::launch::run(
+            &scenario,
+            run,
+            quiet,
+            &crate::launch::RunHow {
+                transport,
+                sched,
+                no_report,
+                restart_agents,
+            },
+        ),
+        Command::Bench(args) => crate::bench::main(&args),
+        Command::BaselineWorld(args) => crate::baseline::world(&args),
+        Command::BaselineAgent(args) => crate::baseline::agent(&args),
         Command::World {
             scenario,
             run,
@@ -164,6 +205,7 @@ pub fn main(cli: Cli) -> i32 {
             impersonate,
             fault,
             protocol_version,
+            usage_out,
         } => crate::launch::agent(
             &robot,
             &run,
@@ -173,6 +215,7 @@ pub fn main(cli: Cli) -> i32 {
                 fault,
                 protocol_version,
             },
+            usage_out.as_deref(),
         ),
         Command::Top { run, timeout } => crate::top::run(&run, timeout),
         Command::Report { dir } => crate::report_cmd::run(&dir),

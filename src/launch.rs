@@ -22,7 +22,7 @@ impl std::fmt::Display for Invalid {
 
 impl std::error::Error for Invalid {}
 
-fn invalid(msg: impl Into<String>) -> anyhow::Error {
+pub(crate) fn invalid(msg: impl Into<String>) -> anyhow::Error {
     anyhow::Error::new(Invalid(msg.into()))
 }
 
@@ -197,9 +197,15 @@ fn signal_name(sig: i32) -> &'static str {
 /// How often `mrsim run --restart-agents` restarts one robot's agent at most.
 pub const MAX_RESTARTS: u32 = 10;
 
-fn spawn_agent(exe: &std::path::Path, robot: &str, run_id: &str) -> Result<Child> {
+fn spawn_agent(
+    exe: &std::path::Path,
+    robot: &str,
+    run_id: &str,
+    usage: &std::path::Path,
+) -> Result<Child> {
     Command::new(exe)
-        .args(["agent", "--robot", robot, "--run", run_id])
+        .args(["agent", "--robot", robot, "--run", run_id, "--usage-out"])
+        .arg(usage)
         .stdin(Stdio::null())
         .spawn()
         .with_context(|| format!("cannot start the agent process for {robot}"))
@@ -220,21 +226,53 @@ fn claim_namespace(ns: &Namespace) -> Result<()> {
     }
 }
 
+/// How `mrsim run` carries the run out, beyond the scenario.
+#[derive(Debug, Clone, Default)]
+pub struct RunHow {
+    /// The transport between world and agents.
+    pub transport: Transport,
+    /// `--cpus`, `--rt`.
+    pub sched: crate::sched::SchedArgs,
+    /// Skip plot.svg/png and replay.html (the bench does not need them).
+    pub no_report: bool,
+    /// Restart an agent process that dies while the world runs.
+    pub restart_agents: bool,
+}
+
+/// The transport between the world and its agents.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Transport {
+    /// iceoryx2 shared memory, one process per agent.
+    #[default]
+    Shm,
+    /// crossbeam channels, one thread per agent in one process.
+    Inproc,
+}
+
+impl Transport {
+    /// The name used on the command line and in metrics.json.
+    pub fn name(self) -> &'static str {
+        match self {
+            Transport::Shm => "shm",
+            Transport::Inproc => "inproc",
+        }
+    }
+}
+
 /// `mrsim run`: the whole run.
-pub fn run(
-    args: &ScenarioArgs,
-    run_id: Option<String>,
-    quiet: bool,
-    restart_agents: bool,
-) -> Result<i32> {
+pub fn run(args: &ScenarioArgs, run_id: Option<String>, quiet: bool, how: &RunHow) -> Result<i32> {
     let loaded = load(args)?;
     let scenario = &loaded.scenario;
     let dir = prepare_out(&args.out, &scenario.name)?;
     let run_id = run_id.unwrap_or_else(Namespace::fresh_run_id);
     let ns = Namespace::new(&run_id).map_err(|e| invalid(e.to_string()))?;
     claim_namespace(&ns)?;
-    let exe = std::env::current_exe().context("cannot find the mrsim executable")?;
+    crate::sched::apply(&how.sched).map_err(invalid)?;
     install_signal_handlers();
+    if how.transport == Transport::Inproc {
+        return run_inproc(scenario, &dir, &run_id, quiet, how);
+    }
+    let exe = std::env::current_exe().context("cannot find the mrsim executable")?;
 
     let mut world_cmd = Command::new(&exe);
     world_cmd.arg("world");
@@ -267,7 +305,10 @@ pub fn run(
 
     let mut agents: Vec<(String, Child)> = Vec::with_capacity(scenario.robots.len());
     for r in &scenario.robots {
-        agents.push((r.name.clone(), spawn_agent(&exe, &r.name, &run_id)?));
+        agents.push((
+            r.name.clone(),
+            spawn_agent(&exe, &r.name, &run_id, &usage_file(&dir, &r.name))?,
+        ));
     }
     let mut restarts = vec![0u32; agents.len()];
 
@@ -294,7 +335,8 @@ pub fn run(
             let Ok(Some(status)) = a.try_wait() else {
                 continue;
             };
-            if !restart_agents || forwarded.is_some() || status.success() || *n >= MAX_RESTARTS {
+            if !how.restart_agents || forwarded.is_some() || status.success() || *n >= MAX_RESTARTS
+            {
                 continue;
             }
             *n += 1;
@@ -304,7 +346,7 @@ pub fn run(
                 describe(status),
                 *n
             );
-            *a = spawn_agent(&exe, name, &run_id)?;
+            *a = spawn_agent(&exe, name, &run_id, &usage_file(&dir, name))?;
         }
         std::thread::sleep(Duration::from_millis(20));
     };
@@ -355,11 +397,84 @@ pub fn run(
     for f in &agent_failures {
         eprintln!("note: {f} (see events.jsonl)");
     }
+    let usage: Vec<_> = scenario
+        .robots
+        .iter()
+        .filter_map(|r| {
+            let f = usage_file(&dir, &r.name);
+            let u = crate::usage::AgentUsage::read(&f);
+            let _ = std::fs::remove_file(&f);
+            u
+        })
+        .collect();
+    write_usage(&dir, "shm", &usage)?;
+    finish(&dir, quiet, how)
+}
+
+fn usage_file(dir: &std::path::Path, robot: &str) -> PathBuf {
+    dir.join(format!(".usage-{robot}.json"))
+}
+
+/// Writes usage.json: what the agents used while the run ticked.
+fn write_usage(
+    dir: &std::path::Path,
+    transport: &str,
+    usage: &[crate::usage::AgentUsage],
+) -> Result<()> {
+    let v = serde_json::json!({
+        "transport": transport,
+        "agents_reported": usage.len(),
+        "agents_cpu_s": usage.iter().map(|u| u.cpu_s).sum::<f64>(),
+        // In-process agents share the world's process: no RSS of their own.
+        "agent_maxrss_kb": (transport == "shm").then(|| usage.iter().map(|u| u.maxrss_kb).max()).flatten(),
+    });
+    std::fs::write(dir.join("usage.json"), format!("{v:#}\n"))
+        .with_context(|| format!("writing {}", dir.join("usage.json").display()))
+}
+
+fn run_inproc(
+    scenario: &mrsim_scenario::Scenario,
+    dir: &std::path::Path,
+    run_id: &str,
+    quiet: bool,
+    how: &RunHow,
+) -> Result<i32> {
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let watch = stop.clone();
+    let done = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let done_w = done.clone();
+    // A signal to the launcher stops the in-process run as SIGTERM stops a
+    // world process.
+    let watcher = std::thread::spawn(move || {
+        while !done_w.load(Ordering::SeqCst) {
+            if SIGNALLED.load(Ordering::SeqCst) != 0 {
+                watch.store(true, Ordering::SeqCst);
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    });
+    let outcome = crate::inproc::run_scenario(scenario, dir, run_id, stop);
+    done.store(true, Ordering::SeqCst);
+    let _ = watcher.join();
+    let outcome = outcome.map_err(|e| anyhow!("{e}"))?;
+    for (r, e) in scenario.robots.iter().zip(&outcome.agent_errors) {
+        if let Some(e) = e {
+            eprintln!("note: agent for {} failed: {e} (see events.jsonl)", r.name);
+        }
+    }
+    write_usage(dir, "inproc", &outcome.agent_usage)?;
+    finish(dir, quiet, how)
+}
+
+/// Reads metrics.json, draws the plots, prints the summary.
+fn finish(dir: &std::path::Path, quiet: bool, how: &RunHow) -> Result<i32> {
     let metrics = std::fs::read_to_string(dir.join("metrics.json"))
         .with_context(|| format!("reading {}", dir.join("metrics.json").display()))?;
     let metrics: serde_json::Value =
         serde_json::from_str(&metrics).context("parsing metrics.json")?;
-    if let Err(e) = mrsim_report::render_all(&dir) {
+    if !how.no_report
+        && let Err(e) = mrsim_report::render_all(dir)
+    {
         eprintln!("warning: cannot draw the run's plots and replay: {e}");
     }
     if !quiet {
@@ -457,7 +572,15 @@ pub struct Misbehave {
 }
 
 /// `mrsim agent`: one robot's agent process.
-pub fn agent(robot: &str, run_id: &str, timeout: f64, bad: Misbehave) -> Result<i32> {
+/// With `usage_out`, it writes what it used (CPU while the run ticked,
+/// peak RSS) there at the end.
+pub fn agent(
+    robot: &str,
+    run_id: &str,
+    timeout: f64,
+    bad: Misbehave,
+    usage_out: Option<&std::path::Path>,
+) -> Result<i32> {
     let ns = Namespace::new(run_id).map_err(|e| invalid(e.to_string()))?;
     let node_name = format!("mrsim-agent-{robot}");
     let mut link = ShmAgent::connect(&ns, &node_name, Duration::from_secs_f64(timeout))
@@ -469,7 +592,17 @@ pub fn agent(robot: &str, run_id: &str, timeout: f64, bad: Misbehave) -> Result<
     if let Some(v) = bad.protocol_version {
         opts.protocol_version = v;
     }
-    match mrsim_agents::run(&mut link, &opts) {
+    let mut metered = crate::usage::Metered::new(&mut link, crate::usage::Scope::Process);
+    let result = mrsim_agents::run(&mut metered, &opts);
+    if let Some(path) = usage_out
+        && let Err(e) = metered.usage().write(path)
+    {
+        eprintln!(
+            "warning: agent {robot}: cannot write {}: {e}",
+            path.display()
+        );
+    }
+    match result {
         Ok(_) => Ok(0),
         Err(e) => Err(anyhow!("agent {robot}: {e}")),
     }

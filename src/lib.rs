@@ -9,11 +9,16 @@
 //! be tested without processes.
 #![warn(missing_docs)]
 
+pub mod baseline;
+pub mod bench;
 pub mod cli;
+pub mod inproc;
 pub mod launch;
 pub mod progress;
 pub mod report_cmd;
+pub mod sched;
 pub mod sweep;
 pub mod table;
 pub mod top;
+pub mod usage;
 pub mod watch;

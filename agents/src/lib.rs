@@ -233,11 +233,17 @@ pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentEx
         }
         Ok(exit)
     };
+    let capacity = scenario.robots.len() + scenario.obstacles.len();
+    let robot_count = scenario.robots.len();
+    // The whole scenario (every robot's spec) is no longer needed: with a
+    // thousand robots it is megabytes per agent.
+    drop(scenario);
+    drop(value);
+    drop(setup);
 
     // Control loop.
     let mut header = SnapshotHeader::default();
-    let mut bodies: Vec<BodyState> =
-        Vec::with_capacity(scenario.robots.len() + scenario.obstacles.len());
+    let mut bodies: Vec<BodyState> = Vec::with_capacity(capacity);
     let mut answered: Option<u64> = None;
     let mut last_heard = Instant::now();
     let mut injector = opts.fault.map(fault::Injector::new);
@@ -287,7 +293,7 @@ pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentEx
         };
         match &injector {
             Some(inj) => {
-                for m in inj.corrupt(msg, scenario.robots.len()) {
+                for m in inj.corrupt(msg, robot_count) {
                     link.send_command(&m)?;
                 }
             }

@@ -191,6 +191,60 @@ pub struct RunMetrics {
     pub transport: String,
     /// True if the run was stopped early by a signal.
     pub interrupted: bool,
+    /// How the run kept time and what the world process used.
+    pub timing: TimingMetrics,
+}
+
+/// metrics.json's `timing`: the run as a real-time system.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct TimingMetrics {
+    /// Wall-clock duration of the tick loop, s.
+    pub wall_s: f64,
+    /// Every robot's snapshot published -> command received, µs.
+    pub latency_us: Percentiles,
+    /// Every robot's snapshot published -> agent awake, µs.
+    pub wake_us: Percentiles,
+    /// Every robot's planner compute time, µs.
+    pub compute_us: Percentiles,
+    /// Realtime: actual tick start (snapshot published) minus scheduled, µs.
+    pub jitter_us: Percentiles,
+    /// Snapshot published -> last command in, on ticks where every live
+    /// agent answered in time, µs.
+    pub allin_us: Percentiles,
+    /// The world's own work per tick (publish, record, apply, physics,
+    /// metrics; not the wait for commands), µs.
+    pub world_tick_us: Percentiles,
+    /// CPU seconds of the world's process during the tick loop (with the
+    /// in-process transport this includes the agent threads).
+    pub process_cpu_s: f64,
+    /// Peak resident set size of the world's process at the end, KiB.
+    pub process_maxrss_kb: u64,
+}
+
+/// CPU seconds (user + system) and peak resident set size (KiB) of this
+/// process so far (getrusage: the same counters as /proc/self/stat's utime +
+/// stime and /proc/self/status's VmHWM).
+pub fn process_usage() -> (f64, u64) {
+    rusage(libc::RUSAGE_SELF)
+}
+
+/// CPU seconds of the calling thread so far, and the process's peak
+/// resident set size (KiB).
+pub fn thread_usage() -> (f64, u64) {
+    rusage(libc::RUSAGE_THREAD)
+}
+
+fn rusage(who: libc::c_int) -> (f64, u64) {
+    // SAFETY: getrusage writes into the struct we own.
+    let mut ru: libc::rusage = unsafe { std::mem::zeroed() };
+    if unsafe { libc::getrusage(who, &mut ru) } != 0 {
+        return (0.0, 0);
+    }
+    let secs = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+    (
+        secs(ru.ru_utime) + secs(ru.ru_stime),
+        ru.ru_maxrss.max(0) as u64,
+    )
 }
 
 /// Distance from `p` to the segment `w`.
@@ -204,4 +258,194 @@ pub fn segment_distance(w: [[f64; 2]; 2], p: [f64; 2]) -> f64 {
         0.0
     };
     (p[0] - a[0] - ab[0] * t).hypot(p[1] - a[1] - ab[1] * t)
+}
+
+/// Each robot's smallest surface distance to any other body, per tick,
+/// through a uniform grid instead of all pairs: bodies are bucketed into
+/// about one cell per body (never smaller than the largest diameter), and
+/// each robot searches rings of cells outwards until no unsearched body can
+/// be nearer. The result is the same number, bit for bit, as the
+/// all-pairs minimum (the same expression, minimised over the same bodies).
+#[derive(Debug, Clone, Default)]
+pub struct ClearanceGrid {
+    start: Vec<u32>,
+    order: Vec<u32>,
+    cell_of: Vec<u32>,
+    fill: Vec<u32>,
+}
+
+impl ClearanceGrid {
+    /// Fills `out[i]` for each of the first `robots` bodies of `states`:
+    /// min over j != i of |p_i - p_j| - r_j - r_i (infinity if alone).
+    pub fn clearances(
+        &mut self,
+        states: &[mrsim_proto::BodyState],
+        robots: usize,
+        out: &mut Vec<f64>,
+    ) {
+        out.clear();
+        out.resize(robots.min(states.len()), f64::INFINITY);
+        let n = states.len();
+        if n < 2 {
+            return;
+        }
+        let (mut lo, mut hi, mut rmax) = ([f64::MAX; 2], [f64::MIN; 2], 0.0f64);
+        for s in states {
+            for k in 0..2 {
+                lo[k] = lo[k].min(s.position[k]);
+                hi[k] = hi[k].max(s.position[k]);
+            }
+            rmax = rmax.max(s.radius);
+        }
+        if !(lo[0].is_finite() && lo[1].is_finite() && hi[0].is_finite() && hi[1].is_finite()) {
+            // Non-finite positions: fall back to all pairs.
+            for (i, o) in out.iter_mut().enumerate() {
+                *o = brute(states, i);
+            }
+            return;
+        }
+        let (w, h) = ((hi[0] - lo[0]).max(1e-9), (hi[1] - lo[1]).max(1e-9));
+        let mut cell = (w * h / n as f64).sqrt().max(2.0 * rmax).max(1e-9);
+        // At most about 4n cells, whatever the shape.
+        while (w / cell + 1.0) * (h / cell + 1.0) > 4.0 * n as f64 + 4.0 {
+            cell *= 1.5;
+        }
+        let nx = (w / cell) as usize + 1;
+        let ny = (h / cell) as usize + 1;
+        let index = |p: [f64; 2]| -> (usize, usize) {
+            (
+                (((p[0] - lo[0]) / cell) as usize).min(nx - 1),
+                (((p[1] - lo[1]) / cell) as usize).min(ny - 1),
+            )
+        };
+        self.start.clear();
+        self.start.resize(nx * ny + 1, 0);
+        self.cell_of.clear();
+        for s in states {
+            let (cx, cy) = index(s.position);
+            let c = cy * nx + cx;
+            self.cell_of.push(c as u32);
+            self.start[c + 1] += 1;
+        }
+        for c in 0..nx * ny {
+            self.start[c + 1] += self.start[c];
+        }
+        self.order.clear();
+        self.order.resize(n, 0);
+        self.fill.clear();
+        self.fill.extend_from_slice(&self.start[..nx * ny]);
+        for (j, &c) in self.cell_of.iter().enumerate() {
+            self.order[self.fill[c as usize] as usize] = j as u32;
+            self.fill[c as usize] += 1;
+        }
+        for (i, o) in out.iter_mut().enumerate() {
+            let s = &states[i];
+            let (cx, cy) = index(s.position);
+            let (cx, cy) = (cx as isize, cy as isize);
+            let mut best = f64::INFINITY;
+            let rings = nx.max(ny) as isize;
+            for ring in 0..=rings {
+                for dy in -ring..=ring {
+                    let y = cy + dy;
+                    if y < 0 || y >= ny as isize {
+                        continue;
+                    }
+                    let step = if dy.abs() == ring { 1 } else { 2 * ring.max(1) };
+                    let mut dx = -ring;
+                    while dx <= ring {
+                        let x = cx + dx;
+                        if x >= 0 && x < nx as isize {
+                            let c = y as usize * nx + x as usize;
+                            for &j in
+                                &self.order[self.start[c] as usize..self.start[c + 1] as usize]
+                            {
+                                let j = j as usize;
+                                if j != i {
+                                    let q = &states[j];
+                                    let d = (q.position[0] - s.position[0])
+                                        .hypot(q.position[1] - s.position[1]);
+                                    best = best.min(d - q.radius - s.radius);
+                                }
+                            }
+                        }
+                        dx += step;
+                    }
+                }
+                // Every body not yet searched is at least ring * cell away.
+                if best <= ring as f64 * cell - s.radius - rmax {
+                    break;
+                }
+            }
+            *o = best;
+        }
+    }
+}
+
+fn brute(states: &[mrsim_proto::BodyState], i: usize) -> f64 {
+    let s = &states[i];
+    let mut clear = f64::INFINITY;
+    for (j, o) in states.iter().enumerate() {
+        if j != i {
+            let d = (o.position[0] - s.position[0]).hypot(o.position[1] - s.position[1]);
+            clear = clear.min(d - o.radius - s.radius);
+        }
+    }
+    clear
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mrsim_proto::BodyState;
+
+    fn scatter(n: usize, seed: u64, spread: f64) -> Vec<BodyState> {
+        let mut x = seed;
+        let mut next = || {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        };
+        (0..n)
+            .map(|_| BodyState {
+                position: [spread * (next() - 0.5), spread * 0.3 * (next() - 0.5)],
+                radius: 0.1 + 0.4 * next(),
+                ..Default::default()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_grid_gives_exactly_the_all_pairs_minimum_clearance() {
+        let mut grid = ClearanceGrid::default();
+        let mut out = Vec::new();
+        for (n, spread) in [
+            (2, 1.0),
+            (17, 5.0),
+            (300, 40.0),
+            (300, 4000.0),
+            (1000, 60.0),
+        ] {
+            let states = scatter(n, n as u64, spread);
+            let robots = n * 3 / 4;
+            grid.clearances(&states, robots, &mut out);
+            assert_eq!(out.len(), robots);
+            for (i, c) in out.iter().enumerate() {
+                assert_eq!(c.to_bits(), brute(&states, i).to_bits(), "n {n} robot {i}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_lone_robot_has_no_clearance_and_stacked_robots_overlap() {
+        let mut grid = ClearanceGrid::default();
+        let mut out = Vec::new();
+        let one = scatter(1, 1, 1.0);
+        grid.clearances(&one, 1, &mut out);
+        assert_eq!(out, vec![f64::INFINITY]);
+        let mut two = scatter(2, 2, 1.0);
+        two[1].position = two[0].position;
+        grid.clearances(&two, 2, &mut out);
+        assert!(out.iter().all(|c| *c < 0.0));
+    }
 }

@@ -9,7 +9,10 @@
 //! tick, is rejected, counted and logged, and never drives a robot.
 
 use crate::live::LiveStats;
-use crate::metrics::{RobotAccumulator, RobotMetrics, RunMetrics};
+use crate::metrics::{
+    ClearanceGrid, DurationHistogram, RobotAccumulator, RobotMetrics, RunMetrics, TimingMetrics,
+    process_usage,
+};
 use crate::physics::{Applied, Contact, Owner, World};
 use crate::record::Recorder;
 use mrsim_proto::{
@@ -120,6 +123,12 @@ struct Loop<'a> {
     late: u64,
     tick: u64,
     published_ns: u64,
+    /// Latest receive time of a command accepted this tick.
+    last_in_ns: u64,
+    /// Every robot's round trip, wake-up and compute, together.
+    all: [DurationHistogram; 3],
+    grid: ClearanceGrid,
+    clearance: Vec<f64>,
     last_pid_check: Instant,
     live: LiveStats,
     clock_start: Option<Instant>,
@@ -306,6 +315,11 @@ impl Loop<'_> {
             .record_ns(cmd.woke_ns.saturating_sub(self.published_ns));
         acc.compute.record_ns(cmd.compute_ns);
         self.got[i] = Some(cmd);
+        self.last_in_ns = self.last_in_ns.max(received_ns);
+        let [lat, wake, compute] = &mut self.all;
+        lat.record_ns(received_ns.saturating_sub(self.published_ns));
+        wake.record_ns(cmd.woke_ns.saturating_sub(self.published_ns));
+        compute.record_ns(cmd.compute_ns);
     }
 
     fn lose(&mut self, i: usize, reason: String) {
@@ -402,19 +416,14 @@ impl Loop<'_> {
         let time = self.time();
         let walls = self.world.walls();
         let mut reached = Vec::new();
+        self.grid.clearances(states, n, &mut self.clearance);
         for i in 0..n {
             let s = &states[i];
             let spec = &self.world.scenario.robots[i];
             let acc = &mut self.acc[i];
             acc.path_length += (s.position[0] - prev[i][0]).hypot(s.position[1] - prev[i][1]);
             acc.max_speed = acc.max_speed.max(s.velocity[0].hypot(s.velocity[1]));
-            let mut clear = f64::INFINITY;
-            for (j, o) in states.iter().enumerate() {
-                if j != i {
-                    let d = (o.position[0] - s.position[0]).hypot(o.position[1] - s.position[1]);
-                    clear = clear.min(d - o.radius - s.radius);
-                }
-            }
+            let mut clear = self.clearance[i];
             for w in walls {
                 clear = clear.min(crate::metrics::segment_distance(*w, s.position) - s.radius);
             }
@@ -496,6 +505,30 @@ impl Loop<'_> {
     }
 }
 
+/// Below this much time left, [`wait_until`] stops relying on the
+/// transport's timed wait: iceoryx2's listener times out through a socket
+/// receive timeout, which the kernel rounds up to whole jiffies (4 ms at
+/// HZ = 250), so a tick would start or close up to two jiffies late.
+const COARSE_WAIT: Duration = Duration::from_millis(9);
+/// Polling step for the last [`COARSE_WAIT`] before a deadline.
+const FINE_WAIT: Duration = Duration::from_micros(200);
+
+/// Waits for a wake-up from an agent or until about `until`, whichever
+/// comes first, without overshooting `until` by more than [`FINE_WAIT`]
+/// (plus scheduling delay): far from it, the transport's wait (woken by
+/// agents at once); close to it, short precise sleeps.
+fn wait_until(link: &mut dyn WorldTransport, until: Instant) -> Result<(), TransportError> {
+    let left = until.saturating_duration_since(Instant::now());
+    // At least a millisecond: a socket timeout below a microsecond reads as
+    // zero, which means "wait forever".
+    if left >= COARSE_WAIT + Duration::from_millis(1) {
+        link.wait((left - COARSE_WAIT).min(Duration::from_millis(20)))
+    } else {
+        std::thread::sleep(left.min(FINE_WAIT));
+        Ok(())
+    }
+}
+
 /// Runs `world` to the end over `link`, writing the outputs into
 /// `opts.out_dir`.
 pub fn run(
@@ -555,10 +588,17 @@ pub fn run(
         late: 0,
         tick: 0,
         published_ns: 0,
+        last_in_ns: 0,
+        all: Default::default(),
+        grid: ClearanceGrid::default(),
+        clearance: Vec::with_capacity(n),
         last_pid_check: Instant::now(),
         live: LiveStats::new(n),
         clock_start: None,
     };
+    let mut jitter = DurationHistogram::default();
+    let mut allin = DurationHistogram::default();
+    let mut tick_cost = DurationHistogram::default();
 
     // Join: every robot's agent must be there before the clock starts.
     let join_start = Instant::now();
@@ -609,6 +649,7 @@ pub fn run(
     let wall_start = Instant::now();
     lp.clock_start = Some(wall_start);
     lp.publish_stats(run_phase::RUNNING, true);
+    let (cpu_start, _) = process_usage();
     let mut contacts = Vec::new();
     let mut prev: Vec<[f64; 2]> = lp.world.states()[..n].iter().map(|s| s.position).collect();
     while !interrupted && lp.tick < max_ticks {
@@ -616,17 +657,23 @@ pub fn run(
             interrupted = true;
             break;
         }
+        let mut scheduled = None;
         if realtime {
-            let scheduled = wall_start + Duration::from_secs_f64(lp.tick as f64 * dt);
-            while Instant::now() < scheduled {
-                let left = scheduled.saturating_duration_since(Instant::now());
-                lp.link.wait(left.min(Duration::from_millis(20)))?;
+            let at = wall_start + Duration::from_secs_f64(lp.tick as f64 * dt);
+            while Instant::now() < at {
+                wait_until(lp.link, at)?;
                 lp.drain(true)?;
             }
+            scheduled = Some(at);
         }
         lp.got.iter_mut().for_each(|g| *g = None);
         lp.garbage.iter_mut().for_each(|g| *g = false);
+        lp.last_in_ns = 0;
         let pub_instant = Instant::now();
+        if let Some(at) = scheduled {
+            // Tick jitter: actual start of the tick minus its scheduled time.
+            jitter.record_ns(pub_instant.saturating_duration_since(at).as_nanos() as u64);
+        }
         lp.published_ns = now_ns();
         let header = SnapshotHeader {
             tick: lp.tick,
@@ -642,6 +689,7 @@ pub fn run(
         };
         lp.link.publish_snapshot(&header, lp.world.states())?;
         lp.rec.tick(lp.tick, lp.time(), lp.world.states());
+        let mut own = pub_instant.elapsed();
 
         // Collect this tick's commands.
         loop {
@@ -671,9 +719,19 @@ pub fn run(
                 }
                 break;
             }
-            lp.link
-                .wait((limit - waited).min(Duration::from_millis(20)))?;
+            if realtime {
+                wait_until(lp.link, pub_instant + limit)?;
+            } else {
+                lp.link
+                    .wait((limit - waited).min(Duration::from_millis(20)))?;
+            }
         }
+        // All in: published -> the last command in, on ticks where every
+        // live agent answered in time.
+        if lp.all_answered() && lp.got.iter().any(Option::is_some) {
+            allin.record_ns(lp.last_in_ns.saturating_sub(lp.published_ns));
+        }
+        let work_start = Instant::now();
 
         // Apply: a valid command, or the policy for a miss, or brake.
         for i in 0..n {
@@ -708,6 +766,8 @@ pub fn run(
         for (p, s) in prev.iter_mut().zip(lp.world.states()) {
             *p = s.position;
         }
+        own += work_start.elapsed();
+        tick_cost.record_ns(own.as_nanos() as u64);
         lp.publish_stats(run_phase::RUNNING, false);
         if lp.done() {
             break;
@@ -718,6 +778,18 @@ pub fn run(
     interrupted |= lp.link.termination_requested();
     lp.rec.tick(lp.tick, lp.time(), lp.world.states());
     let wall = wall_start.elapsed().as_secs_f64();
+    let (cpu_end, maxrss_kb) = process_usage();
+    let timing = TimingMetrics {
+        wall_s: wall,
+        latency_us: lp.all[0].percentiles(),
+        wake_us: lp.all[1].percentiles(),
+        compute_us: lp.all[2].percentiles(),
+        jitter_us: jitter.percentiles(),
+        allin_us: allin.percentiles(),
+        world_tick_us: tick_cost.percentiles(),
+        process_cpu_s: (cpu_end - cpu_start).max(0.0),
+        process_maxrss_kb: maxrss_kb,
+    };
 
     lp.publish_stats(run_phase::FINISHED, true);
     // Tell every agent the run is over (twice, in case one is mid-read).
@@ -786,6 +858,7 @@ pub fn run(
         run_id: lp.opts.run_id.clone(),
         transport: lp.opts.transport.clone(),
         interrupted,
+        timing,
     };
     lp.rec.finish().map_err(out_err("trajectory.csv"))?;
     let text =

@@ -8,6 +8,7 @@
 //! the end of a run and `mrsim report DIR` on a folder.
 #![warn(missing_docs)]
 
+pub mod bench_plot;
 mod palette;
 mod plot;
 mod replay;

@@ -28,7 +28,7 @@ const MAX_NAMED: usize = 16;
 const FONT: &[u8] = include_bytes!("../assets/DejaVuSans-ascii.ttf");
 const FAMILY: &str = "sans-serif";
 
-fn register_font() -> Result<(), String> {
+pub(crate) fn register_font() -> Result<(), String> {
     static DONE: OnceLock<Result<(), String>> = OnceLock::new();
     DONE.get_or_init(|| {
         plotters::style::register_font(FAMILY, FontStyle::Normal, FONT)

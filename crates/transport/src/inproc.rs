@@ -10,7 +10,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 enum ToWorld {
-    Join(JoinRequest),
+    /// A join request and the index of the agent side that sent it.
+    Join(JoinRequest, usize),
     Command(CommandMsg, u64),
 }
 
@@ -25,16 +26,22 @@ pub struct InprocWorld {
     agents: Vec<Sender<ToAgent>>,
     setup: Arc<std::sync::Mutex<Option<Vec<u8>>>>,
     pending: Vec<ToWorld>,
+    /// Which agent side asked with which nonce, so a reply goes to it alone.
+    asked_by: std::collections::HashMap<u64, usize>,
     stop: Arc<AtomicBool>,
     alive: Arc<AtomicBool>,
 }
 
 /// One agent's side of an in-process run.
 pub struct InprocAgent {
+    index: usize,
     tx: Sender<ToWorld>,
     rx: Receiver<ToAgent>,
     setup: Arc<std::sync::Mutex<Option<Vec<u8>>>>,
     replies: Vec<JoinReply>,
+    /// Nonces of this agent's join requests: replies are broadcast to every
+    /// agent, and only those answering one of these are kept.
+    asked: Vec<u64>,
     pending: Option<(SnapshotHeader, Arc<[BodyState]>)>,
     stop: Arc<AtomicBool>,
     world_alive: Arc<AtomicBool>,
@@ -48,14 +55,16 @@ pub fn channels(agents: usize, stop: Arc<AtomicBool>) -> (InprocWorld, Vec<Inpro
     let alive = Arc::new(AtomicBool::new(true));
     let mut senders = Vec::with_capacity(agents);
     let mut sides = Vec::with_capacity(agents);
-    for _ in 0..agents {
+    for index in 0..agents {
         let (atx, arx) = unbounded();
         senders.push(atx);
         sides.push(InprocAgent {
+            index,
             tx: tx.clone(),
             rx: arx,
             setup: setup.clone(),
             replies: Vec::new(),
+            asked: Vec::new(),
             pending: None,
             stop: stop.clone(),
             world_alive: alive.clone(),
@@ -67,6 +76,7 @@ pub fn channels(agents: usize, stop: Arc<AtomicBool>) -> (InprocWorld, Vec<Inpro
             agents: senders,
             setup,
             pending: Vec::new(),
+            asked_by: std::collections::HashMap::new(),
             stop,
             alive,
         },
@@ -139,7 +149,10 @@ impl WorldTransport for InprocWorld {
         let mut rest = Vec::new();
         for m in self.pending.drain(..) {
             match m {
-                ToWorld::Join(j) => f(j),
+                ToWorld::Join(j, from) => {
+                    self.asked_by.insert(j.nonce, from);
+                    f(j)
+                }
                 other => rest.push(other),
             }
         }
@@ -148,8 +161,21 @@ impl WorldTransport for InprocWorld {
     }
 
     fn reply_join(&mut self, reply: &JoinReply) -> Result<(), TransportError> {
-        for a in &self.agents {
-            let _ = a.send(ToAgent::Reply(*reply));
+        match self
+            .asked_by
+            .get(&reply.nonce)
+            .and_then(|&i| self.agents.get(i))
+        {
+            Some(a) => {
+                let _ = a.send(ToAgent::Reply(*reply));
+            }
+            // A nonce nobody asked with: tell everyone (each keeps only
+            // replies to its own requests).
+            None => {
+                for a in &self.agents {
+                    let _ = a.send(ToAgent::Reply(*reply));
+                }
+            }
         }
         Ok(())
     }
@@ -164,7 +190,8 @@ impl InprocAgent {
         for m in first.into_iter().chain(self.rx.try_iter()) {
             match m {
                 ToAgent::Snapshot(h, b) => self.pending = Some((h, b)),
-                ToAgent::Reply(r) => self.replies.push(r),
+                ToAgent::Reply(r) if self.asked.contains(&r.nonce) => self.replies.push(r),
+                ToAgent::Reply(_) => {}
             }
         }
     }
@@ -172,8 +199,11 @@ impl InprocAgent {
 
 impl AgentTransport for InprocAgent {
     fn request_join(&mut self, req: &JoinRequest) -> Result<(), TransportError> {
+        if !self.asked.contains(&req.nonce) {
+            self.asked.push(req.nonce);
+        }
         self.tx
-            .send(ToWorld::Join(*req))
+            .send(ToWorld::Join(*req, self.index))
             .map_err(|_| TransportError::Disconnected)
     }
 

@@ -89,7 +89,9 @@ fn node(cfg: &Config, name: &str) -> Result<Node<S>, TransportError> {
 /// clock themselves.
 fn wait_on(listener: &Listener<S>, timeout: Duration) -> Result<(), TransportError> {
     use iceoryx2::port::listener::ListenerWaitError;
-    match listener.timed_wait(|_| {}, timeout) {
+    // The listener waits through a socket receive timeout of microsecond
+    // resolution, where zero means "forever": never hand it less than 1 µs.
+    match listener.timed_wait(|_| {}, timeout.max(Duration::from_micros(1))) {
         Ok(_) | Err(ListenerWaitError::InterruptSignal) => Ok(()),
         Err(e) => Err(TransportError::Wait(format!("{e:?}"))),
     }

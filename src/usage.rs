@@ -1,0 +1,134 @@
+//! CPU time and peak memory of the run's parts, for `mrsim bench`.
+//!
+//! Each part measures itself with getrusage (the same counters as
+//! /proc/PID/stat's utime + stime and /proc/PID/status's VmHWM, read by
+//! the process itself before it exits, when they are still there). An
+//! agent counts CPU from its first snapshot to the run's end only, so
+//! process start-up (exec, linking, join) is left out, as it is for the
+//! world (`timing.process_cpu_s` in metrics.json).
+
+use mrsim_proto::{BodyState, CommandMsg, JoinReply, JoinRequest, SnapshotHeader};
+use mrsim_transport::{AgentTransport, TransportError};
+use serde_json::json;
+use std::path::Path;
+use std::time::Duration;
+
+/// Which counters: the whole process or the calling thread.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Scope {
+    /// The whole process (an agent process).
+    Process,
+    /// The calling thread (an in-process agent thread).
+    Thread,
+}
+
+/// CPU seconds (user + system) and peak resident set size (KiB; the
+/// process's, whatever the scope) now.
+pub fn rusage(scope: Scope) -> (f64, u64) {
+    match scope {
+        Scope::Process => mrsim_world::metrics::process_usage(),
+        Scope::Thread => mrsim_world::metrics::thread_usage(),
+    }
+}
+
+/// What an agent used while the run ticked.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct AgentUsage {
+    /// CPU seconds from its first snapshot to the last.
+    pub cpu_s: f64,
+    /// Peak resident set size of its process, KiB.
+    pub maxrss_kb: u64,
+}
+
+impl AgentUsage {
+    /// Writes this as a small JSON file (`{"cpu_s", "maxrss_kb"}`).
+    pub fn write(&self, path: &Path) -> std::io::Result<()> {
+        std::fs::write(
+            path,
+            json!({"cpu_s": self.cpu_s, "maxrss_kb": self.maxrss_kb}).to_string(),
+        )
+    }
+
+    /// Reads a file written by [`AgentUsage::write`].
+    pub fn read(path: &Path) -> Option<Self> {
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(path).ok()?).ok()?;
+        Some(Self {
+            cpu_s: v["cpu_s"].as_f64()?,
+            maxrss_kb: v["maxrss_kb"].as_u64()?,
+        })
+    }
+}
+
+/// An agent transport that notes the CPU time at the first snapshot and at
+/// the last one it hands over; everything else is passed through.
+pub struct Metered<'a> {
+    inner: &'a mut dyn AgentTransport,
+    scope: Scope,
+    start: Option<f64>,
+    end: Option<f64>,
+}
+
+impl<'a> Metered<'a> {
+    /// Wraps `inner`.
+    pub fn new(inner: &'a mut dyn AgentTransport, scope: Scope) -> Self {
+        Self {
+            inner,
+            scope,
+            start: None,
+            end: None,
+        }
+    }
+
+    /// What was used between the first and the last snapshot (up to now if
+    /// the run did not finish).
+    pub fn usage(&self) -> AgentUsage {
+        let (now, maxrss_kb) = rusage(self.scope);
+        let cpu_s = match self.start {
+            Some(s) => (self.end.unwrap_or(now) - s).max(0.0),
+            None => 0.0,
+        };
+        AgentUsage { cpu_s, maxrss_kb }
+    }
+}
+
+impl AgentTransport for Metered<'_> {
+    fn request_join(&mut self, req: &JoinRequest) -> Result<(), TransportError> {
+        self.inner.request_join(req)
+    }
+    fn poll_join_reply(&mut self, nonce: u64) -> Result<Option<JoinReply>, TransportError> {
+        self.inner.poll_join_reply(nonce)
+    }
+    fn setup(&mut self) -> Result<Option<Vec<u8>>, TransportError> {
+        self.inner.setup()
+    }
+    fn wait(&mut self, timeout: Duration) -> Result<(), TransportError> {
+        self.inner.wait(timeout)
+    }
+    fn latest_snapshot(
+        &mut self,
+        header: &mut SnapshotHeader,
+        bodies: &mut Vec<BodyState>,
+    ) -> Result<bool, TransportError> {
+        let got = self.inner.latest_snapshot(header, bodies)?;
+        if got {
+            if header.finished != 0 {
+                if self.end.is_none() {
+                    self.end = Some(rusage(self.scope).0);
+                }
+            } else if self.start.is_none() {
+                self.start = Some(rusage(self.scope).0);
+            }
+        }
+        Ok(got)
+    }
+    fn send_command(&mut self, cmd: &CommandMsg) -> Result<(), TransportError> {
+        self.inner.send_command(cmd)
+    }
+    fn world_alive(&mut self) -> bool {
+        self.inner.world_alive()
+    }
+    fn termination_requested(&self) -> bool {
+        self.inner.termination_requested()
+    }
+}

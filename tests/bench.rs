@@ -1,0 +1,127 @@
+//! `mrsim bench` on a tiny run: the output's shape (fields, one row per
+//! combination, csv, plot), never its timing.
+
+mod common;
+use common::*;
+
+#[test]
+fn a_tiny_bench_writes_one_row_per_combination_with_every_field_of_the_issue() {
+    let out = fresh_dir("bench");
+    let o = mrsim()
+        .args([
+            "bench",
+            "--agents",
+            "4,8",
+            "--duration",
+            "1",
+            "--rate",
+            "50",
+            "--transport",
+            "shm,inproc",
+            "--baseline",
+            "--cpus",
+            "0",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .expect("start mrsim");
+    assert_ok(&o);
+    let text = std::fs::read_to_string(out.join("bench.json")).expect("bench.json");
+    let doc: serde_json::Value = serde_json::from_str(&text).expect("bench.json parses");
+    let rows = doc["rows"].as_array().expect("rows");
+    let combos: Vec<(u64, &str)> = rows
+        .iter()
+        .map(|r| {
+            (
+                r["agents"].as_u64().expect("agents"),
+                r["transport"].as_str().expect("transport"),
+            )
+        })
+        .collect();
+    assert_eq!(
+        combos,
+        vec![(4, "shm"), (4, "inproc"), (8, "shm"), (8, "inproc")]
+    );
+    for r in rows {
+        assert_eq!(r["rate_hz"], 50.0);
+        for k in ["p50", "p99", "p999", "max"] {
+            assert!(
+                r["roundtrip_us"][k].as_f64().is_some_and(|x| x > 0.0),
+                "roundtrip_us.{k}: {r:#}"
+            );
+        }
+        // Null only if no tick had every reply in time (a very busy machine).
+        for k in ["p50", "p99"] {
+            for f in ["allin_us", "baseline_allin_us"] {
+                let v = r[f]
+                    .get(k)
+                    .unwrap_or_else(|| panic!("{f}.{k} missing: {r:#}"));
+                assert!(
+                    v.is_null() || v.as_f64().is_some_and(|x| x > 0.0),
+                    "{f}.{k}: {r:#}"
+                );
+            }
+        }
+        let miss = r["miss_rate"].as_f64().expect("miss_rate");
+        assert!((0.0..=1.0).contains(&miss));
+        for k in [
+            "jitter_us_p99",
+            "world_cpu_pct",
+            "agents_cpu_pct",
+            "world_rss_mb",
+        ] {
+            assert!(r[k].as_f64().is_some_and(|x| x >= 0.0), "{k}: {r:#}");
+        }
+        assert!(r["world_rss_mb"].as_f64().unwrap_or(0.0) > 0.0);
+        match r["transport"].as_str() {
+            Some("shm") => assert!(r["agent_rss_mb"].as_f64().is_some_and(|x| x > 0.0), "{r:#}"),
+            _ => assert!(
+                r["agent_rss_mb"].is_null(),
+                "in-process agents have no RSS of their own"
+            ),
+        }
+        assert_eq!(r["cpus"], serde_json::json!([0]));
+    }
+    let csv = std::fs::read_to_string(out.join("bench.csv")).expect("bench.csv");
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(lines.len(), 5, "{csv}");
+    for col in [
+        "agents",
+        "transport",
+        "roundtrip_us_p99",
+        "allin_us_p50",
+        "miss_rate",
+        "baseline_allin_us_p99",
+    ] {
+        assert!(
+            lines[0].split(',').any(|c| c == col),
+            "{col} missing from {}",
+            lines[0]
+        );
+    }
+    let svg = std::fs::read_to_string(out.join("bench.svg")).expect("bench.svg");
+    assert!(
+        svg.contains("<svg") && svg.contains("<polyline"),
+        "two lines drawn"
+    );
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains("transport")
+            && stdout.lines().filter(|l| l.contains("inproc")).count() >= 2,
+        "{stdout}"
+    );
+}
+
+#[test]
+fn a_bench_with_an_unknown_planner_is_refused_before_anything_runs() {
+    let out = fresh_dir("bench-bad");
+    let o = mrsim()
+        .args(["bench", "--agents", "4", "--planner", "nope", "--out"])
+        .arg(&out)
+        .output()
+        .expect("start mrsim");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("nope"));
+    assert!(!out.join("bench.json").exists());
+}
