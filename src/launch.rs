@@ -185,12 +185,16 @@ pub fn run(args: &ScenarioArgs, run_id: Option<String>, quiet: bool) -> Result<i
             ModeArg::Realtime => "realtime",
         });
     }
+    // Hundreds of agent processes starting on two cores take a while to
+    // join: the world and each agent wait a minute plus half a second per
+    // robot.
+    let join_secs = format!("{}", 60.0 + 0.5 * scenario.robots.len() as f64);
     world_cmd
         .args([
             "--run",
             &run_id,
             "--start-timeout",
-            "60",
+            &join_secs,
             "--launched",
             "--out",
         ])
@@ -204,6 +208,7 @@ pub fn run(args: &ScenarioArgs, run_id: Option<String>, quiet: bool) -> Result<i
     for r in &scenario.robots {
         let child = Command::new(&exe)
             .args(["agent", "--robot", &r.name, "--run", &run_id])
+            .args(["--timeout", &join_secs])
             .stdin(Stdio::null())
             .spawn()
             .with_context(|| format!("cannot start the agent process for {}", r.name))?;

@@ -164,8 +164,16 @@ impl Loop<'_> {
                     refuse(format!("robot `{name}` is already driven by process {pid}"))
                 }
                 previous => {
+                    // The same request asked again (its reply was slow to
+                    // come, e.g. hundreds of agents joining on two cores)
+                    // gets the same token: a per-world secret, not the
+                    // clock, keeps tokens unguessable.
+                    static SECRET: std::sync::OnceLock<u64> = std::sync::OnceLock::new();
+                    let secret = *SECRET.get_or_init(|| splitmix(now_ns()));
                     let token =
-                        splitmix(now_ns() ^ ((req.pid as u64) << 32) ^ i as u64 ^ req.nonce) | 1;
+                        splitmix(secret ^ ((req.pid as u64) << 32) ^ i as u64 ^ req.nonce) | 1;
+                    let repeated = matches!(previous, Agent::Live { pid, token: t }
+                        if pid == req.pid && t == token);
                     self.agents[i] = Agent::Live {
                         pid: req.pid,
                         token,
@@ -173,7 +181,9 @@ impl Loop<'_> {
                     self.acc[i].agent_pid = Some(req.pid);
                     let flags = self.world.states()[i].flags & !flags::LOST;
                     self.world.set_flags(i, flags);
-                    if matches!(previous, Agent::Lost { .. }) {
+                    if repeated {
+                        // Already joined: answer again, nothing new to log.
+                    } else if matches!(previous, Agent::Lost { .. }) {
                         self.event(
                             json!({"type": "agent_rejoined", "robot": name, "pid": req.pid}),
                         );

@@ -71,7 +71,14 @@
 //! `setAgentDefaults(15, 10, 10, 10, 1.5, 2)`, radius and max speed being the
 //! robot's own): `neighbor_dist` = 15, `max_neighbors` = 10, `time_horizon` =
 //! 10, `time_horizon_obst` = 10, `pref_speed` = 1; `perturb` = 0 (off),
-//! `seed` = 0.
+//! `seed` = 0, `radius_margin` = 0.
+//!
+//! ORCA's guarantee holds only while every program is feasible and every
+//! pair sees each other: in a dense crowd (RVO2's Circle, with
+//! `max_neighbors` = 10) the 3-D fallback lets discs overlap a little, in
+//! RVO2 as here (RVO2's own Circle of 250: overlaps up to 0.91 of a 3.0
+//! combined radius). `radius_margin` pads every disc when planning, the
+//! safety buffer RVO2's users add; the e2e Circle of 32 uses it.
 
 use crate::{
     BodyKind, Command, Diagnostic, Observation, ParamError, ParamReader, Params, Planner, Segment,
@@ -309,6 +316,10 @@ pub struct Orca {
     pub perturb: f64,
     /// Seed of the perturbation.
     pub seed: u64,
+    /// Padding added to every disc's radius when planning (the robot's
+    /// own and each other robot's; walls are padded once): RVO2's users'
+    /// safety buffer. 0 = RVO2 exactly.
+    pub radius_margin: f64,
     // Scratch space, reused across ticks (no effect on the result).
     obstacles: ObstacleSet,
     chains: Vec<WallChain>,
@@ -344,6 +355,7 @@ impl Orca {
             pref_speed,
             perturb: 0.0,
             seed: 0,
+            radius_margin: 0.0,
             obstacles: ObstacleSet::default(),
             chains: Vec::new(),
             chains_of: Vec::new(),
@@ -357,8 +369,8 @@ impl Orca {
     }
 
     /// Reads `neighbor_dist`, `max_neighbors`, `time_horizon`,
-    /// `time_horizon_obst`, `pref_speed`, `perturb` and `seed` from a
-    /// robot's params.
+    /// `time_horizon_obst`, `pref_speed`, `perturb`, `seed` and
+    /// `radius_margin` from a robot's params.
     pub fn from_params(params: &Params) -> Result<Self, ParamError> {
         let mut r = ParamReader::new("orca", params);
         let neighbor_dist = r.non_negative("neighbor_dist", 15.0)?;
@@ -368,10 +380,12 @@ impl Orca {
         let pref_speed = r.non_negative("pref_speed", 1.0)?;
         let perturb = r.non_negative("perturb", 0.0)?;
         let seed = r.count("seed", 0, 0)? as u64;
+        let radius_margin = r.non_negative("radius_margin", 0.0)?;
         r.finish()?;
         Ok(Self {
             perturb,
             seed,
+            radius_margin,
             ..Self::new(
                 neighbor_dist,
                 max_neighbors,
@@ -672,11 +686,12 @@ impl Orca {
         inv_tau: f64,
         dt: f64,
         share: f64,
+        margin: f64,
     ) -> Line {
         let rel_pos = other.position - position;
         let rel_vel = velocity - other.velocity;
         let dist_sq = rel_pos.norm_squared();
-        let combined = radius + other.radius;
+        let combined = radius + other.radius + margin;
         let combined_sq = combined * combined;
         let (direction, u);
         if dist_sq > combined_sq {
@@ -890,8 +905,9 @@ impl Planner for Orca {
         }
         self.obstacles.clear();
         self.obstacles.push_chains(&self.chains, me.position);
-        self.select_obstacle_neighbors(me.position, me.radius, me.max_speed);
-        self.push_obstacle_lines(me.position, me.velocity, me.radius);
+        let radius = me.radius + self.radius_margin;
+        self.select_obstacle_neighbors(me.position, radius, me.max_speed);
+        self.push_obstacle_lines(me.position, me.velocity, radius);
         let num_obst_lines = self.lines.len();
 
         // Then the other bodies, nearest first.
@@ -907,11 +923,12 @@ impl Planner for Orca {
             self.lines.push(Self::body_line(
                 me.position,
                 me.velocity,
-                me.radius,
+                radius,
                 other,
                 inv_tau,
                 dt,
                 share,
+                self.radius_margin,
             ));
         }
 
