@@ -186,9 +186,9 @@ pub fn run(args: &ScenarioArgs, run_id: Option<String>, quiet: bool) -> Result<i
         });
     }
     // Hundreds of agent processes starting on two cores take a while to
-    // join: the world and each agent wait a minute plus half a second per
+    // join: the world and each agent wait a minute plus a second per
     // robot.
-    let join_secs = format!("{}", 60.0 + 0.5 * scenario.robots.len() as f64);
+    let join_secs = format!("{}", 60.0 + scenario.robots.len() as f64);
     world_cmd
         .args([
             "--run",
