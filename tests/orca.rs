@@ -33,7 +33,10 @@ fn orca_circle_of_32_in_lockstep_brings_every_robot_home_without_a_collision() {
     for spec in scen["robots"].as_array().expect("robots") {
         let name = spec["name"].as_str().expect("name");
         let goal = &spec["goal"];
-        let (gx, gy) = (goal[0].as_f64().unwrap_or(f64::NAN), goal[1].as_f64().unwrap_or(f64::NAN));
+        let (gx, gy) = (
+            goal[0].as_f64().unwrap_or(f64::NAN),
+            goal[1].as_f64().unwrap_or(f64::NAN),
+        );
         let end = track(&rows, name)
             .into_iter()
             .find(|r| r.tick == last)
@@ -70,7 +73,10 @@ fn dwa_and_social_force_robots_cross_through_the_world_without_a_collision() {
         assert_eq!(m["success_rate"], 1.0, "{planner}: {m:#}");
         assert_eq!(m["collisions_total"], 0, "{planner}: {m:#}");
         for r in m["robots"].as_object().expect("robots").values() {
-            assert!(r["min_clearance"].as_f64().unwrap_or(-1.0) > 0.0, "{planner}: {m:#}");
+            assert!(
+                r["min_clearance"].as_f64().unwrap_or(-1.0) > 0.0,
+                "{planner}: {m:#}"
+            );
         }
         assert_clean(&id);
     }

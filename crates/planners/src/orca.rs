@@ -18,8 +18,8 @@
 //!    an arena) when inside; an open chain p0..pk is the degenerate polygon
 //!    p0..pk..p1, of which a lone segment is RVO2's two-vertex obstacle (two
 //!    directed edges, both ends convex). Each directed edge is seen only
-//!    from its right-hand side. The edges within `time_horizon_obst * v_max
-//!    + r` of p, nearest first, each add one half-plane of admissible
+//!    from its right-hand side. The edges within `r + time_horizon_obst *
+//!    v_max` of p, nearest first, each add one half-plane of admissible
 //!    velocities: the velocity obstacle of the edge truncated at
 //!    `time_horizon_obst`, with the full responsibility (obstacles do not
 //!    move).
@@ -677,7 +677,8 @@ impl Orca {
     }
 
     /// The ORCA half-plane of another body (section 4 of the paper), with
-    /// `share` of the avoidance taken by this robot.
+    /// `share` of the avoidance taken by this robot; `radius` is its own
+    /// radius plus any padding of both discs.
     fn body_line(
         position: Vec2,
         velocity: Vec2,
@@ -686,12 +687,11 @@ impl Orca {
         inv_tau: f64,
         dt: f64,
         share: f64,
-        margin: f64,
     ) -> Line {
         let rel_pos = other.position - position;
         let rel_vel = velocity - other.velocity;
         let dist_sq = rel_pos.norm_squared();
-        let combined = radius + other.radius + margin;
+        let combined = radius + other.radius;
         let combined_sq = combined * combined;
         let (direction, u);
         if dist_sq > combined_sq {
@@ -923,12 +923,12 @@ impl Planner for Orca {
             self.lines.push(Self::body_line(
                 me.position,
                 me.velocity,
-                radius,
+                // Both discs padded.
+                radius + self.radius_margin,
                 other,
                 inv_tau,
                 dt,
                 share,
-                self.radius_margin,
             ));
         }
 
@@ -1277,8 +1277,8 @@ mod tests {
     fn a_square_drawn_as_four_walls_in_any_order_is_rvo2s_polygon() {
         // RVO2's Blocks obstacle 2, counter-clockwise, and the same square as
         // four walls, shuffled and some reversed.
-        let polygon = [(10.0, 40.0), (10.0, 10.0), (40.0, 10.0), (40.0, 40.0)]
-            .map(|(x, y)| Vec2::new(x, y));
+        let polygon =
+            [(10.0, 40.0), (10.0, 10.0), (40.0, 10.0), (40.0, 40.0)].map(|(x, y)| Vec2::new(x, y));
         let walls = [
             seg((40.0, 10.0), (40.0, 40.0)),
             seg((10.0, 10.0), (10.0, 40.0)),

@@ -186,7 +186,10 @@ fn jitter_moves_each_start_by_at_most_its_value_reproducibly_and_keeps_goals() {
         .iter()
         .zip(&exact.robots)
         .fold([0.0, 0.0], |m, (j, e)| {
-            [m[0] + j.start[0] - e.start[0], m[1] + j.start[1] - e.start[1]]
+            [
+                m[0] + j.start[0] - e.start[0],
+                m[1] + j.start[1] - e.start[1],
+            ]
         });
     assert!(mean[0].hypot(mean[1]) / 16.0 < 0.05);
     no_overlap(&jittered.robots);
