@@ -1200,15 +1200,20 @@ mod tests {
         assert!((v - w).norm() < 1e-12, "{v:?} {w:?}");
     }
 
-    /// Runs one ORCA robot of radius 0.5 from the origin to `goal` past
-    /// `wall`; returns the smallest gap to the wall, the tick it came
-    /// within 0.1 of the goal, and where it ended.
-    fn past_wall(wall: Segment, goal: Vec2, ticks: u64) -> (f64, Option<u64>, Vec2) {
+    /// Runs one ORCA robot of radius 0.5 from `start` to `goal` past
+    /// `walls`; returns the smallest gap to a wall, the tick it came within
+    /// 0.1 of the goal, and where it ended.
+    fn past_walls(
+        walls: &[Segment],
+        start: Vec2,
+        goal: Vec2,
+        ticks: u64,
+    ) -> (f64, Option<u64>, Vec2) {
         let mut sim = Sim::new(0.25, 1);
-        sim.walls.push(wall);
+        sim.walls.extend_from_slice(walls);
         sim.add_robot(
             Box::new(Orca::default()),
-            Vec2::zeros(),
+            start,
             goal,
             0.5,
             1.0,
@@ -1220,7 +1225,9 @@ mod tests {
         for tick in 1..=ticks {
             sim.step();
             let p = sim.robots[0].state.position;
-            min_gap = min_gap.min((p - wall.closest_point(p)).norm() - 0.5);
+            for w in walls {
+                min_gap = min_gap.min((p - w.closest_point(p)).norm() - 0.5);
+            }
             if (p - goal).norm() < 0.1 {
                 return (min_gap, Some(tick), p);
             }
@@ -1234,7 +1241,7 @@ mod tests {
             a: Vec2::new(5.0, -1.0),
             b: Vec2::new(5.0, 3.0),
         };
-        let (min_gap, reached, end) = past_wall(wall, Vec2::new(10.0, 6.0), 400);
+        let (min_gap, reached, end) = past_walls(&[wall], Vec2::zeros(), Vec2::new(10.0, 6.0), 400);
         assert!(min_gap >= -TOUCH, "touched the wall: gap {min_gap}");
         assert!(reached.is_some(), "stuck at {end:?}");
     }
@@ -1248,7 +1255,7 @@ mod tests {
             a: Vec2::new(5.0, -1.0),
             b: Vec2::new(5.0, 3.0),
         };
-        let (min_gap, reached, end) = past_wall(wall, Vec2::new(10.0, 0.0), 400);
+        let (min_gap, reached, end) = past_walls(&[wall], Vec2::zeros(), Vec2::new(10.0, 0.0), 400);
         assert!(reached.is_none());
         assert!(min_gap >= -TOUCH, "touched the wall: gap {min_gap}");
         assert!(end.y.abs() < 1e-9 && end.x > 4.0, "{end:?}");
@@ -1377,34 +1384,10 @@ mod tests {
             seg((0.0, -1.0), (0.0, 3.0)),
             seg((3.0, 3.0), (0.0, 3.0)),
         ];
-        let mut sim = Sim::new(0.25, 1);
-        sim.walls.extend_from_slice(&walls);
         let goal = Vec2::new(7.0, 6.0);
-        sim.add_robot(
-            Box::new(Orca::default()),
-            Vec2::new(-7.0, -6.0),
-            goal,
-            0.5,
-            1.0,
-            0.0,
-            2.0,
-            1e9,
-        );
-        let mut min_gap = f64::INFINITY;
-        let mut reached = false;
-        for _ in 0..400 {
-            sim.step();
-            let p = sim.robots[0].state.position;
-            for w in &walls {
-                min_gap = min_gap.min((p - w.closest_point(p)).norm() - 0.5);
-            }
-            if (p - goal).norm() < 0.1 {
-                reached = true;
-                break;
-            }
-        }
+        let (min_gap, reached, end) = past_walls(&walls, Vec2::new(-7.0, -6.0), goal, 400);
         assert!(min_gap >= -TOUCH, "touched a wall: gap {min_gap}");
-        assert!(reached, "stuck at {:?}", sim.robots[0].state.position);
+        assert!(reached.is_some(), "stuck at {end:?}");
     }
 
     #[test]
