@@ -202,10 +202,12 @@ fn spawn_agent(
     robot: &str,
     run_id: &str,
     usage: &std::path::Path,
+    join_secs: &str,
 ) -> Result<Child> {
     Command::new(exe)
         .args(["agent", "--robot", robot, "--run", run_id, "--usage-out"])
         .arg(usage)
+        .args(["--timeout", join_secs])
         .stdin(Stdio::null())
         .spawn()
         .with_context(|| format!("cannot start the agent process for {robot}"))
@@ -288,12 +290,16 @@ pub fn run(args: &ScenarioArgs, run_id: Option<String>, quiet: bool, how: &RunHo
             ModeArg::Realtime => "realtime",
         });
     }
+    // Hundreds of agent processes starting on two cores take a while to
+    // join: the world and each agent wait a minute plus a second per
+    // robot.
+    let join_secs = format!("{}", 60.0 + scenario.robots.len() as f64);
     world_cmd
         .args([
             "--run",
             &run_id,
             "--start-timeout",
-            "60",
+            &join_secs,
             "--launched",
             "--out",
         ])
@@ -307,7 +313,13 @@ pub fn run(args: &ScenarioArgs, run_id: Option<String>, quiet: bool, how: &RunHo
     for r in &scenario.robots {
         agents.push((
             r.name.clone(),
-            spawn_agent(&exe, &r.name, &run_id, &usage_file(&dir, &r.name))?,
+            spawn_agent(
+                &exe,
+                &r.name,
+                &run_id,
+                &usage_file(&dir, &r.name),
+                &join_secs,
+            )?,
         ));
     }
     let mut restarts = vec![0u32; agents.len()];
@@ -346,7 +358,7 @@ pub fn run(args: &ScenarioArgs, run_id: Option<String>, quiet: bool, how: &RunHo
                 describe(status),
                 *n
             );
-            *a = spawn_agent(&exe, name, &run_id, &usage_file(&dir, name))?;
+            *a = spawn_agent(&exe, name, &run_id, &usage_file(&dir, name), &join_secs)?;
         }
         std::thread::sleep(Duration::from_millis(20));
     };

@@ -189,6 +189,17 @@ impl Loop<'_> {
                 // agent would never see.
                 Agent::Live { pid, token } if pid == req.pid => accept(i, token),
                 previous => {
+                    // A new process for a robot whose agent died before the
+                    // periodic liveness check noticed: record the loss first,
+                    // so the events read lost, then rejoined.
+                    let previous = match previous {
+                        Agent::Live { pid, .. } => {
+                            self.lose(i, format!("agent process {pid} died"));
+                            self.link.cleanup_dead();
+                            self.agents[i]
+                        }
+                        other => other,
+                    };
                     let token =
                         splitmix(now_ns() ^ ((req.pid as u64) << 32) ^ i as u64 ^ req.nonce) | 1;
                     self.agents[i] = Agent::Live {

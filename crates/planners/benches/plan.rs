@@ -165,5 +165,59 @@ fn bench_designated_path(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench, bench_designated_path, zhu_loh);
+/// `orca` as one agent of RVO2's Circle of 250 sees it: 249 other discs of
+/// radius 1.5 on a jittered grid 4 apart (13 within `neighbor_dist` 15, 10
+/// used), all moving; compare with RVO2's `doStep` / 250 (BENCHMARKS.md).
+fn bench_orca_crowd(c: &mut Criterion) {
+    let others: Vec<Sensed> = (0..250)
+        .filter(|&k| k != 125)
+        .map(|k| {
+            let (i, j) = ((k % 25) as f64 - 12.0, (k / 25) as f64 - 5.0);
+            let wobble = (k as f64 * 1.7).sin();
+            Sensed {
+                id: k as u32,
+                kind: BodyKind::Robot,
+                position: Vec2::new(i * 4.0 + 0.3 * wobble, j * 4.0 - 0.2 * wobble),
+                velocity: Vec2::new((k as f64).cos(), (k as f64 * 0.3).sin()),
+                acceleration: Vec2::zeros(),
+                radius: 1.5,
+            }
+        })
+        .collect();
+    let obs = Observation {
+        tick: 10,
+        time: 2.5,
+        dt: 0.25,
+        me: SelfState {
+            id: 125,
+            position: Vec2::new(0.1, 0.05),
+            velocity: Vec2::new(0.9, 0.2),
+            radius: 1.5,
+            mass: 1.0,
+            damping: 0.0,
+            max_speed: 2.0,
+            max_accel: 1e9,
+        },
+        goal: Vec2::new(200.0, 0.0),
+        goal_tolerance: 1.5,
+        others: &others,
+        walls: &[],
+        path: None,
+    };
+    let mut g = c.benchmark_group("orca_circle_250");
+    if let Ok(mut p) = build("orca", &Params::new()) {
+        g.bench_function("one_agent_249_others", |b| {
+            b.iter(|| p.plan(std::hint::black_box(&obs)))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(
+    benches,
+    bench,
+    bench_designated_path,
+    zhu_loh,
+    bench_orca_crowd
+);
 criterion_main!(benches);

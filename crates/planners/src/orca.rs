@@ -9,15 +9,20 @@
 //! r and speed limit v_max:
 //!
 //! 1. **Static obstacles** (section 5.2 of the paper; RVO2's obstacle lines).
-//!    Every wall segment is an RVO2 obstacle of two vertices (both ends,
-//!    both convex), i.e. two directed edges a->b and b->a, each seen only
-//!    from its right-hand side. The edges within `time_horizon_obst * v_max
-//!    + r` of p, nearest first, each add one half-plane of admissible
+//!    RVO2's obstacles are polygons whose vertices know their neighbours
+//!    (a vertex's convexity, and the "foreign" leg along the next edge);
+//!    the scenario's walls are segments. The segments are joined where they
+//!    share an endpoint ([`WallChain::join`]): a closed chain (a square drawn
+//!    as four walls) is RVO2's polygon, counter-clockwise when the robot is
+//!    outside it and clockwise (RVO2's "negative" obstacle, the boundary of
+//!    an arena) when inside; an open chain p0..pk is the degenerate polygon
+//!    p0..pk..p1, of which a lone segment is RVO2's two-vertex obstacle (two
+//!    directed edges, both ends convex). Each directed edge is seen only
+//!    from its right-hand side. The edges within `r + time_horizon_obst *
+//!    v_max` of p, nearest first, each add one half-plane of admissible
 //!    velocities: the velocity obstacle of the edge truncated at
 //!    `time_horizon_obst`, with the full responsibility (obstacles do not
-//!    move). [`ObstacleSet::push_polygon`] also takes closed
-//!    counter-clockwise polygons with non-convex vertices exactly as RVO2's
-//!    `addObstacle`, for when the observation carries polygons.
+//!    move).
 //! 2. **Other bodies** (section 4, eqs (5)-(6) of the paper). The
 //!    `max_neighbors` nearest bodies whose centres are closer than
 //!    `neighbor_dist` each give the half-plane ORCA_A|B = {v' : (v' - (v +
@@ -44,7 +49,12 @@
 //! The preferred velocity points at the goal with length `pref_speed`, and is
 //! the goal vector itself once the goal is nearer than `pref_speed` (RVO2's
 //! Circle example normalises the goal vector when it is longer than 1 with
-//! `pref_speed` = 1; we read "1" as `pref_speed`). The command is a
+//! `pref_speed` = 1; we read "1" as `pref_speed`). With `perturb` > 0 a
+//! vector of length uniform in [0, `perturb`) in a uniform direction is
+//! added to it every tick, as RVO2's Blocks example does ("to avoid
+//! deadlocks due to perfect symmetry", with 0.0001 and C's `rand()`); ours
+//! is drawn from a hash of (`seed`, robot id, tick), so a run stays
+//! reproducible and the planner pure. The command is a
 //! [`Command::Velocity`]: RVO2 sets the velocity exactly, which the world
 //! reproduces with `velocity_lag = 0` and a large `max_accel`.
 //!
@@ -60,7 +70,15 @@
 //! Parameters (RVO2's names; defaults from RVO2's Circle example,
 //! `setAgentDefaults(15, 10, 10, 10, 1.5, 2)`, radius and max speed being the
 //! robot's own): `neighbor_dist` = 15, `max_neighbors` = 10, `time_horizon` =
-//! 10, `time_horizon_obst` = 10, `pref_speed` = 1.
+//! 10, `time_horizon_obst` = 10, `pref_speed` = 1; `perturb` = 0 (off),
+//! `seed` = 0, `radius_margin` = 0.
+//!
+//! ORCA's guarantee holds only while every program is feasible and every
+//! pair sees each other: in a dense crowd (RVO2's Circle, with
+//! `max_neighbors` = 10) the 3-D fallback lets discs overlap a little, in
+//! RVO2 as here (RVO2's own Circle of 250: overlaps up to 0.91 of a 3.0
+//! combined radius). `radius_margin` pads every disc when planning, the
+//! safety buffer RVO2's users add; the e2e Circle of 32 uses it.
 
 use crate::{
     BodyKind, Command, Diagnostic, Observation, ParamError, ParamReader, Params, Planner, Segment,
@@ -154,11 +172,129 @@ impl ObstacleSet {
         }
     }
 
-    /// Adds every wall segment as a two-vertex obstacle.
-    pub fn push_walls(&mut self, walls: &[Segment]) {
-        for w in walls {
-            self.push_polygon(&[w.a, w.b]);
+    /// Adds wall chains as RVO2 obstacles seen from `position`: a closed
+    /// chain is a polygon, counter-clockwise (an obstacle) when `position`
+    /// is outside it and clockwise (RVO2's "negative" obstacle, a boundary)
+    /// when inside; an open chain p0..pk is the degenerate polygon
+    /// p0..pk..p1 that goes there and back, of which a lone segment is
+    /// RVO2's two-vertex obstacle.
+    pub fn push_chains(&mut self, chains: &[WallChain], position: Vec2) {
+        let mut points = Vec::new();
+        for c in chains {
+            points.clear();
+            points.extend_from_slice(&c.points);
+            if c.closed {
+                let ccw = signed_area(&points) > 0.0;
+                if ccw == contains(&points, position) {
+                    points.reverse();
+                }
+            } else if points.len() > 2 {
+                let back: Vec<Vec2> = points[1..points.len() - 1].iter().rev().copied().collect();
+                points.extend(back);
+            }
+            self.push_polygon(&points);
         }
+    }
+
+    /// Adds wall segments, joined into chains where they share endpoints
+    /// (see [`WallChain::join`]), as seen from `position`.
+    pub fn push_walls(&mut self, walls: &[Segment], position: Vec2) {
+        self.push_chains(&WallChain::join(walls), position);
+    }
+}
+
+/// Twice the signed area of a polygon (positive when counter-clockwise).
+fn signed_area(points: &[Vec2]) -> f64 {
+    let n = points.len();
+    (0..n).map(|i| det(points[i], points[(i + 1) % n])).sum()
+}
+
+/// Is `p` inside the polygon (even-odd rule)?
+fn contains(points: &[Vec2], p: Vec2) -> bool {
+    let n = points.len();
+    let mut inside = false;
+    for i in 0..n {
+        let (a, b) = (points[i], points[(i + 1) % n]);
+        if (a.y > p.y) != (b.y > p.y) && p.x < a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x) {
+            inside = !inside;
+        }
+    }
+    inside
+}
+
+/// Wall segments joined end to end: the scenario's walls are segments, RVO2's
+/// obstacles are polygons whose vertices know their neighbours (convexity,
+/// the "foreign" legs along the next edge). Segments that share an endpoint
+/// (within 1e-9 of the coordinates' scale) with exactly one other segment
+/// are joined there; an endpoint shared by three or more ends a chain for
+/// each of them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WallChain {
+    /// The chain's points in order (a closed chain does not repeat its
+    /// first point).
+    pub points: Vec<Vec2>,
+    /// Does the last point join the first?
+    pub closed: bool,
+}
+
+impl WallChain {
+    /// Joins `walls` into chains (zero-length segments are dropped).
+    pub fn join(walls: &[Segment]) -> Vec<WallChain> {
+        let segs: Vec<[Vec2; 2]> = walls
+            .iter()
+            .filter(|w| (w.b - w.a).norm() > f64::EPSILON)
+            .map(|w| [w.a, w.b])
+            .collect();
+        let same = |p: Vec2, q: Vec2| (p - q).norm() <= 1e-9 * (1.0 + p.norm().max(q.norm()));
+        // partner[2 s + e]: the only other segment end at end e of segment s.
+        let ends = segs.len() * 2;
+        let mut partner = vec![None; ends];
+        for a in 0..ends {
+            let pa = segs[a / 2][a % 2];
+            let mut found = None;
+            let mut count = 0;
+            for b in 0..ends {
+                if b != a && same(pa, segs[b / 2][b % 2]) {
+                    count += 1;
+                    found = Some(b);
+                }
+            }
+            if count == 1 {
+                partner[a] = found;
+            }
+        }
+        let mut used = vec![false; segs.len()];
+        let mut chains = Vec::new();
+        for first in 0..segs.len() {
+            if used[first] {
+                continue;
+            }
+            // Walk backwards to the chain's start: `enter` is the end by
+            // which the walk enters segment `s`.
+            let (mut s, mut enter) = (first, 0);
+            for _ in 0..segs.len() {
+                match partner[2 * s + enter] {
+                    Some(b) if b / 2 != first => (s, enter) = (b / 2, 1 - b % 2),
+                    _ => break,
+                }
+            }
+            let (start, mut points, mut closed) = (s, vec![segs[s][enter]], false);
+            loop {
+                used[s] = true;
+                points.push(segs[s][1 - enter]);
+                match partner[2 * s + 1 - enter] {
+                    Some(b) if b / 2 == start => {
+                        closed = true;
+                        points.pop();
+                        break;
+                    }
+                    Some(b) if !used[b / 2] => (s, enter) = (b / 2, b % 2),
+                    _ => break,
+                }
+            }
+            chains.push(WallChain { points, closed });
+        }
+        chains
     }
 }
 
@@ -175,8 +311,19 @@ pub struct Orca {
     pub time_horizon_obst: f64,
     /// Length of the preferred velocity (towards the goal).
     pub pref_speed: f64,
+    /// Largest random perturbation added to the preferred velocity each
+    /// tick (RVO2's Blocks example: 0.0001); 0 = none.
+    pub perturb: f64,
+    /// Seed of the perturbation.
+    pub seed: u64,
+    /// Padding added to every disc's radius when planning (the robot's
+    /// own and each other robot's; walls are padded once): RVO2's users'
+    /// safety buffer. 0 = RVO2 exactly.
+    pub radius_margin: f64,
     // Scratch space, reused across ticks (no effect on the result).
     obstacles: ObstacleSet,
+    chains: Vec<WallChain>,
+    chains_of: Vec<Segment>,
     lines: Vec<Line>,
     proj_lines: Vec<Line>,
     neighbors: Vec<(f64, usize)>,
@@ -206,7 +353,12 @@ impl Orca {
             time_horizon,
             time_horizon_obst,
             pref_speed,
+            perturb: 0.0,
+            seed: 0,
+            radius_margin: 0.0,
             obstacles: ObstacleSet::default(),
+            chains: Vec::new(),
+            chains_of: Vec::new(),
             lines: Vec::new(),
             proj_lines: Vec::new(),
             neighbors: Vec::new(),
@@ -217,7 +369,8 @@ impl Orca {
     }
 
     /// Reads `neighbor_dist`, `max_neighbors`, `time_horizon`,
-    /// `time_horizon_obst` and `pref_speed` from a robot's params.
+    /// `time_horizon_obst`, `pref_speed`, `perturb`, `seed` and
+    /// `radius_margin` from a robot's params.
     pub fn from_params(params: &Params) -> Result<Self, ParamError> {
         let mut r = ParamReader::new("orca", params);
         let neighbor_dist = r.non_negative("neighbor_dist", 15.0)?;
@@ -225,25 +378,48 @@ impl Orca {
         let time_horizon = r.positive("time_horizon", 10.0)?;
         let time_horizon_obst = r.positive("time_horizon_obst", 10.0)?;
         let pref_speed = r.non_negative("pref_speed", 1.0)?;
+        let perturb = r.non_negative("perturb", 0.0)?;
+        let seed = r.count("seed", 0, 0)? as u64;
+        let radius_margin = r.non_negative("radius_margin", 0.0)?;
         r.finish()?;
-        Ok(Self::new(
-            neighbor_dist,
-            max_neighbors,
-            time_horizon,
-            time_horizon_obst,
-            pref_speed,
-        ))
+        Ok(Self {
+            perturb,
+            seed,
+            radius_margin,
+            ..Self::new(
+                neighbor_dist,
+                max_neighbors,
+                time_horizon,
+                time_horizon_obst,
+                pref_speed,
+            )
+        })
     }
 
     /// The preferred velocity: towards the goal, at most `pref_speed` long.
     fn preferred_velocity(&self, obs: &Observation) -> Vec2 {
         let g = obs.goal - obs.me.position;
         let d = g.norm();
-        if d > self.pref_speed {
+        let pref = if d > self.pref_speed {
             g * (self.pref_speed / d)
         } else {
             g
+        };
+        if self.perturb <= 0.0 {
+            return pref;
         }
+        let mut h = self.seed ^ (u64::from(obs.me.id) << 40) ^ obs.tick;
+        let mut unit = || {
+            // SplitMix64.
+            h = h.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = h;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let angle = unit() * std::f64::consts::TAU;
+        let length = unit() * self.perturb;
+        pref + Vec2::new(angle.cos(), angle.sin()) * length
     }
 
     /// The indices of the `max_neighbors` nearest bodies within
@@ -501,7 +677,8 @@ impl Orca {
     }
 
     /// The ORCA half-plane of another body (section 4 of the paper), with
-    /// `share` of the avoidance taken by this robot.
+    /// `share` of the avoidance taken by this robot; `radius` is its own
+    /// radius plus any padding of both discs.
     fn body_line(
         position: Vec2,
         velocity: Vec2,
@@ -722,10 +899,15 @@ impl Planner for Orca {
         self.lines.clear();
 
         // Static obstacles first (they stay hard in the 3-D program).
+        if self.chains_of.as_slice() != obs.walls {
+            self.chains_of = obs.walls.to_vec();
+            self.chains = WallChain::join(obs.walls);
+        }
         self.obstacles.clear();
-        self.obstacles.push_walls(obs.walls);
-        self.select_obstacle_neighbors(me.position, me.radius, me.max_speed);
-        self.push_obstacle_lines(me.position, me.velocity, me.radius);
+        self.obstacles.push_chains(&self.chains, me.position);
+        let radius = me.radius + self.radius_margin;
+        self.select_obstacle_neighbors(me.position, radius, me.max_speed);
+        self.push_obstacle_lines(me.position, me.velocity, radius);
         let num_obst_lines = self.lines.len();
 
         // Then the other bodies, nearest first.
@@ -741,7 +923,8 @@ impl Planner for Orca {
             self.lines.push(Self::body_line(
                 me.position,
                 me.velocity,
-                me.radius,
+                // Both discs padded.
+                radius + self.radius_margin,
                 other,
                 inv_tau,
                 dt,
@@ -1018,15 +1201,20 @@ mod tests {
         assert!((v - w).norm() < 1e-12, "{v:?} {w:?}");
     }
 
-    /// Runs one ORCA robot of radius 0.5 from the origin to `goal` past
-    /// `wall`; returns the smallest gap to the wall, the tick it came
-    /// within 0.1 of the goal, and where it ended.
-    fn past_wall(wall: Segment, goal: Vec2, ticks: u64) -> (f64, Option<u64>, Vec2) {
+    /// Runs one ORCA robot of radius 0.5 from `start` to `goal` past
+    /// `walls`; returns the smallest gap to a wall, the tick it came within
+    /// 0.1 of the goal, and where it ended.
+    fn past_walls(
+        walls: &[Segment],
+        start: Vec2,
+        goal: Vec2,
+        ticks: u64,
+    ) -> (f64, Option<u64>, Vec2) {
         let mut sim = Sim::new(0.25, 1);
-        sim.walls.push(wall);
+        sim.walls.extend_from_slice(walls);
         sim.add_robot(
             Box::new(Orca::default()),
-            Vec2::zeros(),
+            start,
             goal,
             0.5,
             1.0,
@@ -1038,7 +1226,9 @@ mod tests {
         for tick in 1..=ticks {
             sim.step();
             let p = sim.robots[0].state.position;
-            min_gap = min_gap.min((p - wall.closest_point(p)).norm() - 0.5);
+            for w in walls {
+                min_gap = min_gap.min((p - w.closest_point(p)).norm() - 0.5);
+            }
             if (p - goal).norm() < 0.1 {
                 return (min_gap, Some(tick), p);
             }
@@ -1052,7 +1242,7 @@ mod tests {
             a: Vec2::new(5.0, -1.0),
             b: Vec2::new(5.0, 3.0),
         };
-        let (min_gap, reached, end) = past_wall(wall, Vec2::new(10.0, 6.0), 400);
+        let (min_gap, reached, end) = past_walls(&[wall], Vec2::zeros(), Vec2::new(10.0, 6.0), 400);
         assert!(min_gap >= -TOUCH, "touched the wall: gap {min_gap}");
         assert!(reached.is_some(), "stuck at {end:?}");
     }
@@ -1066,10 +1256,163 @@ mod tests {
             a: Vec2::new(5.0, -1.0),
             b: Vec2::new(5.0, 3.0),
         };
-        let (min_gap, reached, end) = past_wall(wall, Vec2::new(10.0, 0.0), 400);
+        let (min_gap, reached, end) = past_walls(&[wall], Vec2::zeros(), Vec2::new(10.0, 0.0), 400);
         assert!(reached.is_none());
         assert!(min_gap >= -TOUCH, "touched the wall: gap {min_gap}");
         assert!(end.y.abs() < 1e-9 && end.x > 4.0, "{end:?}");
+    }
+
+    fn seg(a: (f64, f64), b: (f64, f64)) -> Segment {
+        Segment {
+            a: Vec2::new(a.0, a.1),
+            b: Vec2::new(b.0, b.1),
+        }
+    }
+
+    /// The obstacle lines a robot at `p` with velocity `v` gets from `set`.
+    fn obstacle_lines(set: ObstacleSet, p: Vec2, v: Vec2) -> Vec<Line> {
+        let mut orca = Orca {
+            time_horizon_obst: 5.0,
+            ..Orca::default()
+        };
+        orca.obstacles = set;
+        orca.select_obstacle_neighbors(p, 2.0, 2.0);
+        orca.push_obstacle_lines(p, v, 2.0);
+        orca.lines
+    }
+
+    #[test]
+    fn a_square_drawn_as_four_walls_in_any_order_is_rvo2s_polygon() {
+        // RVO2's Blocks obstacle 2, counter-clockwise, and the same square as
+        // four walls, shuffled and some reversed.
+        let polygon =
+            [(10.0, 40.0), (10.0, 10.0), (40.0, 10.0), (40.0, 40.0)].map(|(x, y)| Vec2::new(x, y));
+        let walls = [
+            seg((40.0, 10.0), (40.0, 40.0)),
+            seg((10.0, 10.0), (10.0, 40.0)),
+            seg((40.0, 40.0), (10.0, 40.0)),
+            seg((40.0, 10.0), (10.0, 10.0)),
+        ];
+        let chains = WallChain::join(&walls);
+        assert_eq!(chains.len(), 1);
+        assert!(chains[0].closed && chains[0].points.len() == 4);
+        let mut lone_segments_differ = 0;
+        // Robots all round the square, near and far, heading at it, past
+        // its corners and along its sides.
+        for k in 0..48 {
+            for dist in [19.0, 21.5, 24.0, 30.0] {
+                for turn in 0..8 {
+                    // Off the diagonals: no two edges at exactly one distance.
+                    let a = (k as f64 + 0.3) * std::f64::consts::TAU / 48.0;
+                    let p = Vec2::new(25.0, 25.0) + Vec2::new(a.cos(), a.sin()) * dist;
+                    if (p.x - 25.0).abs() < 17.0 && (p.y - 25.0).abs() < 17.0 {
+                        continue;
+                    }
+                    let b = turn as f64 * std::f64::consts::TAU / 8.0;
+                    let v = Vec2::new(b.cos(), b.sin()) * 1.8;
+                    let mut rvo2 = ObstacleSet::default();
+                    rvo2.push_polygon(&polygon);
+                    let mut ours = ObstacleSet::default();
+                    ours.push_walls(&walls, p);
+                    let (want, got) = (obstacle_lines(rvo2, p, v), obstacle_lines(ours, p, v));
+                    // The same lines; edges at equal distances may come in
+                    // another order (RVO2 orders such ties by its k-d tree).
+                    assert_eq!(want.len(), got.len(), "at {p:?}");
+                    for w in &want {
+                        assert!(
+                            got.iter().any(|g| (w.point - g.point).norm() < 1e-12
+                                && (w.direction - g.direction).norm() < 1e-12),
+                            "at {p:?} with {v:?}: {w:?} missing from {got:?}"
+                        );
+                    }
+                    // Four unrelated segments are not the same obstacle.
+                    let mut lone = ObstacleSet::default();
+                    for w in &walls {
+                        lone.push_polygon(&[w.a, w.b]);
+                    }
+                    lone_segments_differ += usize::from(obstacle_lines(lone, p, v) != want);
+                }
+            }
+        }
+        assert!(lone_segments_differ > 0);
+    }
+
+    #[test]
+    fn an_arena_is_a_boundary_from_inside_and_open_chains_go_there_and_back() {
+        let arena = [
+            seg((0.0, 0.0), (10.0, 0.0)),
+            seg((10.0, 0.0), (10.0, 10.0)),
+            seg((10.0, 10.0), (0.0, 10.0)),
+            seg((0.0, 10.0), (0.0, 0.0)),
+        ];
+        let mut inside = ObstacleSet::default();
+        inside.push_walls(&arena, Vec2::new(5.0, 5.0));
+        // Clockwise seen from inside: every edge has the robot on its right.
+        for v in &inside.vertices {
+            let next = inside.vertices[v.next].point;
+            assert!(left_of(v.point, next, Vec2::new(5.0, 5.0)) < 0.0);
+            assert!(!v.convex, "an arena's corners are concave from inside");
+        }
+        // An L of two walls: p0, p1, p2, then back through p1.
+        let l = [seg((0.0, 0.0), (5.0, 0.0)), seg((5.0, 5.0), (5.0, 0.0))];
+        let chains = WallChain::join(&l);
+        assert_eq!(chains.len(), 1);
+        assert!(!chains[0].closed);
+        let mut set = ObstacleSet::default();
+        set.push_chains(&chains, Vec2::new(-3.0, 2.0));
+        let pts: Vec<Vec2> = set.vertices.iter().map(|v| v.point).collect();
+        assert_eq!(pts.len(), 4);
+        assert_eq!(pts[1], Vec2::new(5.0, 0.0));
+        assert_eq!(pts[3], Vec2::new(5.0, 0.0));
+        // The corner is convex on one pass and concave on the other.
+        assert_ne!(set.vertices[1].convex, set.vertices[3].convex);
+        // A T junction ends the chains there.
+        let t = [
+            seg((0.0, 0.0), (2.0, 0.0)),
+            seg((2.0, 0.0), (4.0, 0.0)),
+            seg((2.0, 0.0), (2.0, 2.0)),
+        ];
+        assert_eq!(WallChain::join(&t).len(), 3);
+    }
+
+    #[test]
+    fn robot_inside_an_arena_stays_inside_and_rounds_an_l_shaped_wall() {
+        let walls = [
+            seg((-10.0, -10.0), (10.0, -10.0)),
+            seg((10.0, -10.0), (10.0, 10.0)),
+            seg((10.0, 10.0), (-10.0, 10.0)),
+            seg((-10.0, 10.0), (-10.0, -10.0)),
+            seg((0.0, -1.0), (0.0, 3.0)),
+            seg((3.0, 3.0), (0.0, 3.0)),
+        ];
+        let goal = Vec2::new(7.0, 6.0);
+        let (min_gap, reached, end) = past_walls(&walls, Vec2::new(-7.0, -6.0), goal, 400);
+        assert!(min_gap >= -TOUCH, "touched a wall: gap {min_gap}");
+        assert!(reached.is_some(), "stuck at {end:?}");
+    }
+
+    #[test]
+    fn perturbation_is_bounded_seeded_and_off_by_default() {
+        let o = obs(
+            me(Vec2::zeros(), Vec2::zeros(), 0.5),
+            Vec2::new(10.0, 0.0),
+            &[],
+            &[],
+        );
+        let plain = Orca::default().plan(&o).vector();
+        assert_eq!(plain, Vec2::new(1.0, 0.0));
+        let perturbed = |seed| {
+            let mut p = Orca {
+                perturb: 1e-4,
+                seed,
+                ..Orca::default()
+            };
+            p.plan(&o).vector()
+        };
+        let (a, b, c) = (perturbed(1), perturbed(1), perturbed(2));
+        assert_eq!(a, b);
+        assert_ne!(a, c);
+        assert!((a - plain).norm() < 1e-4 && a != plain);
     }
 
     #[test]

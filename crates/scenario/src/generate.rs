@@ -17,6 +17,14 @@
 //!   margin, no start on a file robot or obstacle. Seeded by `world.seed`
 //!   (SplitMix64), so the same file gives the same robots.
 //!
+//! `jitter` (default 0) moves every generated start by a distance drawn
+//! uniformly in [0, jitter] in a direction drawn uniformly in [0, 2π),
+//! seeded by `world.seed` (a SplitMix64 stream of its own, so `random`'s
+//! draws do not change with it); goals stay where they are. An exactly
+//! symmetric start (the circle) makes symmetric planners such as ORCA stop
+//! in a ring of touching discs; RVO2's Circle example only escapes through
+//! its f32 round-off. A small jitter is the honest, reproducible stand-in.
+//!
 //! Queue spacing (crossing, corridor) is 3 robot radii centre to centre
 //! (one radius of gap), or radius/count for point robots.
 //! Names are `name_prefix` (default `g`) and the index, zero-padded to at
@@ -45,6 +53,7 @@ pub(crate) struct Plan {
     pub names: Vec<String>,
     pub radius: Option<f64>,
     pub center: P,
+    pub jitter: f64,
 }
 
 const WHAT: &str = "generate";
@@ -101,6 +110,12 @@ pub(crate) fn plan(g: &S<RawGenerate>, world: &WorldConfig) -> Result<Plan, Fail
     if let Some(r) = &raw.robot_radius {
         check(r, "robot_radius", Rule::NonNeg, WHAT)?;
     }
+    let jitter = raw
+        .jitter
+        .as_ref()
+        .map(|j| check(j, "jitter", Rule::NonNeg, WHAT))
+        .transpose()?
+        .unwrap_or(0.0);
     let center = raw
         .center
         .as_ref()
@@ -125,6 +140,7 @@ pub(crate) fn plan(g: &S<RawGenerate>, world: &WorldConfig) -> Result<Plan, Fail
         names,
         radius,
         center,
+        jitter,
     })
 }
 
@@ -149,7 +165,7 @@ pub(crate) fn place(
             big_r / group.max(1) as f64
         }
     };
-    Ok(match plan.kind {
+    let mut places = match plan.kind {
         Kind::Circle => (0..n)
             .map(|k| {
                 let a = 2.0 * PI * k as f64 / n as f64;
@@ -192,7 +208,24 @@ pub(crate) fn place(
             out
         }
         Kind::Random => random(plan, g, world, robot_radius, robots, obstacles)?,
-    })
+    };
+    jitter_starts(&mut places, plan.jitter, world.seed);
+    Ok(places)
+}
+
+/// Moves every start by up to `jitter` in a seeded random direction.
+fn jitter_starts(places: &mut [(P, P)], jitter: f64, seed: u64) {
+    if jitter <= 0.0 {
+        return;
+    }
+    // A stream of its own: `random` draws from `Rng(seed)`.
+    let mut rng = Rng(seed ^ 0x6A17_7E12_5EED_0001);
+    for (start, _) in places {
+        let distance = rng.unit() * jitter;
+        let (s, c) = (rng.unit() * 2.0 * PI).sin_cos();
+        start[0] += distance * c;
+        start[1] += distance * s;
+    }
 }
 
 fn random(

@@ -144,4 +144,5 @@ pub(crate) struct RawGenerate {
     pub params: Option<S<RawParams>>,
     pub robot_radius: Option<S<f64>>,
     pub name_prefix: Option<S<String>>,
+    pub jitter: Option<S<f64>>,
 }

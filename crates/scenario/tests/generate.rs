@@ -165,3 +165,38 @@ fn generated_robots_come_after_the_files_robots_and_take_the_defaults() {
             .all(|r| r.mass == 4.0 && r.name.starts_with('g'))
     );
 }
+
+#[test]
+fn jitter_moves_each_start_by_at_most_its_value_reproducibly_and_keeps_goals() {
+    let exact = generated("circle", 16, "radius = 5.0");
+    let jittered = generated("circle", 16, "radius = 5.0\njitter = 0.1");
+    let again = generated("circle", 16, "radius = 5.0\njitter = 0.1");
+    let mut moved = 0;
+    for ((e, j), a) in exact.robots.iter().zip(&jittered.robots).zip(&again.robots) {
+        assert_eq!(j.start, a.start, "same seed, same starts");
+        assert_eq!(e.goal, j.goal, "goals stay");
+        let shift = d(e.start, j.start);
+        assert!(shift <= 0.1 + 1e-12, "{} moved {shift}", e.name);
+        moved += usize::from(shift > 0.0);
+    }
+    assert_eq!(moved, 16);
+    // Directions are spread: the mean shift is far from any single direction.
+    let mean = jittered
+        .robots
+        .iter()
+        .zip(&exact.robots)
+        .fold([0.0, 0.0], |m, (j, e)| {
+            [
+                m[0] + j.start[0] - e.start[0],
+                m[1] + j.start[1] - e.start[1],
+            ]
+        });
+    assert!(mean[0].hypot(mean[1]) / 16.0 < 0.05);
+    no_overlap(&jittered.robots);
+}
+
+#[test]
+fn a_negative_jitter_is_refused_with_its_line() {
+    let src = "name = \"g\"\n[defaults]\nradius = 0.2\n[generate]\nkind = \"circle\"\ncount = 4\nradius = 5.0\njitter = -0.1\n";
+    refused_at(src, "jitter = -0.1", "jitter must be >= 0");
+}

@@ -188,7 +188,9 @@ impl ShmWorld {
         let reply = node
             .service_builder(&service_name("mrsim/join-reply")?)
             .publish_subscribe::<JoinReply>()
-            .subscriber_max_buffer_size(8)
+            // Every agent sees every reply: with hundreds joining at once,
+            // a small buffer drops an agent's own reply before it polls.
+            .subscriber_max_buffer_size((agents + 2).clamp(8, 128))
             .max_publishers(1)
             .max_subscribers(agents + 2)
             .max_nodes(nodes)
