@@ -327,7 +327,8 @@ impl World {
     }
 
     /// A collision is a pair whose surfaces have actually closed (gap at
-    /// most 1 mm in the scenario's unit) and were apart before. Rapier's own
+    /// most 1 mm in the scenario's unit) after being apart (by more than
+    /// 1 cm, or no longer a candidate pair). Rapier's own
     /// contact events start within its prediction distance (centimetres in a
     /// cm-scale world), which would count near misses; so rapier only
     /// proposes the candidate pairs and the gap is measured here, after
@@ -345,11 +346,21 @@ impl World {
                 continue;
             }
             let gap = self.owner_gap(a, b);
-            if gap > self.touch_tolerance {
+            let was_touching = self.touching.contains(&(a, b));
+            // Hysteresis: a pair that touched stays in contact until it has
+            // separated by ten times the tolerance, so discs held exactly at
+            // touching (ORCA in a crowd) count one collision, not one per
+            // flicker across the tolerance.
+            let limit = if was_touching {
+                10.0 * self.touch_tolerance
+            } else {
+                self.touch_tolerance
+            };
+            if gap > limit {
                 continue;
             }
             now.insert((a, b));
-            if !self.touching.contains(&(a, b)) {
+            if !was_touching {
                 let at = match (self.owner_position(a), self.owner_position(b)) {
                     (Some(p), Some(q)) => [(p[0] + q[0]) / 2.0, (p[1] + q[1]) / 2.0],
                     (Some(p), None) | (None, Some(p)) => p,
