@@ -200,6 +200,7 @@ fn bench_orca_crowd(c: &mut Criterion) {
         },
         goal: Vec2::new(200.0, 0.0),
         goal_tolerance: 1.5,
+        goal_hold_ticks: 3,
         others: &others,
         walls: &[],
         path: None,
