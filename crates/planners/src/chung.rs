@@ -206,19 +206,8 @@ mod tests {
     }
 
     fn force(p: &mut Chung, me: SelfState, goal: Vec2, others: &[Sensed]) -> Vec2 {
-        let obs = Observation {
-            tick: 0,
-            time: 0.0,
-            dt: 0.1,
-            me,
-            goal,
-            goal_tolerance: 0.05,
-            goal_hold_ticks: 3,
-            others,
-            walls: &[],
-            path: None,
-        };
-        p.plan(&obs).vector()
+        p.plan(&crate::testkit::observation(me, goal, others))
+            .vector()
     }
 
     fn chung(strategy: Strategy) -> Chung {

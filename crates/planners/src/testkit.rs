@@ -209,3 +209,20 @@ impl Sim {
             .fold(f64::INFINITY, f64::min)
     }
 }
+
+/// The observation planner unit tests start from: tick 0, dt 0.1 s, goal
+/// tolerance 0.05, goal held for 3 ticks, no walls, no path.
+pub fn observation<'a>(me: SelfState, goal: Vec2, others: &'a [Sensed]) -> Observation<'a> {
+    Observation {
+        tick: 0,
+        time: 0.0,
+        dt: 0.1,
+        me,
+        goal,
+        goal_tolerance: 0.05,
+        goal_hold_ticks: 3,
+        others,
+        walls: &[],
+        path: None,
+    }
+}

@@ -446,18 +446,7 @@ mod tests {
     }
 
     fn observation<'a>(me: SelfState, goal: Vec2, others: &'a [Sensed]) -> Observation<'a> {
-        Observation {
-            tick: 0,
-            time: 0.0,
-            dt: 0.1,
-            me,
-            goal,
-            goal_tolerance: 0.05,
-            goal_hold_ticks: 3,
-            others,
-            walls: &[],
-            path: None,
-        }
+        crate::testkit::observation(me, goal, others)
     }
 
     fn planner() -> TrajectoryGuided {
