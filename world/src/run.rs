@@ -80,24 +80,7 @@ enum Agent {
     Lost { pid: u32, token: u64 },
 }
 
-/// True if process `pid` exists and is not a zombie.
-pub fn pid_alive(pid: u32) -> bool {
-    if pid == 0 {
-        return false;
-    }
-    // SAFETY: kill with signal 0 only checks for existence and permission.
-    let r = unsafe { libc::kill(pid as libc::pid_t, 0) };
-    if r != 0 && std::io::Error::last_os_error().raw_os_error() != Some(libc::EPERM) {
-        return false;
-    }
-    match std::fs::read_to_string(format!("/proc/{pid}/stat")) {
-        Ok(stat) => stat
-            .rsplit_once(") ")
-            .and_then(|(_, rest)| rest.chars().next())
-            .is_none_or(|state| state != 'Z' && state != 'X'),
-        Err(_) => false,
-    }
-}
+pub use mrsim_transport::pid_alive;
 
 fn splitmix(mut x: u64) -> u64 {
     x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
@@ -161,7 +144,7 @@ impl Loop<'_> {
             robot_id: u32::MAX,
             token: 0,
             protocol_version: PROTOCOL_VERSION,
-            _pad: 0,
+            world_pid: std::process::id(),
             reason: FixedStr::new(&reason),
         };
         let accept = |i: usize, token: u64| JoinReply {
@@ -170,7 +153,7 @@ impl Loop<'_> {
             robot_id: i as u32,
             token,
             protocol_version: PROTOCOL_VERSION,
-            _pad: 0,
+            world_pid: std::process::id(),
             reason: FixedStr::default(),
         };
         let idx = self.world.scenario.robot_index(&name);
@@ -369,8 +352,12 @@ impl Loop<'_> {
     fn drain(&mut self, realtime: bool) -> Result<(), TransportError> {
         let mut joins = Vec::new();
         self.link.drain_joins(&mut |j| joins.push(j))?;
+        let any = !joins.is_empty();
         for j in joins {
             self.handle_join(j)?;
+        }
+        if any {
+            self.link.joins_answered()?;
         }
         let mut cmds = Vec::new();
         self.link.drain_commands(&mut |c, t| cmds.push((c, t)))?;
@@ -586,6 +573,9 @@ pub fn run(
             .iter()
             .map(|r| RobotAccumulator {
                 min_clearance: f64::INFINITY,
+                latency: DurationHistogram::per_robot(),
+                wake: DurationHistogram::per_robot(),
+                compute: DurationHistogram::per_robot(),
                 path: crate::path_metrics::PathAccumulator::new(&r.path, r.boundary),
                 ..Default::default()
             })

@@ -174,8 +174,9 @@ pub struct JoinReply {
     pub token: u64,
     /// The world's protocol version.
     pub protocol_version: u32,
-    /// Explicit padding, always zero.
-    pub _pad: u32,
+    /// The world's process id (0 if unknown): an agent on the same machine
+    /// watches it to notice a dead world cheaply.
+    pub world_pid: u32,
     /// Why the request was refused, empty when accepted.
     pub reason: FixedStr<MAX_REASON_LEN>,
 }
@@ -192,6 +193,9 @@ pub mod events {
     pub const JOIN_REQUEST: usize = 4;
     /// A notifier's process died (iceoryx2 dead-notifier event).
     pub const NOTIFIER_DEAD: usize = 5;
+    /// The largest id above (the event services are sized to it: a
+    /// listener's wake-up drains a bit set this long).
+    pub const MAX_ID: usize = 5;
 }
 
 /// A robot's agent as the world sees it, the `state` field of a

@@ -80,8 +80,15 @@ pub trait WorldTransport {
     fn drain_commands(&mut self, f: &mut dyn FnMut(CommandMsg, u64)) -> Result<(), TransportError>;
     /// Hands every join request received since the last call to `f`.
     fn drain_joins(&mut self, f: &mut dyn FnMut(JoinRequest)) -> Result<(), TransportError>;
-    /// Answers a join request.
+    /// Answers a join request. The agents may not hear of it before
+    /// [`WorldTransport::joins_answered`].
     fn reply_join(&mut self, reply: &JoinReply) -> Result<(), TransportError>;
+    /// Wakes the agents waiting for their join replies, once for all the
+    /// replies sent since the last call (hundreds of agents joining at once
+    /// must not each be woken once per reply).
+    fn joins_answered(&mut self) -> Result<(), TransportError> {
+        Ok(())
+    }
     /// True once the process was asked to terminate (SIGINT, SIGTERM).
     fn termination_requested(&self) -> bool;
     /// Frees what dead agent processes left behind, so a restarted agent can
@@ -148,6 +155,25 @@ pub trait ObserverTransport {
     ) -> Result<bool, TransportError>;
     /// False once the world is known to be gone.
     fn world_alive(&mut self) -> bool;
+}
+
+/// True if process `pid` exists and is not a zombie (same machine).
+pub fn pid_alive(pid: u32) -> bool {
+    if pid == 0 {
+        return false;
+    }
+    // SAFETY: kill with signal 0 only checks for existence and permission.
+    let r = unsafe { libc::kill(pid as libc::pid_t, 0) };
+    if r != 0 && std::io::Error::last_os_error().raw_os_error() != Some(libc::EPERM) {
+        return false;
+    }
+    match std::fs::read_to_string(format!("/proc/{pid}/stat")) {
+        Ok(stat) => stat
+            .rsplit_once(") ")
+            .and_then(|(_, rest)| rest.chars().next())
+            .is_none_or(|state| state != 'Z' && state != 'X'),
+        Err(_) => false,
+    }
 }
 
 /// How many participants the channels must hold.

@@ -56,8 +56,19 @@ fn service_name(name: &str) -> Result<ServiceName, TransportError> {
 
 /// The iceoryx2 configuration of a run: its own prefix and root path. The
 /// root path is created readable by the current user only.
+///
+/// Nodes do not look for dead nodes when they are created or dropped or
+/// open a service (iceoryx2's defaults): each look reads the state of every
+/// node of the run (or of the service), so with hundreds of agents starting
+/// and ending together they cost O(agents²) file reads and TOML parses,
+/// seconds of both cores at 250 agents (profiled). The world cleans up
+/// instead, once at its start and whenever an agent process dies; the
+/// launcher removes what is left at the end.
 pub fn config(ns: &Namespace) -> Result<Config, TransportError> {
     let mut cfg = Config::default();
+    cfg.global.node.cleanup_dead_nodes_on_creation = false;
+    cfg.global.node.cleanup_dead_nodes_on_destruction = false;
+    cfg.global.service.cleanup_dead_nodes_on_open = false;
     cfg.global.prefix =
         FileName::new(ns.prefix().as_bytes()).map_err(|e| setup_err("iceoryx2 prefix", e))?;
     let root = ns.root_path();
@@ -121,6 +132,7 @@ pub struct ShmWorld {
     terminated: std::cell::Cell<bool>,
     stats_pub: Publisher<S, [RobotStats], StatsHeader>,
     max_robots: usize,
+    replies_pending: bool,
 }
 
 impl ShmWorld {
@@ -161,6 +173,7 @@ impl ShmWorld {
         let tick_service = node
             .service_builder(&service_name("mrsim/tick")?)
             .event()
+            .event_id_max_value(events::MAX_ID)
             .max_notifiers(2)
             .max_listeners(agents + 2)
             .max_nodes(nodes)
@@ -218,6 +231,7 @@ impl ShmWorld {
         let wake_service = node
             .service_builder(&service_name("mrsim/wake")?)
             .event()
+            .event_id_max_value(events::MAX_ID)
             .max_notifiers(agents)
             .max_listeners(2)
             .max_nodes(nodes)
@@ -244,6 +258,7 @@ impl ShmWorld {
             terminated: std::cell::Cell::new(false),
             stats_pub,
             max_robots: cap.robots,
+            replies_pending: false,
         })
     }
 }
@@ -332,6 +347,14 @@ impl WorldTransport for ShmWorld {
                 what: "join reply",
                 detail: format!("{e:?}"),
             })?;
+        self.replies_pending = true;
+        Ok(())
+    }
+
+    fn joins_answered(&mut self) -> Result<(), TransportError> {
+        if !std::mem::take(&mut self.replies_pending) {
+            return Ok(());
+        }
         // Agents waiting for their reply listen on the tick event.
         self.tick
             .notify_with_custom_event_id(EventId::new(events::JOIN_REPLY))
@@ -370,8 +393,15 @@ impl WorldTransport for ShmWorld {
 
 /// An agent's side over iceoryx2.
 pub struct ShmAgent {
+    ports: AgentPorts,
     cfg: Config,
     node: Node<S>,
+    world: WorldWatch,
+    terminated: std::cell::Cell<bool>,
+}
+
+/// An agent's ports on the run's services.
+struct AgentPorts {
     setup_sub: Subscriber<S, [u8], ()>,
     snap_sub: Subscriber<S, [BodyState], SnapshotHeader>,
     tick: Listener<S>,
@@ -379,10 +409,6 @@ pub struct ShmAgent {
     reply_sub: Subscriber<S, JoinReply, ()>,
     cmd_pub: Publisher<S, CommandMsg, ()>,
     wake: Notifier<S>,
-    last_world_check: Instant,
-    world_alive: bool,
-    world_missing: u32,
-    terminated: std::cell::Cell<bool>,
 }
 
 impl ShmAgent {
@@ -394,11 +420,19 @@ impl ShmAgent {
         timeout: Duration,
     ) -> Result<Self, TransportError> {
         let start = Instant::now();
+        // Hundreds of agents started with their world retry until it has
+        // created the run's services: back off. Each attempt makes its own
+        // node: a world started by hand clears the run's folder (what a
+        // crashed earlier world left) and with it a node made before.
+        let mut pause = Duration::from_millis(10);
         loop {
             match Self::try_connect(ns, node_name) {
                 Ok(agent) => return Ok(agent),
                 Err(e) if start.elapsed() >= timeout => return Err(e),
-                Err(_) => std::thread::sleep(Duration::from_millis(50)),
+                Err(_) => {
+                    std::thread::sleep(pause);
+                    pause = (pause * 2).min(Duration::from_millis(200));
+                }
             }
         }
     }
@@ -407,8 +441,19 @@ impl ShmAgent {
         let cfg = config(ns)?;
         let node = node(&cfg, node_name)?;
         ns.make_private();
-        let setup_sub = setup_subscriber(&node)?;
-        let snap_sub = snapshot_subscriber(&node)?;
+        let ports = Self::open(&node)?;
+        Ok(Self {
+            ports,
+            cfg,
+            node,
+            world: WorldWatch::new(),
+            terminated: std::cell::Cell::new(false),
+        })
+    }
+
+    fn open(node: &Node<S>) -> Result<AgentPorts, TransportError> {
+        let setup_sub = setup_subscriber(node)?;
+        let snap_sub = snapshot_subscriber(node)?;
         let tick = node
             .service_builder(&service_name("mrsim/tick")?)
             .event()
@@ -449,9 +494,7 @@ impl ShmAgent {
             .notifier_builder()
             .create()
             .map_err(|e| setup_err("wake notifier", e))?;
-        Ok(Self {
-            cfg,
-            node,
+        Ok(AgentPorts {
             setup_sub,
             snap_sub,
             tick,
@@ -459,15 +502,7 @@ impl ShmAgent {
             reply_sub,
             cmd_pub,
             wake,
-            last_world_check: Instant::now(),
-            world_alive: true,
-            world_missing: 0,
-            terminated: std::cell::Cell::new(false),
         })
-    }
-
-    fn check_world(&mut self) -> bool {
-        world_node_alive(&self.cfg).unwrap_or(true)
     }
 }
 
@@ -480,29 +515,95 @@ pub fn world_running(ns: &Namespace) -> Result<bool, TransportError> {
 
 /// Some(alive) if the node list could be read.
 fn world_node_alive(cfg: &Config) -> Option<bool> {
-    let mut alive = false;
+    find_world(cfg).map(|w| w != WorldSeen::Gone)
+}
+
+/// What a scan of the run's iceoryx2 nodes says about the world.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum WorldSeen {
+    /// Listed alive, owned by this process id.
+    Alive(u32),
+    /// A node whose state cannot be read (being created or cleaned up
+    /// right now) may be the world: not proof that it is gone.
+    Unsure,
+    /// No live world node.
+    Gone,
+}
+
+/// Scans the run's nodes for the world's (a directory walk over every
+/// node of the run: with hundreds of agents, do it once and then watch the
+/// process id, see [`WorldWatch`]).
+fn find_world(cfg: &Config) -> Option<WorldSeen> {
+    let mut seen = WorldSeen::Gone;
     let listed = Node::<S>::list(cfg, |state| {
         use iceoryx2::node::NodeView;
         match &state {
-            NodeState::Alive(view)
-                if view
-                    .details()
-                    .as_ref()
-                    .is_some_and(|d| d.name().as_str() == WORLD_NODE) =>
-            {
-                alive = true;
-                CallbackProgression::Stop
-            }
-            // A node whose state cannot be read (being created or cleaned
-            // up right now) may be the world: not proof that it is gone.
+            NodeState::Alive(view) => match view.details() {
+                Some(d) if d.name().as_str() == WORLD_NODE => {
+                    seen = WorldSeen::Alive(d.process_id().value() as u32);
+                    CallbackProgression::Stop
+                }
+                _ => CallbackProgression::Continue,
+            },
             NodeState::Inaccessible(_) | NodeState::Undefined(_) => {
-                alive = true;
-                CallbackProgression::Stop
+                seen = WorldSeen::Unsure;
+                CallbackProgression::Continue
             }
             _ => CallbackProgression::Continue,
         }
     });
-    listed.ok().map(|_| alive)
+    listed.ok().map(|_| seen)
+}
+
+/// An agent's or observer's watch on the world process. An agent learns
+/// the world's process id from its join reply; an observer finds it with
+/// one scan of the run's node list. After that only the process id is
+/// checked (one `kill(pid, 0)`): with hundreds of agents checking a few
+/// times a second, a node-list scan each (O(agents²) file reads per second
+/// on 2 cores) starved the very world they were waiting for.
+#[derive(Debug)]
+struct WorldWatch {
+    pid: Option<u32>,
+    last_check: Instant,
+    missing: u32,
+    alive: bool,
+}
+
+impl WorldWatch {
+    fn new() -> Self {
+        Self {
+            pid: None,
+            last_check: Instant::now(),
+            missing: 0,
+            alive: true,
+        }
+    }
+
+    /// False once the world is known to be gone: two checks `every` apart
+    /// both said so.
+    fn alive(&mut self, cfg: &Config, every: Duration) -> bool {
+        if !self.alive || self.last_check.elapsed() < every {
+            return self.alive;
+        }
+        self.last_check = Instant::now();
+        let seen = match self.pid {
+            Some(pid) if crate::pid_alive(pid) => WorldSeen::Alive(pid),
+            Some(_) => WorldSeen::Gone,
+            None => find_world(cfg).unwrap_or(WorldSeen::Unsure),
+        };
+        match seen {
+            WorldSeen::Alive(pid) => {
+                self.pid = Some(pid);
+                self.missing = 0;
+            }
+            WorldSeen::Unsure => self.missing = 0,
+            WorldSeen::Gone => {
+                self.missing += 1;
+                self.alive = self.missing < 2;
+            }
+        }
+        self.alive
+    }
 }
 
 /// Creates the world's publisher of `mrsim/NAME`: a slice of `T` of up to
@@ -625,13 +726,15 @@ where
 
 impl AgentTransport for ShmAgent {
     fn request_join(&mut self, req: &JoinRequest) -> Result<(), TransportError> {
-        self.join_pub
+        self.ports
+            .join_pub
             .send_copy(*req)
             .map_err(|e| TransportError::Send {
                 what: "join request",
                 detail: format!("{e:?}"),
             })?;
-        self.wake
+        self.ports
+            .wake
             .notify_with_custom_event_id(EventId::new(events::JOIN_REQUEST))
             .map_err(|e| TransportError::Send {
                 what: "wake event",
@@ -642,8 +745,14 @@ impl AgentTransport for ShmAgent {
 
     fn poll_join_reply(&mut self, nonce: u64) -> Result<Option<JoinReply>, TransportError> {
         loop {
-            match self.reply_sub.receive() {
-                Ok(Some(s)) if s.payload().nonce == nonce => return Ok(Some(*s.payload())),
+            match self.ports.reply_sub.receive() {
+                Ok(Some(s)) if s.payload().nonce == nonce => {
+                    let reply = *s.payload();
+                    if reply.world_pid != 0 {
+                        self.world.pid = Some(reply.world_pid);
+                    }
+                    return Ok(Some(reply));
+                }
                 Ok(Some(_)) => continue,
                 Ok(None) => return Ok(None),
                 Err(e) => {
@@ -657,7 +766,7 @@ impl AgentTransport for ShmAgent {
     }
 
     fn setup(&mut self) -> Result<Option<Vec<u8>>, TransportError> {
-        match self.setup_sub.receive() {
+        match self.ports.setup_sub.receive() {
             Ok(Some(s)) => Ok(Some(s.payload().to_vec())),
             Ok(None) => Ok(None),
             Err(e) => Err(TransportError::Receive {
@@ -668,7 +777,7 @@ impl AgentTransport for ShmAgent {
     }
 
     fn wait(&mut self, timeout: Duration) -> Result<(), TransportError> {
-        wait_on(&self.tick, timeout)
+        wait_on(&self.ports.tick, timeout)
     }
 
     fn latest_snapshot(
@@ -676,17 +785,19 @@ impl AgentTransport for ShmAgent {
         header: &mut SnapshotHeader,
         bodies: &mut Vec<BodyState>,
     ) -> Result<bool, TransportError> {
-        receive_newest(&self.snap_sub, "snapshot", header, bodies)
+        receive_newest(&self.ports.snap_sub, "snapshot", header, bodies)
     }
 
     fn send_command(&mut self, cmd: &CommandMsg) -> Result<(), TransportError> {
-        self.cmd_pub
+        self.ports
+            .cmd_pub
             .send_copy(*cmd)
             .map_err(|e| TransportError::Send {
                 what: "command",
                 detail: format!("{e:?}"),
             })?;
-        self.wake
+        self.ports
+            .wake
             .notify_with_custom_event_id(EventId::new(events::COMMAND))
             .map_err(|e| TransportError::Send {
                 what: "wake event",
@@ -696,17 +807,7 @@ impl AgentTransport for ShmAgent {
     }
 
     fn world_alive(&mut self) -> bool {
-        if self.world_alive && self.last_world_check.elapsed() >= Duration::from_millis(200) {
-            self.last_world_check = Instant::now();
-            // Gone only when two checks 200 ms apart both say so.
-            if self.check_world() {
-                self.world_missing = 0;
-            } else {
-                self.world_missing += 1;
-                self.world_alive = self.world_missing < 2;
-            }
-        }
-        self.world_alive
+        self.world.alive(&self.cfg, Duration::from_millis(200))
     }
 
     fn termination_requested(&self) -> bool {
@@ -722,8 +823,7 @@ pub struct ShmObserver {
     setup_sub: Subscriber<S, [u8], ()>,
     snap_sub: Option<Subscriber<S, [BodyState], SnapshotHeader>>,
     stats_sub: Subscriber<S, [RobotStats], StatsHeader>,
-    last_world_check: Instant,
-    world_alive: bool,
+    world: WorldWatch,
 }
 
 impl ShmObserver {
@@ -776,8 +876,7 @@ impl ShmObserver {
             setup_sub,
             snap_sub,
             stats_sub,
-            last_world_check: Instant::now(),
-            world_alive: true,
+            world: WorldWatch::new(),
         })
     }
 }
@@ -819,10 +918,6 @@ impl ObserverTransport for ShmObserver {
     }
 
     fn world_alive(&mut self) -> bool {
-        if self.world_alive && self.last_world_check.elapsed() >= Duration::from_millis(250) {
-            self.last_world_check = Instant::now();
-            self.world_alive = world_node_alive(&self.cfg).unwrap_or(true);
-        }
-        self.world_alive
+        self.world.alive(&self.cfg, Duration::from_millis(250))
     }
 }
