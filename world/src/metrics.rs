@@ -58,7 +58,12 @@ impl DurationHistogram {
 
     /// Records one duration, ns (clamped into 1 ns .. 60 s).
     pub fn record_ns(&mut self, ns: u64) {
-        self.0.saturating_record(ns.clamp(1, MAX_NS));
+        let ns = ns.clamp(1, MAX_NS);
+        // Grows to hold `ns`; should growing ever fail, count it as the
+        // largest value held rather than lose it.
+        if self.0.record(ns).is_err() {
+            self.0.saturating_record(ns);
+        }
     }
 
     /// p50/p99/p99.9/max in µs (zeros when empty).
@@ -411,6 +416,21 @@ fn brute(states: &[mrsim_proto::BodyState], i: usize) -> f64 {
 mod tests {
     use super::*;
     use mrsim_proto::BodyState;
+
+    #[test]
+    fn histograms_grow_to_hold_durations_far_beyond_their_first_range() {
+        for mut h in [DurationHistogram::default(), DurationHistogram::per_robot()] {
+            for us in [3, 150, 2_500, 40_000] {
+                h.record_ns(us * 1000);
+            }
+            h.record_ns(90_000_000_000); // beyond 60 s: counted as 60 s
+            let p = h.percentiles();
+            assert_eq!(p.count, 5);
+            // Two significant digits at least.
+            assert!((p.p50 - 2_500.0).abs() / 2_500.0 < 0.01, "{p:?}");
+            assert!((p.max - 60e6).abs() / 60e6 < 0.01, "{p:?}");
+        }
+    }
 
     fn scatter(n: usize, seed: u64, spread: f64) -> Vec<BodyState> {
         let mut x = seed;
