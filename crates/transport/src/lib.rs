@@ -157,14 +157,20 @@ pub trait ObserverTransport {
     fn world_alive(&mut self) -> bool;
 }
 
-/// True if process `pid` exists and is not a zombie (same machine).
-pub fn pid_alive(pid: u32) -> bool {
+/// True if process `pid` exists (same machine), zombie or not: one
+/// syscall.
+pub fn pid_exists(pid: u32) -> bool {
     if pid == 0 {
         return false;
     }
     // SAFETY: kill with signal 0 only checks for existence and permission.
     let r = unsafe { libc::kill(pid as libc::pid_t, 0) };
-    if r != 0 && std::io::Error::last_os_error().raw_os_error() != Some(libc::EPERM) {
+    r == 0 || std::io::Error::last_os_error().raw_os_error() == Some(libc::EPERM)
+}
+
+/// True if process `pid` exists and is not a zombie (same machine).
+pub fn pid_alive(pid: u32) -> bool {
+    if !pid_exists(pid) {
         return false;
     }
     match std::fs::read_to_string(format!("/proc/{pid}/stat")) {

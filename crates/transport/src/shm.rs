@@ -95,17 +95,54 @@ fn node(cfg: &Config, name: &str) -> Result<Node<S>, TransportError> {
         .map_err(|e| setup_err(format!("node {name}"), e))
 }
 
-/// Waits for events on `listener`; a signal interrupting the wait (EINTR)
-/// is a spurious wake-up, not an error: callers check termination and the
-/// clock themselves.
+/// Waits for events on `listener` until `timeout`; a signal interrupting
+/// the wait (EINTR) is a spurious wake-up, not an error: callers check
+/// termination and the clock themselves.
+///
+/// The wait is a `ppoll` on the listener's socket (it returns at once when
+/// events are already pending), then the pending events are drained
+/// without blocking. iceoryx2's own `timed_wait` times out
+/// through a socket receive timeout, which the kernel rounds up to whole
+/// jiffies (4 ms at HZ = 250), and sets it and the socket's flags again on
+/// every call (three syscalls); `ppoll` sleeps on a high-resolution timer,
+/// so the world can wait for commands right up to a tick's deadline
+/// without polling.
 fn wait_on(listener: &Listener<S>, timeout: Duration) -> Result<(), TransportError> {
     use iceoryx2::port::listener::ListenerWaitError;
-    // The listener waits through a socket receive timeout of microsecond
-    // resolution, where zero means "forever": never hand it less than 1 µs.
-    match listener.timed_wait(|_| {}, timeout.max(Duration::from_micros(1))) {
-        Ok(_) | Err(ListenerWaitError::InterruptSignal) => Ok(()),
+    let drain = || match listener.try_wait(|_| {}) {
+        Ok(n) => Ok(n > 0),
+        Err(ListenerWaitError::InterruptSignal) => Ok(true),
         Err(e) => Err(TransportError::Wait(format!("{e:?}"))),
+    };
+    if timeout.is_zero() {
+        drain()?;
+        return Ok(());
     }
+    // SAFETY: the descriptor belongs to the listener, which outlives this
+    // call; it is only polled here, never closed.
+    let fd = unsafe { listener.file_descriptor().native_handle() };
+    let mut pfd = libc::pollfd {
+        fd,
+        events: libc::POLLIN,
+        revents: 0,
+    };
+    let ts = libc::timespec {
+        tv_sec: timeout.as_secs().min(i32::MAX as u64) as libc::time_t,
+        tv_nsec: timeout.subsec_nanos() as libc::c_long,
+    };
+    // SAFETY: one valid pollfd, a valid timespec, no signal mask change.
+    let r = unsafe { libc::ppoll(&mut pfd, 1, &ts, std::ptr::null()) };
+    if r < 0 {
+        let e = std::io::Error::last_os_error();
+        if e.kind() == std::io::ErrorKind::Interrupted {
+            return Ok(());
+        }
+        return Err(TransportError::Wait(format!("ppoll: {e}")));
+    }
+    if r > 0 {
+        drain()?;
+    }
+    Ok(())
 }
 
 /// True once SIGINT or SIGTERM arrived. iceoryx2 reports a termination
