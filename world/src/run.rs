@@ -341,7 +341,7 @@ impl Loop<'_> {
         // reaped yet (a /proc read, five syscalls: at 256 agents and more,
         // doing that every time cost the world 5 % of a core).
         self.pid_checks += 1;
-        let thorough = self.pid_checks % 10 == 0;
+        let thorough = self.pid_checks.is_multiple_of(10);
         let mut died = false;
         for i in 0..self.agents.len() {
             if let Agent::Live { pid, .. } = self.agents[i]
