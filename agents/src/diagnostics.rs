@@ -60,9 +60,19 @@ struct Row {
 
 /// The writer thread of one agent's part file.
 pub struct DiagnosticsWriter {
-    tx: Option<Sender<Row>>,
+    tx: Option<Sender<Vec<Row>>>,
     thread: Option<JoinHandle<std::io::Result<()>>>,
+    /// Rows not yet handed over: the thread gets them in batches, so it
+    /// wakes about twice a second rather than every tick (with hundreds of
+    /// agents a wake-up per agent per tick was a context switch each).
+    batch: Vec<Row>,
+    batch_started: Instant,
 }
+
+/// Rows per batch handed to the writer thread, at most.
+const BATCH_ROWS: usize = 64;
+/// Age of the oldest queued row after which the batch is handed over.
+const BATCH_AGE: Duration = Duration::from_millis(500);
 
 impl DiagnosticsWriter {
     /// Starts the thread that writes robot `robot` (id `robot_id`)'s values
@@ -70,25 +80,41 @@ impl DiagnosticsWriter {
     pub fn start(dir: &Path, robot_id: usize, robot: &str) -> std::io::Result<Self> {
         let path = dir.join(part_file_name(robot_id, std::process::id()));
         let robot = robot.to_string();
-        let (tx, rx) = channel::<Row>();
+        let (tx, rx) = channel::<Vec<Row>>();
         let thread = std::thread::Builder::new()
             .name("diagnostics".into())
             .spawn(move || write_rows(&path, &robot, rx))?;
         Ok(Self {
             tx: Some(tx),
             thread: Some(thread),
+            batch: Vec::with_capacity(BATCH_ROWS),
+            batch_started: Instant::now(),
         })
     }
 
     /// Queues one tick's values (nothing is queued when there are none).
-    pub fn push(&self, tick: u64, time: f64, values: Vec<Diagnostic>) {
+    pub fn push(&mut self, tick: u64, time: f64, values: Vec<Diagnostic>) {
         if values.is_empty() {
             return;
         }
+        if self.batch.is_empty() {
+            self.batch_started = Instant::now();
+        }
+        self.batch.push(Row { tick, time, values });
+        if self.batch.len() >= BATCH_ROWS || self.batch_started.elapsed() >= BATCH_AGE {
+            self.hand_over();
+        }
+    }
+
+    fn hand_over(&mut self) {
+        if self.batch.is_empty() {
+            return;
+        }
+        let rows = std::mem::replace(&mut self.batch, Vec::with_capacity(BATCH_ROWS));
         if let Some(tx) = &self.tx {
             // The thread only stops early on an I/O error, which `finish`
             // reports; values after it are dropped.
-            let _ = tx.send(Row { tick, time, values });
+            let _ = tx.send(rows);
         }
     }
 
@@ -98,6 +124,7 @@ impl DiagnosticsWriter {
     }
 
     fn stop(&mut self) -> std::io::Result<()> {
+        self.hand_over();
         self.tx.take();
         match self.thread.take().map(JoinHandle::join) {
             Some(Ok(r)) => r,
@@ -113,22 +140,24 @@ impl Drop for DiagnosticsWriter {
     }
 }
 
-fn write_rows(path: &Path, robot: &str, rx: Receiver<Row>) -> std::io::Result<()> {
+fn write_rows(path: &Path, robot: &str, rx: Receiver<Vec<Row>>) -> std::io::Result<()> {
     let mut out: Option<BufWriter<File>> = None;
     let mut last_flush = Instant::now();
     loop {
         match rx.recv_timeout(Duration::from_secs(1)) {
-            Ok(row) => {
+            Ok(rows) => {
                 let w = match &mut out {
                     Some(w) => w,
                     None => out.insert(BufWriter::with_capacity(1 << 16, File::create(path)?)),
                 };
-                for d in &row.values {
-                    writeln!(
-                        w,
-                        "{},{:.6},{robot},{},{}",
-                        row.tick, row.time, d.name, d.value
-                    )?;
+                for row in &rows {
+                    for d in &row.values {
+                        writeln!(
+                            w,
+                            "{},{:.6},{robot},{},{}",
+                            row.tick, row.time, d.name, d.value
+                        )?;
+                    }
                 }
             }
             Err(RecvTimeoutError::Timeout) => {}

@@ -213,7 +213,7 @@ pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentEx
     let mut observer = observe::Observer::new(&scenario, me);
     // The planner's diagnostics go to a part file in the run's folder, when
     // the world's folder is reachable from here (same machine).
-    let diag = value
+    let mut diag = value
         .get("out_dir")
         .and_then(|d| d.as_str())
         .map(std::path::PathBuf::from)
@@ -301,7 +301,7 @@ pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentEx
         }
         answered = Some(header.tick);
         // After the command is out: off the tick's critical path.
-        if let Some(d) = &diag {
+        if let Some(d) = &mut diag {
             d.push(header.tick, header.sim_time, planner.diagnostics());
         }
     }
