@@ -1,11 +1,21 @@
 //! Runs with the in-process transport: the world loop in the calling thread
-//! and one thread per agent, over `mrsim_transport::inproc` (crossbeam
-//! channels). The same world loop, agent loop and planners as a run over
-//! iceoryx2, without processes: the fast path for large headless
-//! experiments and the lower bound for the IPC cost.
+//! and the agents in threads, over `mrsim_transport::inproc` (crossbeam
+//! channels). The same world loop, agent code ([`mrsim_agents::join`] and
+//! [`mrsim_agents::Driver`]) and planners as a run over iceoryx2, without
+//! processes: the fast path for large headless experiments and the lower
+//! bound for the IPC cost.
+//!
+//! Each agent joins in a thread of its own, exactly as an agent process
+//! does; once joined it hands its [`Driver`] to one of a few worker threads
+//! (one per CPU this process may run on), which receive each snapshot once
+//! and answer for all their robots in one batch. A thread per agent woken
+//! by every snapshot cost two context switches per agent per tick, which
+//! bounded 64 robots at about 20x real time on two cores.
 
-use crate::usage::{AgentUsage, Metered, Scope};
+use crate::usage::{AgentUsage, Scope};
+use mrsim_agents::{AgentExit, Driver};
 use mrsim_scenario::Scenario;
+use mrsim_transport::inproc::{InprocWorker, WorkerEvent};
 use mrsim_world::metrics::RunMetrics;
 use std::path::Path;
 use std::sync::Arc;
@@ -55,19 +65,42 @@ pub fn run_scenario(
 ) -> Result<InprocOutcome, InprocError> {
     let world = mrsim_world::World::new(scenario)?;
     let n = scenario.robots.len();
-    let (mut link, sides) = mrsim_transport::inproc::channels(n, stop);
+    let workers = std::thread::available_parallelism()
+        .map_or(1, |p| p.get())
+        .clamp(1, n.max(1));
+    let (mut link, sides, pool) = mrsim_transport::inproc::pooled_channels(n, workers, stop);
+    // Worker w drives the robots i with i % workers == w.
+    let mut adopt = Vec::with_capacity(workers);
+    let mut worker_handles = Vec::with_capacity(workers);
+    for (w, side) in pool.into_iter().enumerate() {
+        let (tx, rx) = crossbeam::channel::unbounded::<Driver>();
+        adopt.push(tx);
+        let expected = (w..n).step_by(workers).count();
+        let handle = std::thread::Builder::new()
+            .name(format!("agents-{w}"))
+            .spawn(move || drive(side, rx, expected))
+            .map_err(|source| InprocError::Spawn {
+                robot: format!("worker {w}"),
+                source,
+            })?;
+        worker_handles.push(handle);
+    }
     let mut handles = Vec::with_capacity(n);
-    for (robot, mut side) in scenario.robots.iter().zip(sides) {
+    for (i, (robot, mut side)) in scenario.robots.iter().zip(sides).enumerate() {
         let opts = mrsim_agents::AgentOptions::new(&robot.name);
+        let to_worker = adopt[i % workers].clone();
         let handle = std::thread::Builder::new()
             .name(format!("agent-{}", robot.name))
             // Planners keep little on the stack; 1000 agents fit easily.
             .stack_size(512 * 1024)
-            .spawn(move || {
-                let mut metered = Metered::new(&mut side, Scope::Thread);
-                let result = mrsim_agents::run(&mut metered, &opts);
-                let usage = metered.usage();
-                (result.err().map(|e| e.to_string()), usage)
+            .spawn(move || match mrsim_agents::join(&mut side, &opts) {
+                Ok(Some(driver)) => {
+                    // A worker that is gone (the run ended) drops it.
+                    let _ = to_worker.send(driver);
+                    None
+                }
+                Ok(None) => None,
+                Err(e) => Some(e.to_string()),
             })
             .map_err(|source| InprocError::Spawn {
                 robot: robot.name.clone(),
@@ -75,6 +108,7 @@ pub fn run_scenario(
             })?;
         handles.push(handle);
     }
+    drop(adopt);
     let opts = mrsim_world::RunOptions {
         out_dir: out_dir.to_path_buf(),
         run_id: run_id.to_string(),
@@ -87,16 +121,39 @@ pub fn run_scenario(
     // waiting sees the world gone and ends.
     drop(link);
     let mut agent_errors = Vec::with_capacity(n);
-    let mut agent_usage = Vec::with_capacity(n);
     for h in handles {
-        match h.join() {
-            Ok((err, usage)) => {
-                agent_errors.push(err);
-                agent_usage.push(usage);
-            }
-            Err(_) => {
-                agent_errors.push(Some("the agent thread panicked".to_string()));
-                agent_usage.push(AgentUsage::default());
+        agent_errors.push(
+            h.join()
+                .unwrap_or_else(|_| Some("the agent thread panicked".to_string())),
+        );
+    }
+    // A worker's CPU time is shared equally among its robots.
+    let mut agent_usage = vec![AgentUsage::default(); n];
+    for (w, h) in worker_handles.into_iter().enumerate() {
+        let (usage, errors) = h.join().unwrap_or_else(|_| {
+            (
+                AgentUsage::default(),
+                vec![(usize::MAX, "the worker thread panicked".to_string())],
+            )
+        });
+        let mine: Vec<usize> = (w..n).step_by(workers).collect();
+        for &i in &mine {
+            agent_usage[i] = AgentUsage {
+                cpu_s: usage.cpu_s / mine.len().max(1) as f64,
+                maxrss_kb: usage.maxrss_kb,
+            };
+        }
+        for (i, e) in errors {
+            for j in if i == usize::MAX {
+                mine.clone()
+            } else {
+                vec![i]
+            } {
+                if let Some(slot) = agent_errors.get_mut(j)
+                    && slot.is_none()
+                {
+                    *slot = Some(e.clone());
+                }
             }
         }
     }
@@ -105,4 +162,97 @@ pub fn run_scenario(
         agent_errors,
         agent_usage,
     })
+}
+
+/// A worker thread: adopts the drivers of the robots that joined, and on
+/// each snapshot plans for all of them and sends their commands in one
+/// batch. Ends on the run's last snapshot, when asked to stop, or when the
+/// world is gone. Returns its CPU time (from the first snapshot to the
+/// end) and the errors of the robots it drove, by robot index.
+fn drive(
+    side: InprocWorker,
+    adopt: crossbeam::channel::Receiver<Driver>,
+    expected: usize,
+) -> (AgentUsage, Vec<(usize, String)>) {
+    let mut drivers: Vec<Driver> = Vec::with_capacity(expected);
+    let mut latest: Option<(
+        mrsim_proto::SnapshotHeader,
+        std::sync::Arc<[mrsim_proto::BodyState]>,
+    )> = None;
+    let mut errors = Vec::new();
+    let mut cpu_start = None;
+    let mut batch = Vec::with_capacity(expected);
+    let step = |d: &mut Driver,
+                h: &mrsim_proto::SnapshotHeader,
+                b: &[mrsim_proto::BodyState],
+                batch: &mut Vec<(mrsim_proto::CommandMsg, u64)>,
+                errors: &mut Vec<(usize, String)>| {
+        let woke = mrsim_proto::now_ns();
+        let r = d.on_snapshot(h, b, woke, &mut |m| {
+            batch.push((*m, mrsim_proto::now_ns()));
+            Ok(())
+        });
+        if let Err(e) = r {
+            errors.push((d.robot_id(), e.to_string()));
+        }
+    };
+    let exit = loop {
+        if side.termination_requested() {
+            break AgentExit::Interrupted;
+        }
+        // Robots that joined since: they answer the newest snapshot at once
+        // (in lockstep the world waits for them).
+        let mut adopted = false;
+        while let Ok(mut d) = adopt.try_recv() {
+            if let Some((h, b)) = &latest {
+                step(&mut d, h, b, &mut batch, &mut errors);
+            }
+            drivers.push(d);
+            adopted = true;
+        }
+        if adopted && let Err(e) = side.send_commands(std::mem::take(&mut batch)) {
+            errors.push((usize::MAX, e.to_string()));
+            break AgentExit::Finished;
+        }
+        // Poll often for newcomers until every robot of this worker joined
+        // (one whose join failed keeps it polling, which costs little).
+        let timeout = if drivers.len() >= expected {
+            Duration::from_millis(100)
+        } else {
+            Duration::from_millis(5)
+        };
+        match side.next(timeout) {
+            WorkerEvent::Snapshot(h, b) => {
+                if h.finished != 0 {
+                    break AgentExit::Finished;
+                }
+                cpu_start.get_or_insert_with(|| crate::usage::rusage(Scope::Thread).0);
+                for d in drivers.iter_mut() {
+                    step(d, &h, &b, &mut batch, &mut errors);
+                }
+                if let Err(e) = side.send_commands(std::mem::take(&mut batch)) {
+                    errors.push((usize::MAX, e.to_string()));
+                    break AgentExit::Finished;
+                }
+                latest = Some((h, b));
+            }
+            WorkerEvent::Idle => {}
+            WorkerEvent::WorldGone => {
+                errors.push((usize::MAX, mrsim_agents::AgentError::WorldGone.to_string()));
+                break AgentExit::Finished;
+            }
+        }
+    };
+    let (cpu_end, maxrss_kb) = crate::usage::rusage(Scope::Thread);
+    let usage = AgentUsage {
+        cpu_s: cpu_start.map_or(0.0, |s| (cpu_end - s).max(0.0)),
+        maxrss_kb,
+    };
+    for d in drivers {
+        let id = d.robot_id();
+        if let Err(e) = d.finish(exit) {
+            errors.push((id, e.to_string()));
+        }
+    }
+    (usage, errors)
 }

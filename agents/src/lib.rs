@@ -18,7 +18,7 @@ use mrsim_proto::{
     BodyState, CommandMsg, FixedStr, JoinRequest, PROTOCOL_VERSION, SnapshotHeader, command_kind,
     now_ns,
 };
-use mrsim_scenario::{RobotSpec, Scenario};
+use mrsim_scenario::RobotSpec;
 use mrsim_transport::{AgentTransport, TransportError};
 use std::time::{Duration, Instant};
 
@@ -131,6 +131,39 @@ pub fn build_planner(spec: &RobotSpec) -> Result<Box<dyn Planner>, mrsim_planner
 /// Joins the run as `opts.robot` and drives it until the world ends the
 /// run, the process is asked to stop, or something fails.
 pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentExit, AgentError> {
+    let Some(mut driver) = join(link, opts)? else {
+        return Ok(AgentExit::Interrupted);
+    };
+    let mut header = SnapshotHeader::default();
+    let mut bodies: Vec<BodyState> = Vec::with_capacity(driver.capacity);
+    let mut last_heard = Instant::now();
+    loop {
+        if link.termination_requested() {
+            return driver.finish(AgentExit::Interrupted);
+        }
+        link.wait(Duration::from_millis(100))?;
+        let woke = now_ns();
+        if !link.latest_snapshot(&mut header, &mut bodies)? {
+            if last_heard.elapsed() > opts.world_check_after && !link.world_alive() {
+                return Err(AgentError::WorldGone);
+            }
+            continue;
+        }
+        last_heard = Instant::now();
+        if header.finished != 0 {
+            return driver.finish(AgentExit::Finished);
+        }
+        driver.on_snapshot(&header, &bodies, woke, &mut |m| link.send_command(m))?;
+    }
+}
+
+/// Joins the run as `opts.robot` and reads the run's setup: the robot's
+/// [`Driver`], ready for the first snapshot. `None` if the process was
+/// asked to stop meanwhile.
+pub fn join(
+    link: &mut dyn AgentTransport,
+    opts: &AgentOptions,
+) -> Result<Option<Driver>, AgentError> {
     // Join: ask for the robot, re-asking until the world answers.
     let nonce = now_ns() ^ ((std::process::id() as u64) << 20) ^ 0x6d72_7369_6d00_0000;
     let req = JoinRequest {
@@ -143,7 +176,7 @@ pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentEx
     let mut last_ask: Option<Instant> = None;
     let reply = loop {
         if link.termination_requested() {
-            return Ok(AgentExit::Interrupted);
+            return Ok(None);
         }
         if last_ask.is_none_or(|t| t.elapsed() > Duration::from_millis(500)) {
             if last_ask.is_none() && opts.fault == Some(fault::Fault::JoinTwice) {
@@ -183,39 +216,40 @@ pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentEx
         }
         link.wait(Duration::from_millis(20))?;
     };
-    let value: serde_json::Value =
-        serde_json::from_slice(&setup).map_err(|e| AgentError::BadSetup(e.to_string()))?;
-    let scenario: Scenario =
-        serde_json::from_value(value.get("scenario").cloned().unwrap_or_default())
-            .map_err(|e| AgentError::BadSetup(e.to_string()))?;
     let me = reply.robot_id as usize;
-    let spec = scenario
+    let view: SetupView =
+        serde_json::from_slice(&setup).map_err(|e| AgentError::BadSetup(e.to_string()))?;
+    let scenario = view.scenario;
+    let spec: RobotSpec = scenario
         .robots
         .get(me)
-        .ok_or_else(|| AgentError::BadSetup(format!("no robot with id {me}")))?
-        .clone();
-    let mut planner = build_planner(&spec).map_err(|source| AgentError::Planner {
+        .ok_or_else(|| AgentError::BadSetup(format!("no robot with id {me}")))
+        .and_then(|raw| {
+            serde_json::from_str(raw.get()).map_err(|e| AgentError::BadSetup(e.to_string()))
+        })?;
+    let planner = build_planner(&spec).map_err(|source| AgentError::Planner {
         robot: spec.name.clone(),
         source,
     })?;
-    let walls: Vec<Segment> = scenario
-        .all_walls()
-        .iter()
-        .map(|w| Segment {
-            a: Vec2::new(w[0][0], w[0][1]),
-            b: Vec2::new(w[1][0], w[1][1]),
-        })
-        .collect();
+    let walls: Vec<Segment> =
+        mrsim_scenario::walls_and_arena(&scenario.walls, scenario.world.arena)
+            .iter()
+            .map(|w| Segment {
+                a: Vec2::new(w[0][0], w[0][1]),
+                b: Vec2::new(w[1][0], w[1][1]),
+            })
+            .collect();
     let path = (!spec.path.is_empty()).then(|| DesignatedPath {
         points: spec.path.iter().map(|p| Vec2::new(p[0], p[1])).collect(),
         boundary: spec.boundary.unwrap_or(f64::INFINITY),
     });
-    let mut observer = observe::Observer::new(&scenario, me);
+    let robot_count = scenario.robots.len();
+    let capacity = robot_count + scenario.obstacles;
+    let observer = observe::Observer::for_robot(&scenario.world, Some(&spec), me, capacity);
     // The planner's diagnostics go to a part file in the run's folder, when
     // the world's folder is reachable from here (same machine).
-    let mut diag = value
-        .get("out_dir")
-        .and_then(|d| d.as_str())
+    let diag = view
+        .out_dir
         .map(std::path::PathBuf::from)
         .filter(|d| d.is_dir())
         .and_then(
@@ -227,82 +261,164 @@ pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentEx
                 }
             },
         );
-    let finish = |diag: Option<diagnostics::DiagnosticsWriter>, exit: AgentExit| {
-        if let Some(Err(e)) = diag.map(diagnostics::DiagnosticsWriter::finish) {
-            eprintln!("agent {}: diagnostics not fully written: {e}", spec.name);
-        }
-        Ok(exit)
-    };
-    let capacity = scenario.robots.len() + scenario.obstacles.len();
-    let robot_count = scenario.robots.len();
-    // The whole scenario (every robot's spec) is no longer needed: with a
-    // thousand robots it is megabytes per agent.
-    drop(scenario);
-    drop(value);
-    drop(setup);
+    Ok(Some(Driver {
+        me,
+        claim: opts.impersonate.unwrap_or(me as u32),
+        token: reply.token,
+        robot_count,
+        capacity,
+        spec,
+        planner,
+        walls,
+        path,
+        observer,
+        diag,
+        answered: None,
+        injector: opts.fault.map(fault::Injector::new),
+        hung: false,
+    }))
+}
 
-    // Control loop.
-    let mut header = SnapshotHeader::default();
-    let mut bodies: Vec<BodyState> = Vec::with_capacity(capacity);
-    let mut answered: Option<u64> = None;
-    let mut last_heard = Instant::now();
-    let mut injector = opts.fault.map(fault::Injector::new);
-    let mut hung = false;
-    loop {
-        if link.termination_requested() {
-            return finish(diag, AgentExit::Interrupted);
+/// The part of the world's setup an agent reads. Only its own robot's
+/// entry is parsed (the others are skipped as raw text, nothing built): a
+/// thousand agents each building all thousand robots' specs cost O(n²) at
+/// join, seconds on two cores.
+#[derive(serde::Deserialize)]
+struct SetupView<'a> {
+    #[serde(borrow)]
+    scenario: ScenarioView<'a>,
+    #[serde(default)]
+    out_dir: Option<String>,
+}
+
+/// [`Scenario`] as an agent needs it.
+#[derive(serde::Deserialize)]
+struct ScenarioView<'a> {
+    world: mrsim_scenario::WorldConfig,
+    #[serde(borrow)]
+    robots: Vec<&'a serde_json::value::RawValue>,
+    /// Only counted.
+    #[serde(default, deserialize_with = "count")]
+    obstacles: usize,
+    #[serde(default)]
+    walls: Vec<mrsim_scenario::WallSpec>,
+}
+
+/// The length of a sequence, its items skipped.
+fn count<'de, D: serde::Deserializer<'de>>(d: D) -> Result<usize, D::Error> {
+    struct Count;
+    impl<'de> serde::de::Visitor<'de> for Count {
+        type Value = usize;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("a sequence")
         }
-        link.wait(Duration::from_millis(100))?;
-        let woke = now_ns();
-        if !link.latest_snapshot(&mut header, &mut bodies)? {
-            if last_heard.elapsed() > opts.world_check_after && !link.world_alive() {
-                return Err(AgentError::WorldGone);
+        fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<usize, A::Error> {
+            let mut n = 0;
+            while seq.next_element::<serde::de::IgnoredAny>()?.is_some() {
+                n += 1;
             }
-            continue;
+            Ok(n)
         }
-        last_heard = Instant::now();
-        if header.finished != 0 {
-            return finish(diag, AgentExit::Finished);
+    }
+    d.deserialize_seq(Count)
+}
+
+/// One joined robot's control: from each snapshot to its command. It holds
+/// no transport and no clock of its own, so the same driver runs in an
+/// agent process ([`run`]) or among many in a thread of an in-process run.
+pub struct Driver {
+    me: usize,
+    /// The robot id put in commands (another one only in fault tests).
+    claim: u32,
+    token: u64,
+    robot_count: usize,
+    capacity: usize,
+    spec: RobotSpec,
+    planner: Box<dyn Planner>,
+    walls: Vec<Segment>,
+    path: Option<DesignatedPath>,
+    observer: observe::Observer,
+    diag: Option<diagnostics::DiagnosticsWriter>,
+    answered: Option<u64>,
+    injector: Option<fault::Injector>,
+    hung: bool,
+}
+
+impl Driver {
+    /// The robot's index in the scenario.
+    pub fn robot_id(&self) -> usize {
+        self.me
+    }
+
+    /// Bodies a snapshot of this run holds (robots and obstacles).
+    pub fn capacity(&self) -> usize {
+        self.capacity
+    }
+
+    /// Plans on one snapshot (not the run's last) and hands the command to
+    /// `send`; `woke` is when the agent woke for it (CLOCK_MONOTONIC ns).
+    /// A tick already answered, or a snapshot without this robot, is
+    /// skipped.
+    pub fn on_snapshot(
+        &mut self,
+        header: &SnapshotHeader,
+        bodies: &[BodyState],
+        woke: u64,
+        send: &mut dyn FnMut(&CommandMsg) -> Result<(), TransportError>,
+    ) -> Result<(), AgentError> {
+        if self.hung || self.answered.is_some_and(|t| t >= header.tick) || self.me >= bodies.len() {
+            return Ok(());
         }
-        if hung || answered.is_some_and(|t| t >= header.tick) || me >= bodies.len() {
-            continue;
-        }
-        if let Some(inj) = injector.as_mut() {
-            hung = inj.before_plan(header.tick) == fault::Before::Hang;
-            if hung {
-                continue;
+        if let Some(inj) = self.injector.as_mut() {
+            self.hung = inj.before_plan(header.tick) == fault::Before::Hang;
+            if self.hung {
+                return Ok(());
             }
         }
         let t0 = now_ns();
-        let obs = observer.observe(&header, &bodies, &spec, &walls, path.as_ref());
-        let cmd = planner.plan(&obs);
+        let obs =
+            self.observer
+                .observe(header, bodies, &self.spec, &self.walls, self.path.as_ref());
+        let cmd = self.planner.plan(&obs);
         let compute_ns = now_ns().saturating_sub(t0);
         let (kind, v) = match cmd {
             Command::Force(f) => (command_kind::FORCE, f),
             Command::Velocity(v) => (command_kind::VELOCITY, v),
         };
         let msg = CommandMsg {
-            robot_id: opts.impersonate.unwrap_or(me as u32),
+            robot_id: self.claim,
             kind,
-            token: reply.token,
+            token: self.token,
             tick: header.tick,
             value: [v.x, v.y],
             compute_ns,
             woke_ns: woke,
             sent_ns: now_ns(),
         };
-        match &injector {
+        match &self.injector {
             Some(inj) => {
-                for m in inj.corrupt(msg, robot_count) {
-                    link.send_command(&m)?;
+                for m in inj.corrupt(msg, self.robot_count) {
+                    send(&m)?;
                 }
             }
-            None => link.send_command(&msg)?,
+            None => send(&msg)?,
         }
-        answered = Some(header.tick);
+        self.answered = Some(header.tick);
         // After the command is out: off the tick's critical path.
-        if let Some(d) = &mut diag {
-            d.push(header.tick, header.sim_time, planner.diagnostics());
+        if let Some(d) = &mut self.diag {
+            d.push(header.tick, header.sim_time, self.planner.diagnostics());
         }
+        Ok(())
+    }
+
+    /// Ends the robot's control: writes out its diagnostics.
+    pub fn finish(mut self, exit: AgentExit) -> Result<AgentExit, AgentError> {
+        if let Some(Err(e)) = self.diag.take().map(diagnostics::DiagnosticsWriter::finish) {
+            eprintln!(
+                "agent {}: diagnostics not fully written: {e}",
+                self.spec.name
+            );
+        }
+        Ok(exit)
     }
 }

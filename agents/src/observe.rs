@@ -16,7 +16,7 @@ use mrsim_planners::estimate::VelocityEstimator;
 use mrsim_planners::{BodyKind, DesignatedPath, Observation, Segment, SelfState, Sensed, Vec2};
 use mrsim_proto::{BodyState, SnapshotHeader, body_kind};
 use mrsim_scenario::rng::Rng;
-use mrsim_scenario::{RobotSpec, Scenario, VelocitySource};
+use mrsim_scenario::{RobotSpec, Scenario, VelocitySource, WorldConfig};
 
 /// Turns snapshots into observations for one robot; keeps the buffers.
 pub struct Observer {
@@ -33,17 +33,31 @@ pub struct Observer {
 impl Observer {
     /// An observer for robot `me` of `scenario`.
     pub fn new(scenario: &Scenario, me: usize) -> Self {
+        Self::for_robot(
+            &scenario.world,
+            scenario.robots.get(me),
+            me,
+            scenario.robots.len() + scenario.obstacles.len(),
+        )
+    }
+
+    /// An observer for robot `me` (its entry `spec`, if known) of a run
+    /// with `world` and `bodies` bodies in each snapshot.
+    pub fn for_robot(
+        world: &WorldConfig,
+        spec: Option<&RobotSpec>,
+        me: usize,
+        bodies: usize,
+    ) -> Self {
         Self {
             me,
-            dt: scenario.world.dt,
-            others: Vec::with_capacity(scenario.robots.len() + scenario.obstacles.len()),
-            estimator: scenario
-                .robots
-                .get(me)
+            dt: world.dt,
+            others: Vec::with_capacity(bodies),
+            estimator: spec
                 .is_some_and(|r| r.velocity_source == VelocitySource::Differenced)
                 .then(VelocityEstimator::new),
-            noise: scenario.robots.get(me).map_or(0.0, |r| r.position_noise),
-            rng: Rng::stream(scenario.world.seed, "position-noise", me as u64),
+            noise: spec.map_or(0.0, |r| r.position_noise),
+            rng: Rng::stream(world.seed, "position-noise", me as u64),
         }
     }
 
@@ -72,6 +86,15 @@ impl Observer {
         self.others.clear();
         for b in bodies.iter() {
             if b.id as usize == self.me {
+                continue;
+            }
+            // Clearly out of range (centre distance squared well beyond the
+            // range plus both radii): skipped without a square root. Bodies
+            // near the limit go through the exact test below, so what is
+            // sensed does not change.
+            let (dx, dy) = (b.position[0] - position.x, b.position[1] - position.y);
+            let reach = (spec.sensing_range + b.radius + spec.radius) * (1.0 + 1e-9) + 1e-9;
+            if dx * dx + dy * dy > reach * reach {
                 continue;
             }
             let p = Vec2::new(b.position[0], b.position[1]);

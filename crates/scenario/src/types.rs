@@ -263,15 +263,7 @@ pub struct Scenario {
 impl Scenario {
     /// Every wall segment, the arena's four sides included.
     pub fn all_walls(&self) -> Vec<[[f64; 2]; 2]> {
-        let mut out: Vec<[[f64; 2]; 2]> = self.walls.iter().map(|w| w.segment).collect();
-        if let Some(a) = self.world.arena {
-            let (x0, y0, x1, y1) = (a.min[0], a.min[1], a.max[0], a.max[1]);
-            out.push([[x0, y0], [x1, y0]]);
-            out.push([[x1, y0], [x1, y1]]);
-            out.push([[x1, y1], [x0, y1]]);
-            out.push([[x0, y1], [x0, y0]]);
-        }
-        out
+        walls_and_arena(&self.walls, self.world.arena)
     }
 
     /// Number of ticks the run lasts at most.
@@ -283,4 +275,18 @@ impl Scenario {
     pub fn robot_index(&self, name: &str) -> Option<usize> {
         self.robots.iter().position(|r| r.name == name)
     }
+}
+
+/// The segments of `walls` and, with an `arena`, its four sides (as
+/// [`Scenario::all_walls`]).
+pub fn walls_and_arena(walls: &[WallSpec], arena: Option<Arena>) -> Vec<[[f64; 2]; 2]> {
+    let mut out: Vec<[[f64; 2]; 2]> = walls.iter().map(|w| w.segment).collect();
+    if let Some(a) = arena {
+        let (x0, y0, x1, y1) = (a.min[0], a.min[1], a.max[0], a.max[1]);
+        out.push([[x0, y0], [x1, y0]]);
+        out.push([[x1, y0], [x1, y1]]);
+        out.push([[x1, y1], [x0, y1]]);
+        out.push([[x0, y1], [x0, y0]]);
+    }
+    out
 }

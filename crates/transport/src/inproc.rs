@@ -1,6 +1,12 @@
 //! The in-process transport: the world and its agents as threads of one
 //! process, over crossbeam channels. Same interface as [`crate::shm`]; the
 //! lower bound for the IPC cost and the fast path for large headless runs.
+//!
+//! Two layouts: [`channels`] gives every agent its own side (a thread per
+//! agent, each woken by every snapshot); [`pooled_channels`] also gives a
+//! few [`InprocWorker`]s that receive each snapshot once and answer for
+//! many agents in one batch, so a tick costs a few thread wake-ups instead
+//! of two per agent (the agents' sides then serve only to join).
 
 use crate::{AgentTransport, TransportError, WorldTransport};
 use crossbeam::channel::{Receiver, Sender, unbounded};
@@ -13,6 +19,8 @@ enum ToWorld {
     /// A join request and the index of the agent side that sent it.
     Join(JoinRequest, usize),
     Command(CommandMsg, u64),
+    /// A worker's commands of one snapshot, each with its time.
+    Commands(Vec<(CommandMsg, u64)>),
 }
 
 enum ToAgent {
@@ -24,6 +32,8 @@ enum ToAgent {
 pub struct InprocWorld {
     rx: Receiver<ToWorld>,
     agents: Vec<Sender<ToAgent>>,
+    /// With workers, snapshots go to them, not to the agents' sides.
+    workers: Vec<Sender<ToAgent>>,
     setup: Arc<std::sync::Mutex<Option<Vec<u8>>>>,
     pending: Vec<ToWorld>,
     /// Which agent side asked with which nonce, so a reply goes to it alone.
@@ -74,6 +84,7 @@ pub fn channels(agents: usize, stop: Arc<AtomicBool>) -> (InprocWorld, Vec<Inpro
         InprocWorld {
             rx,
             agents: senders,
+            workers: Vec::new(),
             setup,
             pending: Vec::new(),
             asked_by: std::collections::HashMap::new(),
@@ -82,6 +93,90 @@ pub fn channels(agents: usize, stop: Arc<AtomicBool>) -> (InprocWorld, Vec<Inpro
         },
         sides,
     )
+}
+
+/// A worker's side of a pooled in-process run: it receives every snapshot
+/// once and sends the commands of all its agents in one batch.
+pub struct InprocWorker {
+    rx: Receiver<ToAgent>,
+    tx: Sender<ToWorld>,
+    stop: Arc<AtomicBool>,
+}
+
+/// Creates a world side, `agents` agent sides (to join with) and `workers`
+/// worker sides (to answer snapshots with), all connected. `stop` plays the
+/// role of SIGTERM for every side.
+pub fn pooled_channels(
+    agents: usize,
+    workers: usize,
+    stop: Arc<AtomicBool>,
+) -> (InprocWorld, Vec<InprocAgent>, Vec<InprocWorker>) {
+    let (mut world, sides) = channels(agents, stop.clone());
+    let tx = sides
+        .first()
+        .map(|s| s.tx.clone())
+        .unwrap_or_else(|| unbounded().0);
+    let mut pool = Vec::with_capacity(workers);
+    for _ in 0..workers.max(1) {
+        let (wtx, wrx) = unbounded();
+        world.workers.push(wtx);
+        pool.push(InprocWorker {
+            rx: wrx,
+            tx: tx.clone(),
+            stop: stop.clone(),
+        });
+    }
+    (world, sides, pool)
+}
+
+/// What an [`InprocWorker`] received.
+#[derive(Debug)]
+pub enum WorkerEvent {
+    /// A snapshot (the newest, when several were waiting).
+    Snapshot(SnapshotHeader, Arc<[BodyState]>),
+    /// Nothing within the timeout.
+    Idle,
+    /// The world is gone (its side was dropped).
+    WorldGone,
+}
+
+impl InprocWorker {
+    /// Waits up to `timeout` for the next snapshot.
+    pub fn next(&self, timeout: Duration) -> WorkerEvent {
+        let first = match self.rx.recv_timeout(timeout) {
+            Ok(m) => m,
+            Err(crossbeam::channel::RecvTimeoutError::Timeout) => return WorkerEvent::Idle,
+            Err(crossbeam::channel::RecvTimeoutError::Disconnected) => {
+                return WorkerEvent::WorldGone;
+            }
+        };
+        let mut latest = None;
+        for m in std::iter::once(first).chain(self.rx.try_iter()) {
+            if let ToAgent::Snapshot(h, b) = m {
+                latest = Some((h, b));
+            }
+        }
+        match latest {
+            Some((h, b)) => WorkerEvent::Snapshot(h, b),
+            None => WorkerEvent::Idle,
+        }
+    }
+
+    /// Sends one snapshot's commands (each with the time it was made) to
+    /// the world in one message.
+    pub fn send_commands(&self, cmds: Vec<(CommandMsg, u64)>) -> Result<(), TransportError> {
+        if cmds.is_empty() {
+            return Ok(());
+        }
+        self.tx
+            .send(ToWorld::Commands(cmds))
+            .map_err(|_| TransportError::Disconnected)
+    }
+
+    /// True once the run was asked to stop.
+    pub fn termination_requested(&self) -> bool {
+        self.stop.load(Ordering::Relaxed)
+    }
 }
 
 impl Drop for InprocWorld {
@@ -111,7 +206,12 @@ impl WorldTransport for InprocWorld {
     ) -> Result<(), TransportError> {
         let h = *header;
         let shared: Arc<[BodyState]> = Arc::from(bodies);
-        for a in &self.agents {
+        let to = if self.workers.is_empty() {
+            &self.agents
+        } else {
+            &self.workers
+        };
+        for a in to {
             // An agent thread that has ended simply misses the snapshot.
             let _ = a.send(ToAgent::Snapshot(h, shared.clone()));
         }
@@ -137,6 +237,7 @@ impl WorldTransport for InprocWorld {
         for m in self.pending.drain(..) {
             match m {
                 ToWorld::Command(c, t) => f(c, t),
+                ToWorld::Commands(cs) => cs.into_iter().for_each(|(c, t)| f(c, t)),
                 other => rest.push(other),
             }
         }
