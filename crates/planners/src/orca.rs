@@ -79,6 +79,12 @@
 //! RVO2 as here (RVO2's own Circle of 250: overlaps up to 0.91 of a 3.0
 //! combined radius). `radius_margin` pads every disc when planning, the
 //! safety buffer RVO2's users add; the e2e Circle of 32 uses it.
+//!
+//! ORCA is local: robots pressed against a wall with crossing goals can
+//! come to rest touching, each preferred velocity inside the cone of its
+//! constraints' outward normals, a jam that the preferred-velocity
+//! perturbation cannot break (RVO2's Blocks example: 2 of 100 seeded runs,
+//! in RVO2 as here; BENCHMARKS.md, "ORCA vs RVO2").
 
 use crate::{
     BodyKind, Command, Diagnostic, Observation, ParamError, ParamReader, Params, Planner, Segment,
@@ -521,8 +527,10 @@ impl Orca {
                     });
                 }
                 continue;
-            } else if (0.0..1.0).contains(&s) && dist_sq_line <= radius_sq {
-                // Collision with obstacle segment.
+            } else if (0.0..=1.0).contains(&s) && dist_sq_line <= radius_sq {
+                // Collision with obstacle segment (both ends included, as
+                // in RVO2: a robot exactly abreast of the end, s = 1, is
+                // still colliding with the segment).
                 self.lines.push(Line {
                     point: Vec2::zeros(),
                     direction: -verts[i1].unit_dir,
@@ -1282,6 +1290,23 @@ mod tests {
     }
 
     #[test]
+    fn a_robot_touching_a_wall_exactly_abreast_of_its_end_gets_the_segment_collision_line() {
+        // Wall from (0, 0) to (10, 0), seen from below; a robot of radius 2
+        // at (10, -1) projects exactly onto the wall's end (s = 1) and
+        // overlaps the wall. RVO2 takes 0 <= s <= 1 as "collision with
+        // obstacle segment": the line through the origin along the wall
+        // reversed, leaving only velocities away from the wall.
+        let mut set = ObstacleSet::default();
+        set.push_walls(&[seg((0.0, 0.0), (10.0, 0.0))], Vec2::new(10.0, -1.0));
+        let lines = obstacle_lines(set, Vec2::new(10.0, -1.0), Vec2::zeros());
+        let expected = Line {
+            point: Vec2::zeros(),
+            direction: Vec2::new(-1.0, 0.0),
+        };
+        assert_eq!(lines.first(), Some(&expected), "{lines:?}");
+    }
+
+    #[test]
     fn a_square_drawn_as_four_walls_in_any_order_is_rvo2s_polygon() {
         // RVO2's Blocks obstacle 2, counter-clockwise, and the same square as
         // four walls, shuffled and some reversed.
@@ -1588,6 +1613,171 @@ mod tests {
         assert!(!all_reached(&sim, &goals));
         assert!(min_gap >= -TOUCH, "overlap {min_gap}");
         assert!(sim.robots.iter().all(|r| r.state.velocity.norm() < 1e-3));
+    }
+
+    /// RVO2's Blocks obstacle 4 (the lower-left square), as four walls.
+    fn blocks_square_4() -> Vec<Segment> {
+        let corners = [
+            (-10.0, -40.0),
+            (-10.0, -10.0),
+            (-40.0, -10.0),
+            (-40.0, -40.0),
+        ];
+        (0..4)
+            .map(|k| seg(corners[k], corners[(k + 1) % 4]))
+            .collect()
+    }
+
+    /// ORCA with RVO2's Blocks parameters and perturbation, `seed` drawn.
+    fn blocks_orca(seed: u64) -> Orca {
+        Orca {
+            perturb: 1e-4,
+            seed,
+            ..Orca::new(15.0, 10, 5.0, 5.0, 1.0)
+        }
+    }
+
+    #[test]
+    fn three_robots_wedged_under_a_square_with_crossing_goals_stay_jammed_as_in_rvo2() {
+        // Blocks' perturbation seed 7 ends with this jam under square 4
+        // (BENCHMARKS.md, "Blocks"): two robots touching the bottom wall
+        // head on, one wanting to pass right (goal up-right), one left
+        // (goal up-left), and a third wedged below them between both,
+        // wanting up-left. Each preferred velocity lies in the cone of its
+        // constraints' normals (wall, and the touching neighbours' ORCA
+        // lines through the current velocity), so the programs stay
+        // feasible and the closest admissible velocity is (nearly) zero;
+        // RVO2 fed the same three discs (f32 and f64) is still jammed
+        // after 20,000 steps. ORCA is local: nothing makes one of them back
+        // off.
+        let mut sim = Sim::new(0.25, 1);
+        sim.walls = blocks_square_4();
+        let h = (4.01f64 * 4.01 - 2.005 * 2.005).sqrt();
+        let robots = [
+            (Vec2::new(-26.51, -42.001), Vec2::new(75.0, 75.0)),
+            (Vec2::new(-22.5, -42.001), Vec2::new(-75.0, 75.0)),
+            (Vec2::new(-24.505, -42.001 - h), Vec2::new(-75.0, 75.0)),
+        ];
+        for (start, goal) in robots {
+            sim.add_robot(
+                Box::new(blocks_orca(7)),
+                start,
+                goal,
+                2.0,
+                1.0,
+                0.0,
+                2.0,
+                1e12,
+            );
+        }
+        // 500 s, in which a free robot would cover its 130-160 to the goal
+        // three times over at its preferred speed of 1.
+        for _ in 0..2000 {
+            sim.step();
+            for i in 0..3 {
+                assert!(!infeasible(&sim, i), "robot {i}: infeasible program");
+            }
+        }
+        for (i, (start, goal)) in robots.iter().enumerate() {
+            let p = sim.robots[i].state.position;
+            assert!((p - start).norm() < 1.0, "robot {i} got loose: {p:?}");
+            assert!((p - goal).norm() > 100.0);
+            assert!(sim.robots[i].state.velocity.norm() < 0.01);
+        }
+        for i in 0..3 {
+            for j in i + 1..3 {
+                assert!(gap(&sim, i, j) >= -TOUCH, "{i} and {j} overlap");
+            }
+        }
+    }
+
+    /// RVO2's Blocks example (examples/Blocks.cc: 100 agents, four squares,
+    /// its parameters and preferred-velocity perturbation) for the
+    /// perturbation seeds in `BLOCKS_SEEDS` (default 1..=10); prints each
+    /// makespan in steps, as BENCHMARKS.md compares with RVO2's (run with
+    /// `BLOCKS_SEEDS=1-10 cargo test --release -p mrsim-planners rvo2_blocks -- --ignored --nocapture`).
+    #[test]
+    #[ignore]
+    fn rvo2_blocks_reports_its_makespan_for_each_perturbation_seed() {
+        let (first, last) = std::env::var("BLOCKS_SEEDS")
+            .ok()
+            .and_then(|s| {
+                let (a, b) = s.split_once('-').unwrap_or((&s, &s));
+                Some((a.trim().parse::<u64>().ok()?, b.trim().parse::<u64>().ok()?))
+            })
+            .unwrap_or((1, 10));
+        let polygons = [
+            [(-10.0, 40.0), (-40.0, 40.0), (-40.0, 10.0), (-10.0, 10.0)],
+            [(10.0, 40.0), (10.0, 10.0), (40.0, 10.0), (40.0, 40.0)],
+            [(10.0, -40.0), (40.0, -40.0), (40.0, -10.0), (10.0, -10.0)],
+            [
+                (-10.0, -40.0),
+                (-10.0, -10.0),
+                (-40.0, -10.0),
+                (-40.0, -40.0),
+            ],
+        ];
+        for seed in first..=last {
+            let mut sim = Sim::new(0.25, 1);
+            for p in polygons {
+                sim.walls.extend((0..4).map(|k| seg(p[k], p[(k + 1) % 4])));
+            }
+            let mut goals = Vec::new();
+            // Blocks.cc's order: per grid cell, one agent of each group.
+            for i in 0..5 {
+                for j in 0..5 {
+                    let (x, y) = (55.0 + 10.0 * i as f64, 55.0 + 10.0 * j as f64);
+                    for (sx, sy) in [(1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)] {
+                        let goal = Vec2::new(-75.0 * sx, -75.0 * sy);
+                        goals.push(goal);
+                        let start = Vec2::new(x * sx, y * sy);
+                        let orca = Box::new(blocks_orca(seed));
+                        sim.add_robot(orca, start, goal, 2.0, 1.0, 0.0, 2.0, 1e12);
+                    }
+                }
+            }
+            // Blocks.cc's reachedGoal: every agent within 20 of its goal.
+            let done = |sim: &Sim| {
+                sim.robots
+                    .iter()
+                    .zip(&goals)
+                    .all(|(r, g)| (r.state.position - g).norm_squared() <= 400.0)
+            };
+            let (mut min_gap, mut steps) = (f64::INFINITY, 0);
+            while steps < 20_000 && !done(&sim) {
+                sim.step();
+                steps += 1;
+                for i in 0..sim.robots.len() {
+                    for j in i + 1..sim.robots.len() {
+                        min_gap = min_gap.min(gap(&sim, i, j));
+                    }
+                }
+            }
+            let out: Vec<String> = sim
+                .robots
+                .iter()
+                .zip(&goals)
+                .enumerate()
+                .filter(|(_, (r, g))| (r.state.position - *g).norm_squared() > 400.0)
+                .map(|(i, (r, _))| {
+                    let p = r.state.position;
+                    format!("a{i} at ({:.2}, {:.2})", p.x, p.y)
+                })
+                .collect();
+            println!(
+                "blocks seed {seed}: {} steps, min gap {min_gap:.4}{}",
+                if out.is_empty() {
+                    steps.to_string()
+                } else {
+                    format!("> {steps}")
+                },
+                if out.is_empty() {
+                    String::new()
+                } else {
+                    format!(", not in: {}", out.join(", "))
+                }
+            );
+        }
     }
 
     /// RVO2's Circle example at full size, with its exact symmetric start;
