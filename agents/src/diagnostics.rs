@@ -328,7 +328,7 @@ mod tests {
         let dir = temp_dir("merge");
         // Robot 1 writes first, robot 0 second; ticks interleave.
         for (id, name, ticks) in [(1usize, "b", [0u64, 1, 2]), (0, "a", [0, 1, 2])] {
-            let w = DiagnosticsWriter::start(&dir, id, name).expect("writer");
+            let mut w = DiagnosticsWriter::start(&dir, id, name).expect("writer");
             for t in ticks {
                 w.push(
                     t,
@@ -361,7 +361,7 @@ mod tests {
     #[test]
     fn a_planner_that_reports_nothing_leaves_no_file_and_no_merged_file() {
         let dir = temp_dir("empty");
-        let w = DiagnosticsWriter::start(&dir, 0, "a").expect("writer");
+        let mut w = DiagnosticsWriter::start(&dir, 0, "a").expect("writer");
         w.push(0, 0.0, Vec::new());
         w.finish().expect("flushed");
         assert_eq!(std::fs::read_dir(&dir).expect("dir").count(), 0);
