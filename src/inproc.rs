@@ -204,6 +204,7 @@ fn drive(
         // (in lockstep the world waits for them).
         let mut adopted = false;
         while let Ok(mut d) = adopt.try_recv() {
+            batch.push((d.ready(), mrsim_proto::now_ns()));
             if let Some((h, b)) = &latest {
                 step(&mut d, h, b, &mut batch, &mut errors);
             }

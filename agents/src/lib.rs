@@ -134,6 +134,7 @@ pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentEx
     let Some(mut driver) = join(link, opts)? else {
         return Ok(AgentExit::Interrupted);
     };
+    link.send_command(&driver.ready())?;
     let mut header = SnapshotHeader::default();
     let mut bodies: Vec<BodyState> = Vec::with_capacity(driver.capacity);
     let mut last_heard = Instant::now();
@@ -348,6 +349,24 @@ impl Driver {
     /// The robot's index in the scenario.
     pub fn robot_id(&self) -> usize {
         self.me
+    }
+
+    /// The message telling the world this robot's agent is ready (sent
+    /// once, right after [`join`]).
+    pub fn ready(&self) -> CommandMsg {
+        let now = now_ns();
+        CommandMsg {
+            // Its own robot even when impersonating (fault tests): the
+            // world must start the run to see the forged commands.
+            robot_id: self.me as u32,
+            kind: command_kind::READY,
+            token: self.token,
+            tick: 0,
+            value: [0.0, 0.0],
+            compute_ns: 0,
+            woke_ns: now,
+            sent_ns: now,
+        }
     }
 
     /// Bodies a snapshot of this run holds (robots and obstacles).

@@ -114,6 +114,8 @@ struct Loop<'a> {
     clearance: Vec<f64>,
     last_pid_check: Instant,
     pid_checks: u64,
+    /// Agents that have said they are ready (setup read, planner built).
+    ready: Vec<bool>,
     live: LiveStats,
     clock_start: Option<Instant>,
 }
@@ -262,6 +264,10 @@ impl Loop<'_> {
         if !owner_ok {
             return self.reject(&cmd, "not sent by the agent that owns this robot");
         }
+        if cmd.kind == command_kind::READY {
+            self.ready[i] = true;
+            return;
+        }
         if cmd.tick > self.tick {
             return self.reject(&cmd, "command for a future tick");
         }
@@ -381,6 +387,14 @@ impl Loop<'_> {
     /// Every live agent has answered this tick: with a valid command, or
     /// with garbage (rejected; the robot brakes and the world moves on
     /// rather than waiting `stall_timeout` for an answer that came).
+    /// Every live agent has said it is ready.
+    fn all_ready(&self) -> bool {
+        self.agents
+            .iter()
+            .zip(&self.ready)
+            .all(|(a, r)| !matches!(a, Agent::Live { .. }) || *r)
+    }
+
     fn all_answered(&self) -> bool {
         self.agents
             .iter()
@@ -593,6 +607,7 @@ pub fn run(
         clearance: Vec::with_capacity(n),
         last_pid_check: Instant::now(),
         pid_checks: 0,
+        ready: vec![false; n],
         live: LiveStats::new(n),
         clock_start: None,
     };
@@ -607,7 +622,10 @@ pub fn run(
         "waiting for {n} agents to join run {}",
         lp.opts.run_id
     ));
-    while lp.agents.contains(&Agent::Waiting) {
+    // Then every one must be ready (setup read, planner built), so that the
+    // first ticks are not lost to start-up in realtime, nor its time counted
+    // as the first tick's latency in lockstep.
+    while lp.agents.contains(&Agent::Waiting) || !lp.all_ready() {
         if lp.link.termination_requested() {
             interrupted = true;
             break;
@@ -619,7 +637,7 @@ pub fn run(
                 .agents
                 .iter()
                 .enumerate()
-                .filter(|(_, a)| **a == Agent::Waiting)
+                .filter(|(i, a)| **a == Agent::Waiting || !lp.ready[*i])
                 .map(|(i, _)| lp.names[i].as_str())
                 .collect();
             // Tell the agents that did join to stop.

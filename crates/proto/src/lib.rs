@@ -11,7 +11,7 @@ use iceoryx2::prelude::ZeroCopySend;
 
 /// Bumped whenever a wire type changes shape or meaning. An agent whose
 /// version differs from the world's is refused at join time.
-pub const PROTOCOL_VERSION: u32 = 1;
+pub const PROTOCOL_VERSION: u32 = 2;
 
 /// Longest robot name, in bytes, that fits a [`JoinRequest`].
 pub const MAX_NAME_LEN: usize = 64;
@@ -82,6 +82,10 @@ pub mod command_kind {
     pub const FORCE: u32 = 0;
     /// Velocity set-point, tracked by a first-order lag.
     pub const VELOCITY: u32 = 1;
+    /// Not a command: the agent has read the setup and built its planner
+    /// (sent once after joining; the world starts the clock only when every
+    /// agent is ready, so the first ticks are not lost to start-up).
+    pub const READY: u32 = 2;
 }
 
 /// One agent's answer to one tick.
