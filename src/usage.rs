@@ -131,4 +131,7 @@ impl AgentTransport for Metered<'_> {
     fn termination_requested(&self) -> bool {
         self.inner.termination_requested()
     }
+    fn joined(&mut self) {
+        self.inner.joined()
+    }
 }

@@ -135,6 +135,7 @@ pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentEx
         return Ok(AgentExit::Interrupted);
     };
     link.send_command(&driver.ready())?;
+    link.joined();
     let mut header = SnapshotHeader::default();
     let mut bodies: Vec<BodyState> = Vec::with_capacity(driver.capacity);
     let mut last_heard = Instant::now();

@@ -130,6 +130,9 @@ pub trait AgentTransport {
     fn world_alive(&mut self) -> bool;
     /// True once the process was asked to terminate (SIGINT, SIGTERM).
     fn termination_requested(&self) -> bool;
+    /// The agent has joined and read the setup: the ports used only to
+    /// join may be closed (joining again then fails).
+    fn joined(&mut self) {}
 }
 
 /// A read-only observer of a running world (`mrsim top`, the launcher's

@@ -280,7 +280,8 @@ impl ShmWorld {
             .create()
             .map_err(|e| setup_err("wake listener", e))?;
 
-        let stats_pub = slice_publisher(&node, "stats", 1, agents + 2, nodes, cap.robots)?;
+        // Only observers (`mrsim top`, the launcher) read the statistics.
+        let stats_pub = slice_publisher(&node, "stats", 1, Capacity::SPARE + 2, nodes, cap.robots)?;
 
         Ok(Self {
             node,
@@ -422,8 +423,10 @@ impl WorldTransport for ShmWorld {
         };
         // Observers that subscribed since the last call get the setup's
         // history only when its publisher updates its connections (cheap
-        // when nobody new came).
+        // when nobody new came); agents that have joined closed their setup
+        // and join-reply subscribers, whose connections this unmaps.
         let _ = self.setup_pub.update_connections();
+        let _ = self.reply_pub.update_connections();
         send_slice(&self.stats_pub, "stats", &header, &robots[..n])
     }
 }
@@ -439,13 +442,29 @@ pub struct ShmAgent {
 
 /// An agent's ports on the run's services.
 struct AgentPorts {
-    setup_sub: Subscriber<S, [u8], ()>,
+    /// Needed only to join: dropped once joined (each port is a shared
+    /// memory connection the world maps too, 16 kB of its RSS per agent).
+    joining: Option<JoinPorts>,
     snap_sub: Subscriber<S, [BodyState], SnapshotHeader>,
     tick: Listener<S>,
-    join_pub: Publisher<S, JoinRequest, ()>,
-    reply_sub: Subscriber<S, JoinReply, ()>,
     cmd_pub: Publisher<S, CommandMsg, ()>,
     wake: Notifier<S>,
+}
+
+/// The ports an agent joins with.
+struct JoinPorts {
+    setup_sub: Subscriber<S, [u8], ()>,
+    join_pub: Publisher<S, JoinRequest, ()>,
+    reply_sub: Subscriber<S, JoinReply, ()>,
+}
+
+impl AgentPorts {
+    fn joining(&self, what: &'static str) -> Result<&JoinPorts, TransportError> {
+        self.joining.as_ref().ok_or_else(|| TransportError::Setup {
+            what: what.to_string(),
+            detail: "this agent has already joined (its join ports are closed)".to_string(),
+        })
+    }
 }
 
 impl ShmAgent {
@@ -532,11 +551,13 @@ impl ShmAgent {
             .create()
             .map_err(|e| setup_err("wake notifier", e))?;
         Ok(AgentPorts {
-            setup_sub,
+            joining: Some(JoinPorts {
+                setup_sub,
+                join_pub,
+                reply_sub,
+            }),
             snap_sub,
             tick,
-            join_pub,
-            reply_sub,
             cmd_pub,
             wake,
         })
@@ -764,6 +785,7 @@ where
 impl AgentTransport for ShmAgent {
     fn request_join(&mut self, req: &JoinRequest) -> Result<(), TransportError> {
         self.ports
+            .joining("join publisher")?
             .join_pub
             .send_copy(*req)
             .map_err(|e| TransportError::Send {
@@ -782,7 +804,12 @@ impl AgentTransport for ShmAgent {
 
     fn poll_join_reply(&mut self, nonce: u64) -> Result<Option<JoinReply>, TransportError> {
         loop {
-            match self.ports.reply_sub.receive() {
+            match self
+                .ports
+                .joining("join-reply subscriber")?
+                .reply_sub
+                .receive()
+            {
                 Ok(Some(s)) if s.payload().nonce == nonce => {
                     let reply = *s.payload();
                     if reply.world_pid != 0 {
@@ -803,7 +830,7 @@ impl AgentTransport for ShmAgent {
     }
 
     fn setup(&mut self) -> Result<Option<Vec<u8>>, TransportError> {
-        match self.ports.setup_sub.receive() {
+        match self.ports.joining("setup subscriber")?.setup_sub.receive() {
             Ok(Some(s)) => Ok(Some(s.payload().to_vec())),
             Ok(None) => Ok(None),
             Err(e) => Err(TransportError::Receive {
@@ -841,6 +868,10 @@ impl AgentTransport for ShmAgent {
                 detail: format!("{e:?}"),
             })?;
         Ok(())
+    }
+
+    fn joined(&mut self) {
+        self.ports.joining = None;
     }
 
     fn world_alive(&mut self) -> bool {
