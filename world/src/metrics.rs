@@ -293,6 +293,14 @@ pub struct ClearanceGrid {
     fill: Vec<u32>,
 }
 
+/// Distance between two bodies' centres: the plain square root of the sum
+/// of squares (`hypot`'s overflow guard costs a quarter of the whole
+/// clearance pass at 1000 robots, and positions are nowhere near 1e150).
+fn centre_distance(a: &mrsim_proto::BodyState, b: &mrsim_proto::BodyState) -> f64 {
+    let (dx, dy) = (a.position[0] - b.position[0], a.position[1] - b.position[1]);
+    (dx * dx + dy * dy).sqrt()
+}
+
 impl ClearanceGrid {
     /// Fills `out[i]` for each of the first `robots` bodies of `states`:
     /// min over j != i of |p_i - p_j| - r_j - r_i (infinity if alone).
@@ -381,8 +389,7 @@ impl ClearanceGrid {
                                 let j = j as usize;
                                 if j != i {
                                     let q = &states[j];
-                                    let d = (q.position[0] - s.position[0])
-                                        .hypot(q.position[1] - s.position[1]);
+                                    let d = centre_distance(q, s);
                                     best = best.min(d - q.radius - s.radius);
                                 }
                             }
@@ -405,7 +412,7 @@ fn brute(states: &[mrsim_proto::BodyState], i: usize) -> f64 {
     let mut clear = f64::INFINITY;
     for (j, o) in states.iter().enumerate() {
         if j != i {
-            let d = (o.position[0] - s.position[0]).hypot(o.position[1] - s.position[1]);
+            let d = centre_distance(o, s);
             clear = clear.min(d - o.radius - s.radius);
         }
     }
