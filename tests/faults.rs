@@ -651,9 +651,15 @@ fn bad_commands_are_rejected_counted_logged_and_never_drive_a_robot() {
     }
     // Two per tick: the second is rejected (as a second command, or as one
     // for a past tick when the world has moved on before it arrives), every
-    // tick; the first drives the robot home.
+    // tick; the first drives the robot home. The last tick's second command
+    // can arrive after the world has stopped reading (the run is over), so
+    // it may go uncounted.
     let got = reasons("double");
-    assert_eq!(got.len() as u64, ticks, "{got:?}");
+    assert!(
+        got.len() as u64 == ticks || got.len() as u64 + 1 == ticks,
+        "{} rejections in {ticks} ticks: {got:?}",
+        got.len()
+    );
     assert!(
         got.iter()
             .all(|w| w.contains("second command") || w.contains("past tick")),

@@ -791,6 +791,13 @@ pub fn run(
             break;
         }
     }
+    // Commands already on their way for the last tick (an agent that sent
+    // two, a late one) are still counted and logged, not left unread.
+    let mut stray = Vec::new();
+    let _ = lp.link.drain_commands(&mut |c, t| stray.push((c, t)));
+    for (c, t) in stray {
+        lp.handle_command(c, t, realtime);
+    }
     // A termination request that came while the last tick ended the run
     // (its agents stopped with it) still makes the run an interrupted one.
     interrupted |= lp.link.termination_requested();
