@@ -386,6 +386,33 @@ impl Driver {
         woke: u64,
         send: &mut dyn FnMut(&CommandMsg) -> Result<(), TransportError>,
     ) -> Result<(), AgentError> {
+        self.on_snapshot_among(header, bodies, None, woke, send)
+    }
+
+    /// How far from its centre this robot senses other bodies' centres,
+    /// less their radius (its sensing range plus its own radius); `None`
+    /// when unlimited.
+    pub fn reach(&self) -> Option<f64> {
+        let r = self.spec.sensing_range + self.spec.radius;
+        r.is_finite().then_some(r)
+    }
+
+    /// The robot's position in `bodies`.
+    pub fn position(&self, bodies: &[BodyState]) -> Option<[f64; 2]> {
+        bodies.get(self.me).map(|b| b.position)
+    }
+
+    /// [`Self::on_snapshot`], the observation looking only at the bodies of
+    /// indices `near` when given (ascending; every body within this robot's
+    /// [`Self::reach`] plus its own radius must be among them).
+    pub fn on_snapshot_among(
+        &mut self,
+        header: &SnapshotHeader,
+        bodies: &[BodyState],
+        near: Option<&[u32]>,
+        woke: u64,
+        send: &mut dyn FnMut(&CommandMsg) -> Result<(), TransportError>,
+    ) -> Result<(), AgentError> {
         if self.hung || self.answered.is_some_and(|t| t >= header.tick) || self.me >= bodies.len() {
             return Ok(());
         }
@@ -396,9 +423,14 @@ impl Driver {
             }
         }
         let t0 = now_ns();
-        let obs =
-            self.observer
-                .observe(header, bodies, &self.spec, &self.walls, self.path.as_ref());
+        let obs = self.observer.observe_among(
+            header,
+            bodies,
+            near,
+            &self.spec,
+            &self.walls,
+            self.path.as_ref(),
+        );
         let cmd = self.planner.plan(&obs);
         let compute_ns = now_ns().saturating_sub(t0);
         let (kind, v) = match cmd {

@@ -70,6 +70,23 @@ impl Observer {
         walls: &'a [Segment],
         path: Option<&'a DesignatedPath>,
     ) -> Observation<'a> {
+        self.observe_among(header, bodies, None, spec, walls, path)
+    }
+
+    /// [`Self::observe`], looking only at the bodies of indices `near`
+    /// (ascending, so the sensed bodies come in the same order) when given:
+    /// a caller that knows which bodies can be within range (a grid built
+    /// once per snapshot for many robots) saves the scan of all of them.
+    /// `near` must hold every body within the sensing range.
+    pub fn observe_among<'a>(
+        &'a mut self,
+        header: &SnapshotHeader,
+        bodies: &[BodyState],
+        near: Option<&[u32]>,
+        spec: &RobotSpec,
+        walls: &'a [Segment],
+        path: Option<&'a DesignatedPath>,
+    ) -> Observation<'a> {
         let s = &bodies[self.me];
         let position = Vec2::new(s.position[0], s.position[1]);
         let velocity = Vec2::new(s.velocity[0], s.velocity[1]);
@@ -84,7 +101,11 @@ impl Observer {
         let half_fov = (spec.field_of_view_deg.min(360.0) / 2.0).to_radians();
         let cos_half = half_fov.cos();
         self.others.clear();
-        for b in bodies.iter() {
+        let candidates: Box<dyn Iterator<Item = &BodyState>> = match near {
+            None => Box::new(bodies.iter()),
+            Some(near) => Box::new(near.iter().filter_map(|&i| bodies.get(i as usize))),
+        };
+        for b in candidates {
             if b.id as usize == self.me {
                 continue;
             }
