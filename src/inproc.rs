@@ -133,7 +133,7 @@ pub fn run_scenario(
         let (usage, errors) = h.join().unwrap_or_else(|_| {
             (
                 AgentUsage::default(),
-                vec![(usize::MAX, "the worker thread panicked".to_string())],
+                vec![(None, "the worker thread panicked".to_string())],
             )
         });
         let mine: Vec<usize> = (w..n).step_by(workers).collect();
@@ -143,17 +143,9 @@ pub fn run_scenario(
                 maxrss_kb: usage.maxrss_kb,
             };
         }
-        for (i, e) in errors {
-            for j in if i == usize::MAX {
-                mine.clone()
-            } else {
-                vec![i]
-            } {
-                if let Some(slot) = agent_errors.get_mut(j)
-                    && slot.is_none()
-                {
-                    *slot = Some(e.clone());
-                }
+        for (robot, e) in errors {
+            for &j in mine.iter().filter(|&&j| robot.is_none_or(|i| i == j)) {
+                agent_errors[j].get_or_insert_with(|| e.clone());
             }
         }
     }
@@ -168,12 +160,13 @@ pub fn run_scenario(
 /// each snapshot plans for all of them and sends their commands in one
 /// batch. Ends on the run's last snapshot, when asked to stop, or when the
 /// world is gone. Returns its CPU time (from the first snapshot to the
-/// end) and the errors of the robots it drove, by robot index.
+/// end) and the errors of the robots it drove, by robot index (`None`:
+/// every robot of this worker).
 fn drive(
     side: InprocWorker,
     adopt: crossbeam::channel::Receiver<Driver>,
     expected: usize,
-) -> (AgentUsage, Vec<(usize, String)>) {
+) -> (AgentUsage, Vec<(Option<usize>, String)>) {
     let mut drivers: Vec<Driver> = Vec::with_capacity(expected);
     let mut latest: Option<(
         mrsim_proto::SnapshotHeader,
@@ -189,14 +182,14 @@ fn drive(
                 b: &[mrsim_proto::BodyState],
                 near: Option<&[u32]>,
                 batch: &mut Vec<(mrsim_proto::CommandMsg, u64)>,
-                errors: &mut Vec<(usize, String)>| {
+                errors: &mut Vec<(Option<usize>, String)>| {
         let woke = mrsim_proto::now_ns();
         let r = d.on_snapshot_among(h, b, near, woke, &mut |m| {
             batch.push((*m, mrsim_proto::now_ns()));
             Ok(())
         });
         if let Err(e) = r {
-            errors.push((d.robot_id(), e.to_string()));
+            errors.push((Some(d.robot_id()), e.to_string()));
         }
     };
     let exit = loop {
@@ -215,7 +208,7 @@ fn drive(
             adopted = true;
         }
         if adopted && let Err(e) = side.send_commands(std::mem::take(&mut batch)) {
-            errors.push((usize::MAX, e.to_string()));
+            errors.push((None, e.to_string()));
             break AgentExit::Finished;
         }
         // Poll often for newcomers until every robot of this worker joined
@@ -239,14 +232,14 @@ fn drive(
                     step(d, &h, &b, near, &mut batch, &mut errors);
                 }
                 if let Err(e) = side.send_commands(std::mem::take(&mut batch)) {
-                    errors.push((usize::MAX, e.to_string()));
+                    errors.push((None, e.to_string()));
                     break AgentExit::Finished;
                 }
                 latest = Some((h, b));
             }
             WorkerEvent::Idle => {}
             WorkerEvent::WorldGone => {
-                errors.push((usize::MAX, mrsim_agents::AgentError::WorldGone.to_string()));
+                errors.push((None, mrsim_agents::AgentError::WorldGone.to_string()));
                 break AgentExit::Finished;
             }
         }
@@ -259,7 +252,7 @@ fn drive(
     for d in drivers {
         let id = d.robot_id();
         if let Err(e) = d.finish(exit) {
-            errors.push((id, e.to_string()));
+            errors.push((Some(id), e.to_string()));
         }
     }
     (usage, errors)

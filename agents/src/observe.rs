@@ -101,11 +101,14 @@ impl Observer {
         let half_fov = (spec.field_of_view_deg.min(360.0) / 2.0).to_radians();
         let cos_half = half_fov.cos();
         self.others.clear();
-        let candidates: Box<dyn Iterator<Item = &BodyState>> = match near {
-            None => Box::new(bodies.iter()),
-            Some(near) => Box::new(near.iter().filter_map(|&i| bodies.get(i as usize))),
-        };
-        for b in candidates {
+        let count = near.map_or(bodies.len(), <[u32]>::len);
+        for k in 0..count {
+            let Some(b) = (match near {
+                None => bodies.get(k),
+                Some(near) => bodies.get(near[k] as usize),
+            }) else {
+                continue;
+            };
             if b.id as usize == self.me {
                 continue;
             }

@@ -347,15 +347,15 @@ impl Loop<'_> {
         // reaped yet (a /proc read, five syscalls: at 256 agents and more,
         // doing that every time cost the world 5 % of a core).
         self.pid_checks += 1;
-        let thorough = self.pid_checks.is_multiple_of(10);
+        let alive = if self.pid_checks.is_multiple_of(10) {
+            pid_alive
+        } else {
+            mrsim_transport::pid_exists
+        };
         let mut died = false;
         for i in 0..self.agents.len() {
             if let Agent::Live { pid, .. } = self.agents[i]
-                && !(if thorough {
-                    pid_alive(pid)
-                } else {
-                    mrsim_transport::pid_exists(pid)
-                })
+                && !alive(pid)
             {
                 self.lose(i, format!("agent process {pid} died"));
                 died = true;
@@ -376,6 +376,11 @@ impl Loop<'_> {
         if any {
             self.link.joins_answered()?;
         }
+        self.drain_commands(realtime)
+    }
+
+    /// Takes in every command received so far.
+    fn drain_commands(&mut self, realtime: bool) -> Result<(), TransportError> {
         let mut cmds = Vec::new();
         self.link.drain_commands(&mut |c, t| cmds.push((c, t)))?;
         for (c, t) in cmds {
@@ -384,9 +389,6 @@ impl Loop<'_> {
         Ok(())
     }
 
-    /// Every live agent has answered this tick: with a valid command, or
-    /// with garbage (rejected; the robot brakes and the world moves on
-    /// rather than waiting `stall_timeout` for an answer that came).
     /// Every live agent has said it is ready.
     fn all_ready(&self) -> bool {
         self.agents
@@ -395,6 +397,9 @@ impl Loop<'_> {
             .all(|(a, r)| !matches!(a, Agent::Live { .. }) || *r)
     }
 
+    /// Every live agent has answered this tick: with a valid command, or
+    /// with garbage (rejected; the robot brakes and the world moves on
+    /// rather than waiting `stall_timeout` for an answer that came).
     fn all_answered(&self) -> bool {
         self.agents
             .iter()
@@ -793,11 +798,7 @@ pub fn run(
     }
     // Commands already on their way for the last tick (an agent that sent
     // two, a late one) are still counted and logged, not left unread.
-    let mut stray = Vec::new();
-    let _ = lp.link.drain_commands(&mut |c, t| stray.push((c, t)));
-    for (c, t) in stray {
-        lp.handle_command(c, t, realtime);
-    }
+    let _ = lp.drain_commands(realtime);
     // A termination request that came while the last tick ended the run
     // (its agents stopped with it) still makes the run an interrupted one.
     interrupted |= lp.link.termination_requested();

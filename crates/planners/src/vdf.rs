@@ -376,16 +376,8 @@ mod tests {
 
     fn obs<'a>(me: SelfState, goal: Vec2, others: &'a [Sensed]) -> Observation<'a> {
         Observation {
-            tick: 0,
-            time: 0.0,
-            dt: 0.1,
-            me,
-            goal,
             goal_tolerance: 1.0,
-            goal_hold_ticks: 3,
-            others,
-            walls: &[],
-            path: None,
+            ..crate::testkit::observation(me, goal, others)
         }
     }
 
