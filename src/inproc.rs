@@ -177,20 +177,24 @@ fn drive(
     let mut batch = Vec::with_capacity(expected);
     let mut grid = Grid::default();
     let mut near = Vec::new();
+    // One robot's turn, from `clock` (the end of the previous robot's: it
+    // is when this robot "wakes" and starts planning); returns the clock at
+    // its end.
     let step = |d: &mut Driver,
                 h: &mrsim_proto::SnapshotHeader,
                 b: &[mrsim_proto::BodyState],
                 near: Option<&[u32]>,
-                batch: &mut Vec<(mrsim_proto::CommandMsg, u64)>,
+                clock: u64,
+                batch: &mut Vec<mrsim_proto::CommandMsg>,
                 errors: &mut Vec<(Option<usize>, String)>| {
-        let woke = mrsim_proto::now_ns();
-        let r = d.on_snapshot_among(h, b, near, woke, &mut |m| {
-            batch.push((*m, mrsim_proto::now_ns()));
+        let r = d.on_snapshot_among(h, b, near, clock, Some(clock), &mut |m| {
+            batch.push(*m);
             Ok(())
         });
-        if let Err(e) = r {
+        r.unwrap_or_else(|e| {
             errors.push((Some(d.robot_id()), e.to_string()));
-        }
+            mrsim_proto::now_ns()
+        })
     };
     let exit = loop {
         if side.termination_requested() {
@@ -200,9 +204,10 @@ fn drive(
         // (in lockstep the world waits for them).
         let mut adopted = false;
         while let Ok(mut d) = adopt.try_recv() {
-            batch.push((d.ready(), mrsim_proto::now_ns()));
+            batch.push(d.ready());
             if let Some((h, b)) = &latest {
-                step(&mut d, h, b, None, &mut batch, &mut errors);
+                let clock = mrsim_proto::now_ns();
+                step(&mut d, h, b, None, clock, &mut batch, &mut errors);
             }
             drivers.push(d);
             adopted = true;
@@ -226,10 +231,11 @@ fn drive(
                 cpu_start.get_or_insert_with(|| crate::usage::rusage(Scope::Thread).0);
                 let reach = drivers.iter().filter_map(Driver::reach).reduce(f64::max);
                 let gridded = grid.build(&b, reach);
+                let mut clock = mrsim_proto::now_ns();
                 for d in drivers.iter_mut() {
                     let among = gridded && grid.near(d, &b, &mut near);
                     let near = among.then_some(near.as_slice());
-                    step(d, &h, &b, near, &mut batch, &mut errors);
+                    clock = step(d, &h, &b, near, clock, &mut batch, &mut errors);
                 }
                 if let Err(e) = side.send_commands(std::mem::take(&mut batch)) {
                     errors.push((None, e.to_string()));

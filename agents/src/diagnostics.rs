@@ -83,7 +83,10 @@ impl DiagnosticsWriter {
         let (tx, rx) = channel::<Vec<Row>>();
         let thread = std::thread::Builder::new()
             .name("diagnostics".into())
-            .spawn(move || write_rows(&path, &robot, rx))?;
+            .spawn(move || {
+                mrsim_transport::background_thread();
+                write_rows(&path, &robot, rx)
+            })?;
         Ok(Self {
             tx: Some(tx),
             thread: Some(thread),

@@ -386,7 +386,8 @@ impl Driver {
         woke: u64,
         send: &mut dyn FnMut(&CommandMsg) -> Result<(), TransportError>,
     ) -> Result<(), AgentError> {
-        self.on_snapshot_among(header, bodies, None, woke, send)
+        self.on_snapshot_among(header, bodies, None, woke, None, send)
+            .map(|_| ())
     }
 
     /// How far from its centre this robot senses other bodies' centres,
@@ -404,25 +405,31 @@ impl Driver {
 
     /// [`Self::on_snapshot`], the observation looking only at the bodies of
     /// indices `near` when given (ascending; every body within this robot's
-    /// [`Self::reach`] plus its own radius must be among them).
+    /// [`Self::reach`] plus its own radius must be among them), and its
+    /// compute time counted from `start` when given (a worker that plans
+    /// for many robots reads the clock once per robot: the end of one is
+    /// the start of the next). Returns the clock at the end of its work
+    /// (`start`, or `woke`, if there was none to do).
     pub fn on_snapshot_among(
         &mut self,
         header: &SnapshotHeader,
         bodies: &[BodyState],
         near: Option<&[u32]>,
         woke: u64,
+        start: Option<u64>,
         send: &mut dyn FnMut(&CommandMsg) -> Result<(), TransportError>,
-    ) -> Result<(), AgentError> {
+    ) -> Result<u64, AgentError> {
+        let idle = start.unwrap_or(woke);
         if self.hung || self.answered.is_some_and(|t| t >= header.tick) || self.me >= bodies.len() {
-            return Ok(());
+            return Ok(idle);
         }
         if let Some(inj) = self.injector.as_mut() {
             self.hung = inj.before_plan(header.tick) == fault::Before::Hang;
             if self.hung {
-                return Ok(());
+                return Ok(idle);
             }
         }
-        let t0 = now_ns();
+        let t0 = start.unwrap_or_else(now_ns);
         let obs = self.observer.observe_among(
             header,
             bodies,
@@ -432,7 +439,8 @@ impl Driver {
             self.path.as_ref(),
         );
         let cmd = self.planner.plan(&obs);
-        let compute_ns = now_ns().saturating_sub(t0);
+        let t1 = now_ns();
+        let compute_ns = t1.saturating_sub(t0);
         let (kind, v) = match cmd {
             Command::Force(f) => (command_kind::FORCE, f),
             Command::Velocity(v) => (command_kind::VELOCITY, v),
@@ -445,7 +453,7 @@ impl Driver {
             value: [v.x, v.y],
             compute_ns,
             woke_ns: woke,
-            sent_ns: now_ns(),
+            sent_ns: t1,
         };
         match &self.injector {
             Some(inj) => {
@@ -460,7 +468,7 @@ impl Driver {
         if let Some(d) = &mut self.diag {
             d.push(header.tick, header.sim_time, self.planner.diagnostics());
         }
-        Ok(())
+        Ok(t1)
     }
 
     /// Ends the robot's control: writes out its diagnostics.

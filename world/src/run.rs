@@ -309,12 +309,11 @@ impl Loop<'_> {
             self.event(json!({"type": "agent_rejoined", "robot": name, "pid": pid}));
             self.log(&format!("agent for {name} answered again and rejoined"));
         }
-        let acc = &mut self.acc[i];
-        acc.latency
-            .record_ns(received_ns.saturating_sub(self.published_ns));
-        acc.wake
-            .record_ns(cmd.woke_ns.saturating_sub(self.published_ns));
-        acc.compute.record_ns(cmd.compute_ns);
+        self.acc[i].timing.record_ns(
+            received_ns.saturating_sub(self.published_ns),
+            cmd.woke_ns.saturating_sub(self.published_ns),
+            cmd.compute_ns,
+        );
         self.got[i] = Some(cmd);
         self.last_in_ns = self.last_in_ns.max(received_ns);
         let [lat, wake, compute] = &mut self.all;
@@ -352,9 +351,16 @@ impl Loop<'_> {
         } else {
             mrsim_transport::pid_exists
         };
+        // An agent in the world's own process (the in-process transport)
+        // cannot die on its own: its thread's failure comes through the
+        // transport. Reading /proc/self for each of them would walk every
+        // thread of this process (1000 reads of a 1000-thread process: 8 %
+        // of the world's time at 1000 robots).
+        let own = std::process::id();
         let mut died = false;
         for i in 0..self.agents.len() {
             if let Agent::Live { pid, .. } = self.agents[i]
+                && pid != own
                 && !alive(pid)
             {
                 self.lose(i, format!("agent process {pid} died"));
@@ -444,7 +450,10 @@ impl Loop<'_> {
         let time = self.time();
         let walls = self.world.walls();
         let mut reached = Vec::new();
-        self.grid.clearances(states, n, &mut self.clearance);
+        // Only a clearance below the smallest one recorded changes anything.
+        let acc = &self.acc;
+        self.grid
+            .clearances_below(states, n, |i| acc[i].min_clearance, &mut self.clearance);
         for i in 0..n {
             let s = &states[i];
             let spec = &self.world.scenario.robots[i];
@@ -492,8 +501,8 @@ impl Loop<'_> {
             return;
         }
         for (i, row) in self.live.robots_mut().iter_mut().enumerate() {
-            let acc = &self.acc[i];
-            let (p50, p99, commands) = acc.latency.p50_p99_us();
+            let acc = &mut self.acc[i];
+            let (p50, p99, commands) = acc.timing.histograms()[0].p50_p99_us();
             row.state = match self.agents[i] {
                 Agent::Waiting => agent_state::WAITING,
                 Agent::Live { .. } => agent_state::LIVE,
@@ -590,9 +599,6 @@ pub fn run(
             .iter()
             .map(|r| RobotAccumulator {
                 min_clearance: f64::INFINITY,
-                latency: DurationHistogram::per_robot(),
-                wake: DurationHistogram::per_robot(),
-                compute: DurationHistogram::per_robot(),
                 path: crate::path_metrics::PathAccumulator::new(&r.path, r.boundary),
                 ..Default::default()
             })
@@ -718,6 +724,7 @@ pub fn run(
         loop {
             lp.drain(realtime)?;
             lp.check_pids();
+            lp.rec.send_if_due();
             if lp.all_answered() || lp.link.termination_requested() {
                 break;
             }
@@ -836,8 +843,9 @@ pub fn run(
     let robots = scenario
         .robots
         .iter()
-        .zip(&lp.acc)
+        .zip(&mut lp.acc)
         .map(|(spec, a)| {
+            let [latency, wake, compute] = a.timing.histograms();
             (
                 spec.name.clone(),
                 RobotMetrics {
@@ -849,9 +857,9 @@ pub fn run(
                     min_clearance: a.min_clearance.is_finite().then_some(a.min_clearance),
                     max_speed: a.max_speed,
                     deadline_misses: a.deadline_misses,
-                    latency_us: a.latency.percentiles(),
-                    wake_us: a.wake.percentiles(),
-                    compute_us: a.compute.percentiles(),
+                    latency_us: latency.percentiles(),
+                    wake_us: wake.percentiles(),
+                    compute_us: compute.percentiles(),
                     agent_pid: a.agent_pid,
                     lost: a.lost,
                     commands_rejected: a.rejected,

@@ -19,8 +19,8 @@ enum ToWorld {
     /// A join request and the index of the agent side that sent it.
     Join(JoinRequest, usize),
     Command(CommandMsg, u64),
-    /// A worker's commands of one snapshot, each with its time.
-    Commands(Vec<(CommandMsg, u64)>),
+    /// A worker's commands of one snapshot, and the time they were sent.
+    Commands(Vec<CommandMsg>, u64),
 }
 
 enum ToAgent {
@@ -162,14 +162,14 @@ impl InprocWorker {
         }
     }
 
-    /// Sends one snapshot's commands (each with the time it was made) to
-    /// the world in one message.
-    pub fn send_commands(&self, cmds: Vec<(CommandMsg, u64)>) -> Result<(), TransportError> {
+    /// Sends one snapshot's commands to the world in one message. They
+    /// count as received when sent: the world sees none of them earlier.
+    pub fn send_commands(&self, cmds: Vec<CommandMsg>) -> Result<(), TransportError> {
         if cmds.is_empty() {
             return Ok(());
         }
         self.tx
-            .send(ToWorld::Commands(cmds))
+            .send(ToWorld::Commands(cmds, now_ns()))
             .map_err(|_| TransportError::Disconnected)
     }
 
@@ -237,7 +237,7 @@ impl WorldTransport for InprocWorld {
         for m in self.pending.drain(..) {
             match m {
                 ToWorld::Command(c, t) => f(c, t),
-                ToWorld::Commands(cs) => cs.into_iter().for_each(|(c, t)| f(c, t)),
+                ToWorld::Commands(cs, t) => cs.into_iter().for_each(|c| f(c, t)),
                 other => rest.push(other),
             }
         }

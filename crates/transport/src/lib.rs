@@ -160,6 +160,23 @@ pub trait ObserverTransport {
     fn world_alive(&mut self) -> bool;
 }
 
+/// Moves the calling thread into the background: normal (not real-time)
+/// scheduling at nice 10, so that it runs on time the tick loop and the
+/// planners leave idle rather than delaying them. For the threads that only
+/// write files (trajectory, diagnostics): in a lockstep run a writer that
+/// preempts one planner thread delays the whole tick. Best effort: lowering
+/// a thread's own priority is always allowed, and a refusal changes
+/// nothing but timing.
+pub fn background_thread() {
+    let param = libc::sched_param { sched_priority: 0 };
+    // SAFETY: the param struct lives for the call; 0 = the calling thread.
+    unsafe {
+        libc::sched_setscheduler(0, libc::SCHED_OTHER, &param);
+        // With PRIO_PROCESS a thread id names just that thread on Linux.
+        libc::setpriority(libc::PRIO_PROCESS, libc::gettid() as libc::id_t, 10);
+    }
+}
+
 /// True if process `pid` exists (same machine), zombie or not: one
 /// syscall.
 pub fn pid_exists(pid: u32) -> bool {
