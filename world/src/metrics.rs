@@ -316,6 +316,21 @@ fn rusage(who: libc::c_int) -> (f64, u64) {
     )
 }
 
+/// Squared distance from `p` to the segment `w`, without a square root
+/// (to rule a wall out cheaply; [`segment_distance`] gives the distance).
+pub fn segment_distance_sq(w: [[f64; 2]; 2], p: [f64; 2]) -> f64 {
+    let (a, b) = (w[0], w[1]);
+    let ab = [b[0] - a[0], b[1] - a[1]];
+    let len2 = ab[0] * ab[0] + ab[1] * ab[1];
+    let t = if len2 > 0.0 {
+        (((p[0] - a[0]) * ab[0] + (p[1] - a[1]) * ab[1]) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let (dx, dy) = (p[0] - a[0] - ab[0] * t, p[1] - a[1] - ab[1] * t);
+    dx * dx + dy * dy
+}
+
 /// Distance from `p` to the segment `w`.
 pub fn segment_distance(w: [[f64; 2]; 2], p: [f64; 2]) -> f64 {
     let (a, b) = (w[0], w[1]);
@@ -651,6 +666,26 @@ mod tests {
                 assert_eq!(c.to_bits(), brute(&states, i).to_bits(), "n {n} robot {i}");
             }
         }
+    }
+
+    #[test]
+    fn squared_segment_distance_is_the_square_of_the_distance() {
+        let w = [[-1.0, 2.0], [3.0, -0.5]];
+        for p in [
+            [0.0, 0.0],
+            [-4.0, 2.0],
+            [5.0, -3.0],
+            [1.0, 1.0],
+            [-1.0, 2.0],
+        ] {
+            let (d, d2) = (segment_distance(w, p), segment_distance_sq(w, p));
+            assert!((d * d - d2).abs() <= 1e-12 * (1.0 + d2), "{p:?}: {d} {d2}");
+        }
+        // A segment of zero length is a point.
+        assert_eq!(
+            segment_distance_sq([[1.0, 1.0], [1.0, 1.0]], [4.0, 5.0]),
+            25.0
+        );
     }
 
     #[test]

@@ -462,6 +462,16 @@ impl Loop<'_> {
             acc.max_speed = acc.max_speed.max(s.velocity[0].hypot(s.velocity[1]));
             let mut clear = self.clearance[i];
             for w in walls {
+                // Only a wall nearer than the smallest clearance so far can
+                // change it: the others are ruled out without a root (the
+                // margin covers rounding).
+                let reach = clear.min(acc.min_clearance) + s.radius;
+                if reach >= 0.0
+                    && crate::metrics::segment_distance_sq(*w, s.position)
+                        > reach * reach * (1.0 + 1e-9) + 1e-300
+                {
+                    continue;
+                }
                 clear = clear.min(crate::metrics::segment_distance(*w, s.position) - s.radius);
             }
             acc.min_clearance = acc.min_clearance.min(clear);
