@@ -316,9 +316,8 @@ fn rusage(who: libc::c_int) -> (f64, u64) {
     )
 }
 
-/// Squared distance from `p` to the segment `w`, without a square root
-/// (to rule a wall out cheaply; [`segment_distance`] gives the distance).
-pub fn segment_distance_sq(w: [[f64; 2]; 2], p: [f64; 2]) -> f64 {
+/// `p` minus the point of segment `w` nearest to it.
+fn segment_offset(w: [[f64; 2]; 2], p: [f64; 2]) -> [f64; 2] {
     let (a, b) = (w[0], w[1]);
     let ab = [b[0] - a[0], b[1] - a[1]];
     let len2 = ab[0] * ab[0] + ab[1] * ab[1];
@@ -327,21 +326,20 @@ pub fn segment_distance_sq(w: [[f64; 2]; 2], p: [f64; 2]) -> f64 {
     } else {
         0.0
     };
-    let (dx, dy) = (p[0] - a[0] - ab[0] * t, p[1] - a[1] - ab[1] * t);
+    [p[0] - a[0] - ab[0] * t, p[1] - a[1] - ab[1] * t]
+}
+
+/// Squared distance from `p` to the segment `w`, without a square root
+/// (to rule a wall out cheaply; [`segment_distance`] gives the distance).
+pub fn segment_distance_sq(w: [[f64; 2]; 2], p: [f64; 2]) -> f64 {
+    let [dx, dy] = segment_offset(w, p);
     dx * dx + dy * dy
 }
 
 /// Distance from `p` to the segment `w`.
 pub fn segment_distance(w: [[f64; 2]; 2], p: [f64; 2]) -> f64 {
-    let (a, b) = (w[0], w[1]);
-    let ab = [b[0] - a[0], b[1] - a[1]];
-    let len2 = ab[0] * ab[0] + ab[1] * ab[1];
-    let t = if len2 > 0.0 {
-        (((p[0] - a[0]) * ab[0] + (p[1] - a[1]) * ab[1]) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (p[0] - a[0] - ab[0] * t).hypot(p[1] - a[1] - ab[1] * t)
+    let [dx, dy] = segment_offset(w, p);
+    dx.hypot(dy)
 }
 
 /// Each robot's smallest surface distance to any other body, per tick,

@@ -433,7 +433,8 @@ impl World {
         })
     }
 
-    /// Rebuilds `states` from the bodies, keeping each body's flags.
+    /// Refreshes the positions and velocities in `states` from the bodies
+    /// (built once; each body keeps its flags).
     fn refresh_states(&mut self) {
         let n = self.robots.len();
         if self.states.len() != n + self.motions.len() {
