@@ -177,6 +177,8 @@ fn drive(
     let mut batch = Vec::with_capacity(expected);
     let mut grid = Grid::default();
     let mut near = Vec::new();
+    // The largest reach of this worker's robots (it sizes the grid's cells).
+    let mut reach: Option<f64> = None;
     // One robot's turn, from `clock` (the end of the previous robot's: it
     // is when this robot "wakes" and starts planning); returns the clock at
     // its end.
@@ -209,6 +211,7 @@ fn drive(
                 let clock = mrsim_proto::now_ns();
                 step(&mut d, h, b, None, clock, &mut batch, &mut errors);
             }
+            reach = [reach, d.reach()].into_iter().flatten().reduce(f64::max);
             drivers.push(d);
             adopted = true;
         }
@@ -229,7 +232,6 @@ fn drive(
                     break AgentExit::Finished;
                 }
                 cpu_start.get_or_insert_with(|| crate::usage::rusage(Scope::Thread).0);
-                let reach = drivers.iter().filter_map(Driver::reach).reduce(f64::max);
                 let gridded = grid.build(&b, reach);
                 let mut clock = mrsim_proto::now_ns();
                 for d in drivers.iter_mut() {

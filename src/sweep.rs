@@ -207,40 +207,39 @@ const METRICS: [Column; 9] = [
     ("ticks", |m| Some(m.ticks)),
 ];
 
-/// Reads a run folder's metrics.json and scenario.json.
+/// Reads a run folder's metrics.json and scenario.json (with the report
+/// crate's reader of metrics.json and the scenario's own type).
 pub fn read_run(dir: &Path) -> Result<RunMetrics> {
-    let read = |f: &str| -> Result<serde_json::Value> {
+    let read = |f: &str| -> Result<(PathBuf, String)> {
         let p = dir.join(f);
         let text =
             std::fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
-        serde_json::from_str(&text).with_context(|| format!("parsing {}", p.display()))
+        Ok((p, text))
     };
-    let m = read("metrics.json")?;
-    let sc = read("scenario.json")?;
-    let num = |v: &serde_json::Value| v.as_f64();
-    let dt = num(&sc["world"]["dt"]).unwrap_or(0.0);
-    let ticks = num(&m["ticks"]).unwrap_or(0.0);
+    let (p, text) = read("metrics.json")?;
+    let m: mrsim_report::Metrics =
+        serde_json::from_str(&text).with_context(|| format!("parsing {}", p.display()))?;
+    let (p, text) = read("scenario.json")?;
+    let sc: mrsim_scenario::Scenario =
+        serde_json::from_str(&text).with_context(|| format!("parsing {}", p.display()))?;
+    let ticks = m.ticks as f64;
     let mut arrived = Vec::new();
     let mut ratios = Vec::new();
     let mut clearance: Option<f64> = None;
     let mut all_arrived = true;
-    let robots = sc["robots"].as_array().cloned().unwrap_or_default();
-    for r in &robots {
-        let name = r["name"].as_str().unwrap_or("");
-        let rm = &m["robots"][name];
-        match num(&rm["time_to_goal"]) {
-            Some(t) if rm["reached_goal"].as_bool() == Some(true) => arrived.push(t),
+    for r in &sc.robots {
+        let rm = m.robots.get(&r.name).cloned().unwrap_or_default();
+        match rm.time_to_goal {
+            Some(t) if rm.reached_goal => arrived.push(t),
             _ => all_arrived = false,
         }
-        let (s, g) = (&r["start"], &r["goal"]);
-        let straight = (num(&g[0]).unwrap_or(0.0) - num(&s[0]).unwrap_or(0.0))
-            .hypot(num(&g[1]).unwrap_or(0.0) - num(&s[1]).unwrap_or(0.0));
-        if let Some(len) = num(&rm["path_length"])
+        let straight = (r.goal[0] - r.start[0]).hypot(r.goal[1] - r.start[1]);
+        if let Some(len) = rm.path_length
             && straight > 0.0
         {
             ratios.push(len / straight);
         }
-        if let Some(c) = num(&rm["min_clearance"]) {
+        if let Some(c) = rm.min_clearance {
             clearance = Some(clearance.map_or(c, |m: f64| m.min(c)));
         }
     }
@@ -248,16 +247,16 @@ pub fn read_run(dir: &Path) -> Result<RunMetrics> {
     let makespan = if all_arrived && !arrived.is_empty() {
         arrived.iter().copied().fold(f64::MIN, f64::max)
     } else {
-        ticks * dt
+        ticks * sc.world.dt
     };
     Ok(RunMetrics {
-        success_rate: num(&m["success_rate"]).unwrap_or(0.0),
-        collisions_total: num(&m["collisions_total"]).unwrap_or(0.0),
+        success_rate: m.success_rate.unwrap_or(0.0),
+        collisions_total: m.collisions_total as f64,
         makespan,
         path_ratio: mean(&ratios),
         min_clearance: clearance,
         time_to_goal: mean(&arrived),
-        agents_lost: num(&m["agents_lost"]).unwrap_or(0.0),
+        agents_lost: m.agents_lost as f64,
         ticks,
     })
 }

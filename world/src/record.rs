@@ -163,6 +163,10 @@ impl Recorder {
 
     /// Flushes and stops the thread.
     pub fn finish(mut self) -> std::io::Result<()> {
+        self.stop()
+    }
+
+    fn stop(&mut self) -> std::io::Result<()> {
         self.send_pending();
         self.tx.take();
         match self.thread.take().map(JoinHandle::join) {
@@ -175,10 +179,6 @@ impl Recorder {
 
 impl Drop for Recorder {
     fn drop(&mut self) {
-        self.send_pending();
-        self.tx.take();
-        if let Some(t) = self.thread.take() {
-            let _ = t.join();
-        }
+        let _ = self.stop();
     }
 }

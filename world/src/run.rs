@@ -112,6 +112,8 @@ struct Loop<'a> {
     all: [DurationHistogram; 3],
     grid: ClearanceGrid,
     clearance: Vec<f64>,
+    /// Commands taken from the transport, reused from drain to drain.
+    inbox: Vec<(CommandMsg, u64)>,
     last_pid_check: Instant,
     pid_checks: u64,
     /// Agents that have said they are ready (setup read, planner built).
@@ -387,12 +389,16 @@ impl Loop<'_> {
 
     /// Takes in every command received so far.
     fn drain_commands(&mut self, realtime: bool) -> Result<(), TransportError> {
-        let mut cmds = Vec::new();
-        self.link.drain_commands(&mut |c, t| cmds.push((c, t)))?;
-        for (c, t) in cmds {
-            self.handle_command(c, t, realtime);
+        let mut inbox = std::mem::take(&mut self.inbox);
+        inbox.clear();
+        let drained = self.link.drain_commands(&mut |c, t| inbox.push((c, t)));
+        if drained.is_ok() {
+            for (c, t) in inbox.drain(..) {
+                self.handle_command(c, t, realtime);
+            }
         }
-        Ok(())
+        self.inbox = inbox;
+        drained
     }
 
     /// Every live agent has said it is ready.
@@ -415,23 +421,15 @@ impl Loop<'_> {
 
     fn record_contacts(&mut self, contacts: &[Contact]) {
         for c in contacts {
-            let robots: Vec<usize> = [c.a, c.b]
-                .iter()
-                .filter_map(|o| {
-                    if let Owner::Robot(i) = o {
-                        Some(*i)
-                    } else {
-                        None
-                    }
-                })
-                .collect();
-            if robots.is_empty() {
+            if !matches!(c.a, Owner::Robot(_)) && !matches!(c.b, Owner::Robot(_)) {
                 continue;
             }
             self.collisions_total += 1;
-            for &i in &robots {
-                self.acc[i].collisions += 1;
-                self.acc[i].min_clearance = self.acc[i].min_clearance.min(c.gap);
+            for o in [c.a, c.b] {
+                if let Owner::Robot(i) = o {
+                    self.acc[i].collisions += 1;
+                    self.acc[i].min_clearance = self.acc[i].min_clearance.min(c.gap);
+                }
             }
             let n = self.agents.len();
             let name = |o: Owner| match o {
@@ -626,6 +624,7 @@ pub fn run(
         all: Default::default(),
         grid: ClearanceGrid::default(),
         clearance: Vec::with_capacity(n),
+        inbox: Vec::with_capacity(n),
         last_pid_check: Instant::now(),
         pid_checks: 0,
         ready: vec![false; n],
