@@ -1,7 +1,8 @@
 //! The raw iceoryx2 baseline of `mrsim bench --baseline`: the same fan-out
-//! as a run (one world process publishing a tick and waking every agent
-//! process with an event; each agent answering and waking the world with an
-//! event), with a minimal payload (the tick number out, agent index and
+//! as a run (one world process publishing a tick over iceoryx2 and waking
+//! every agent process with the run's doorbell, as a run does; each agent
+//! answering over iceoryx2 and waking the world with an event), with a
+//! minimal payload (the tick number out, agent index and
 //! tick back), agents that reply at once, and no mrsim protocol (no
 //! snapshot, join, ownership, physics or recording). Its all-replies-in
 //! time is the floor mrsim's own all-in time is compared against.
@@ -11,6 +12,7 @@ use clap::Args;
 use iceoryx2::prelude::*;
 use mrsim_proto::now_ns;
 use mrsim_transport::Namespace;
+use mrsim_transport::doorbell::Doorbell;
 use mrsim_world::metrics::DurationHistogram;
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
@@ -90,6 +92,8 @@ pub fn world(args: &WorldArgs) -> Result<i32> {
 fn world_inner(args: &WorldArgs, ns: &Namespace) -> Result<i32> {
     let n = args.agents;
     let node = make_node(ns, "base-world")?;
+    // Before the services: an agent that finds them finds the doorbell.
+    let bell = Doorbell::create(ns).map_err(|e| anyhow!("{e}"))?;
     let nodes = n + 4;
     let tick_pub = node
         .service_builder(&name("base/tick")?)
@@ -103,17 +107,6 @@ fn world_inner(args: &WorldArgs, ns: &Namespace) -> Result<i32> {
         .publisher_builder()
         .create()
         .map_err(|e| anyhow!("tick publisher: {e:?}"))?;
-    let tick_ev = node
-        .service_builder(&name("base/tick-ev")?)
-        .event()
-        .max_notifiers(2)
-        .max_listeners(n + 2)
-        .max_nodes(nodes)
-        .create()
-        .map_err(|e| anyhow!("base/tick-ev: {e:?}"))?
-        .notifier_builder()
-        .create()
-        .map_err(|e| anyhow!("tick notifier: {e:?}"))?;
     let reply_sub = node
         .service_builder(&name("base/reply")?)
         .publish_subscribe::<[u64; 2]>()
@@ -174,7 +167,7 @@ fn world_inner(args: &WorldArgs, ns: &Namespace) -> Result<i32> {
     while joined < n {
         if start.elapsed() > Duration::from_secs(60) {
             let _ = tick_pub.send_copy(STOP);
-            let _ = tick_ev.notify();
+            let _ = bell.ring();
             reap(&mut children);
             return Err(anyhow!(
                 "baseline: only {joined} of {n} agents connected within 60 s"
@@ -209,7 +202,7 @@ fn world_inner(args: &WorldArgs, ns: &Namespace) -> Result<i32> {
         tick_pub
             .send_copy(tick)
             .map_err(|e| anyhow!("send tick: {e:?}"))?;
-        tick_ev.notify().map_err(|e| anyhow!("notify: {e:?}"))?;
+        bell.ring().map_err(|e| anyhow!("{e}"))?;
         let mut answered = 0;
         let mut last_in = published;
         loop {
@@ -234,7 +227,7 @@ fn world_inner(args: &WorldArgs, ns: &Namespace) -> Result<i32> {
     }
     for _ in 0..2 {
         let _ = tick_pub.send_copy(STOP);
-        let _ = tick_ev.notify();
+        let _ = bell.ring();
     }
     reap(&mut children);
     let p = allin.percentiles();
@@ -276,14 +269,6 @@ pub fn agent(args: &AgentArgs) -> Result<i32> {
         .subscriber_builder()
         .create()
         .map_err(|e| anyhow!("tick subscriber: {e:?}"))?;
-    let tick_ev = node
-        .service_builder(&name("base/tick-ev")?)
-        .event()
-        .open()
-        .map_err(|e| anyhow!("base/tick-ev: {e:?}"))?
-        .listener_builder()
-        .create()
-        .map_err(|e| anyhow!("tick listener: {e:?}"))?;
     let reply_pub = node
         .service_builder(&name("base/reply")?)
         .publish_subscribe::<[u64; 2]>()
@@ -300,6 +285,8 @@ pub fn agent(args: &AgentArgs) -> Result<i32> {
         .notifier_builder()
         .create()
         .map_err(|e| anyhow!("wake notifier: {e:?}"))?;
+    // The world creates the doorbell before its services: found them, found it.
+    let mut bell = Doorbell::open(&ns).map_err(|e| anyhow!("{e}"))?;
     let mut started = false;
     let mut last_heard = Instant::now();
     let mut last_hello: Option<Instant> = None;
@@ -309,7 +296,8 @@ pub fn agent(args: &AgentArgs) -> Result<i32> {
             let _ = wake.notify();
             last_hello = Some(Instant::now());
         }
-        let _ = tick_ev.timed_wait(|_| {}, Duration::from_millis(100));
+        bell.wait(Duration::from_millis(100))
+            .map_err(|e| anyhow!("{e}"))?;
         let mut latest = None;
         while let Ok(Some(s)) = tick_sub.receive() {
             latest = Some(*s.payload());

@@ -26,7 +26,7 @@ use std::collections::BinaryHeap;
 use std::fs::File;
 use std::io::{BufRead, BufReader, BufWriter, Write};
 use std::path::{Path, PathBuf};
-use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender, channel};
+use std::sync::mpsc::{Receiver, Sender, channel};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
@@ -144,36 +144,26 @@ impl Drop for DiagnosticsWriter {
 }
 
 fn write_rows(path: &Path, robot: &str, rx: Receiver<Vec<Row>>) -> std::io::Result<()> {
+    // Blocks until a batch comes (at most about twice a second, see
+    // `BATCH_AGE`) and flushes after each, so the thread never wakes on a
+    // timer: with hundreds of agents, each one's writer waking once a
+    // second, all at about the same moment, stole a few milliseconds of
+    // both cores at once and made bursts of deadline misses every second.
     let mut out: Option<BufWriter<File>> = None;
-    let mut last_flush = Instant::now();
-    loop {
-        match rx.recv_timeout(Duration::from_secs(1)) {
-            Ok(rows) => {
-                let w = match &mut out {
-                    Some(w) => w,
-                    None => out.insert(BufWriter::with_capacity(1 << 16, File::create(path)?)),
-                };
-                for row in &rows {
-                    for d in &row.values {
-                        writeln!(
-                            w,
-                            "{},{:.6},{robot},{},{}",
-                            row.tick, row.time, d.name, d.value
-                        )?;
-                    }
-                }
+    for rows in rx {
+        let w = match &mut out {
+            Some(w) => w,
+            None => out.insert(BufWriter::with_capacity(1 << 16, File::create(path)?)),
+        };
+        for row in &rows {
+            for d in &row.values {
+                writeln!(
+                    w,
+                    "{},{:.6},{robot},{},{}",
+                    row.tick, row.time, d.name, d.value
+                )?;
             }
-            Err(RecvTimeoutError::Timeout) => {}
-            Err(RecvTimeoutError::Disconnected) => break,
         }
-        if last_flush.elapsed() >= Duration::from_secs(1) {
-            if let Some(w) = &mut out {
-                w.flush()?;
-            }
-            last_flush = Instant::now();
-        }
-    }
-    if let Some(w) = &mut out {
         w.flush()?;
     }
     Ok(())

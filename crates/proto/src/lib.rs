@@ -10,8 +10,10 @@
 use iceoryx2::prelude::ZeroCopySend;
 
 /// Bumped whenever a wire type changes shape or meaning. An agent whose
-/// version differs from the world's is refused at join time.
-pub const PROTOCOL_VERSION: u32 = 2;
+/// version differs from the world's is refused at join time. Version 3:
+/// snapshots ring the run's doorbell (a futex word in shared memory)
+/// instead of the tick event.
+pub const PROTOCOL_VERSION: u32 = 3;
 
 /// Longest robot name, in bytes, that fits a [`JoinRequest`].
 pub const MAX_NAME_LEN: usize = 64;
@@ -187,7 +189,8 @@ pub struct JoinReply {
 
 /// Event ids on the world's tick event service.
 pub mod events {
-    /// A new snapshot is published.
+    /// A new snapshot is published (protocol 2; since protocol 3 a
+    /// snapshot rings the doorbell instead and this id is not sent).
     pub const SNAPSHOT: usize = 1;
     /// A join reply is published.
     pub const JOIN_REPLY: usize = 2;

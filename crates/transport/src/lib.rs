@@ -20,6 +20,7 @@ use mrsim_proto::{
 };
 use std::time::Duration;
 
+pub mod doorbell;
 pub mod inproc;
 pub mod namespace;
 pub mod shm;

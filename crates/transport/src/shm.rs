@@ -6,7 +6,8 @@
 //! | --- | --- | --- |
 //! | `mrsim/setup` | publish-subscribe `[u8]`, history 1 | world -> agents |
 //! | `mrsim/snapshot` | publish-subscribe `[BodyState]` + `SnapshotHeader` | world -> agents |
-//! | `mrsim/tick` | event | world -> agents |
+//! | `mrsim/tick` | event (join replies) | world -> joining agents |
+//! | `/dev/shm/PREFIXdoorbell` | futex word ([`crate::doorbell`]): a new snapshot | world -> agents |
 //! | `mrsim/join` | publish-subscribe `JoinRequest` | agents -> world |
 //! | `mrsim/join-reply` | publish-subscribe `JoinReply` | world -> agents |
 //! | `mrsim/command` | publish-subscribe `CommandMsg` | agents -> world |
@@ -21,7 +22,13 @@
 //! Limits (publishers, subscribers, listeners, notifiers, nodes) are raised
 //! from the scenario's robot count, with room to spare for restarted agents,
 //! strangers and observers. Waiting is event driven (no busy polling).
+//!
+//! Each tick's wake-up of the agents is the doorbell, not an iceoryx2
+//! event: one futex wake for all agents instead of a datagram per agent
+//! (see [`crate::doorbell`] for the measurements). The snapshot itself, and
+//! everything else, goes through iceoryx2.
 
+use crate::doorbell::Doorbell;
 use crate::{
     AgentTransport, Capacity, Namespace, ObserverTransport, TransportError, WorldTransport,
 };
@@ -148,8 +155,12 @@ fn wait_on(listener: &Listener<S>, timeout: Duration) -> Result<(), TransportErr
 /// True once SIGINT or SIGTERM arrived. iceoryx2 reports a termination
 /// request only once (its signal handler's last signal is taken when read),
 /// so the answer is kept in `seen`: asked twice, a loop must hear it twice.
-fn terminated(node: &Node<S>, seen: &std::cell::Cell<bool>) -> bool {
-    if !seen.get() && node.wait(Duration::ZERO).is_err() {
+///
+/// Reads iceoryx2's signal flag directly: `Node::wait(Duration::ZERO)`,
+/// which reads the same flag, also makes a `nanosleep(0)` system call, once
+/// per agent per tick.
+fn terminated(seen: &std::cell::Cell<bool>) -> bool {
+    if !seen.get() && iceoryx2_bb_posix::signal::SignalHandler::termination_requested() {
         seen.set(true);
     }
     seen.get()
@@ -160,7 +171,9 @@ pub struct ShmWorld {
     node: Node<S>,
     setup_pub: Publisher<S, [u8], ()>,
     snap_pub: Publisher<S, [BodyState], SnapshotHeader>,
+    /// Join replies only; snapshots ring `bell`.
     tick: Notifier<S>,
+    bell: Doorbell,
     cmd_sub: Subscriber<S, CommandMsg, ()>,
     join_sub: Subscriber<S, JoinRequest, ()>,
     reply_pub: Publisher<S, JoinReply, ()>,
@@ -186,6 +199,8 @@ impl ShmWorld {
         ns.make_private();
         // A crashed earlier run of the same id may have left dead nodes.
         let _ = node.try_cleanup_dead_nodes();
+        // Before any service: an agent that finds the services finds it.
+        let bell = Doorbell::create(ns)?;
         let agents = cap.agents();
         let nodes = agents + 4;
 
@@ -288,6 +303,7 @@ impl ShmWorld {
             setup_pub,
             snap_pub,
             tick,
+            bell,
             cmd_sub,
             join_sub,
             reply_pub,
@@ -325,13 +341,7 @@ impl WorldTransport for ShmWorld {
     ) -> Result<(), TransportError> {
         let n = bodies.len().min(self.max_bodies);
         send_slice(&self.snap_pub, "snapshot", header, &bodies[..n])?;
-        self.tick
-            .notify_with_custom_event_id(EventId::new(events::SNAPSHOT))
-            .map_err(|e| TransportError::Send {
-                what: "tick event",
-                detail: format!("{e:?}"),
-            })?;
-        Ok(())
+        self.bell.ring()
     }
 
     fn wait(&mut self, timeout: Duration) -> Result<(), TransportError> {
@@ -404,7 +414,7 @@ impl WorldTransport for ShmWorld {
     }
 
     fn termination_requested(&self) -> bool {
-        terminated(&self.node, &self.terminated)
+        terminated(&self.terminated)
     }
 
     fn cleanup_dead(&mut self) {
@@ -434,8 +444,10 @@ impl WorldTransport for ShmWorld {
 /// An agent's side over iceoryx2.
 pub struct ShmAgent {
     ports: AgentPorts,
+    bell: Doorbell,
     cfg: Config,
-    node: Node<S>,
+    /// Kept for the ports' lifetime: the agent's registration in the run.
+    _node: Node<S>,
     world: WorldWatch,
     terminated: std::cell::Cell<bool>,
 }
@@ -446,7 +458,6 @@ struct AgentPorts {
     /// memory connection the world maps too, 16 kB of its RSS per agent).
     joining: Option<JoinPorts>,
     snap_sub: Subscriber<S, [BodyState], SnapshotHeader>,
-    tick: Listener<S>,
     cmd_pub: Publisher<S, CommandMsg, ()>,
     wake: Notifier<S>,
 }
@@ -456,6 +467,8 @@ struct JoinPorts {
     setup_sub: Subscriber<S, [u8], ()>,
     join_pub: Publisher<S, JoinRequest, ()>,
     reply_sub: Subscriber<S, JoinReply, ()>,
+    /// Woken when join replies are published; snapshots ring the doorbell.
+    tick: Listener<S>,
 }
 
 impl AgentPorts {
@@ -498,10 +511,12 @@ impl ShmAgent {
         let node = node(&cfg, node_name)?;
         ns.make_private();
         let ports = Self::open(&node)?;
+        let bell = Doorbell::open(ns)?;
         Ok(Self {
             ports,
+            bell,
             cfg,
-            node,
+            _node: node,
             world: WorldWatch::new(),
             terminated: std::cell::Cell::new(false),
         })
@@ -555,9 +570,9 @@ impl ShmAgent {
                 setup_sub,
                 join_pub,
                 reply_sub,
+                tick,
             }),
             snap_sub,
-            tick,
             cmd_pub,
             wake,
         })
@@ -841,7 +856,10 @@ impl AgentTransport for ShmAgent {
     }
 
     fn wait(&mut self, timeout: Duration) -> Result<(), TransportError> {
-        wait_on(&self.ports.tick, timeout)
+        match &self.ports.joining {
+            Some(j) => wait_on(&j.tick, timeout),
+            None => self.bell.wait(timeout).map(|_| ()),
+        }
     }
 
     fn latest_snapshot(
@@ -879,7 +897,7 @@ impl AgentTransport for ShmAgent {
     }
 
     fn termination_requested(&self) -> bool {
-        terminated(&self.node, &self.terminated)
+        terminated(&self.terminated)
     }
 }
 
