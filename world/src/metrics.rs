@@ -353,12 +353,121 @@ pub fn segment_distance(w: [[f64; 2]; 2], p: [f64; 2]) -> f64 {
 /// body nearer than `b`, usually one to four instead of nine or more. Either
 /// way a clearance below the bound is the same number, bit for bit, as the
 /// all-pairs minimum (the same expression, minimised over the same bodies).
+///
+/// Once most robots have a bound, one cell per body is far too coarse
+/// where bodies crowd a small part of the box they span (two streams
+/// crossing a 760 m arena: ~30 bodies a cell), so robots with a small
+/// bound search a second, fine grid instead: cells twice as wide as nine
+/// in ten robots' search reach (so such a robot's box meets at most 2 x 2
+/// cells), hashed into about 2n buckets (only the occupied cells cost
+/// anything; bodies of other cells that share a bucket are ruled out by
+/// their distance), each bucket's centres and radii copied side by side.
+/// At 1000 robots this took criterion's `world_tick` from 247 to ~206 µs.
 #[derive(Debug, Clone, Default)]
 pub struct ClearanceGrid {
+    coarse: Buckets,
+    fine: Buckets,
+    reach: Vec<f64>,
+    scratch: Vec<f64>,
+}
+
+/// Bodies sorted by bucket (a counting sort): bucket `c` holds bodies
+/// `order[start[c]..start[c + 1]]`, whose centres and radii are copied in
+/// the same order into `at` (so a bucket's search reads one run of memory).
+#[derive(Debug, Clone, Default)]
+struct Buckets {
     start: Vec<u32>,
     order: Vec<u32>,
-    cell_of: Vec<u32>,
+    at: Vec<[f64; 3]>,
+    key: Vec<u32>,
     fill: Vec<u32>,
+}
+
+impl Buckets {
+    /// Sorts `states` into `buckets` buckets by `keys` (one per body).
+    fn sort(
+        &mut self,
+        states: &[mrsim_proto::BodyState],
+        buckets: usize,
+        keys: impl Iterator<Item = usize>,
+    ) {
+        self.start.clear();
+        self.start.resize(buckets + 1, 0);
+        self.key.clear();
+        for c in keys {
+            self.key.push(c as u32);
+            self.start[c + 1] += 1;
+        }
+        for c in 0..buckets {
+            self.start[c + 1] += self.start[c];
+        }
+        self.order.clear();
+        self.order.resize(self.key.len(), 0);
+        self.fill.clear();
+        self.fill.extend_from_slice(&self.start[..buckets]);
+        for (j, &c) in self.key.iter().enumerate() {
+            self.order[self.fill[c as usize] as usize] = j as u32;
+            self.fill[c as usize] += 1;
+        }
+        self.at.clear();
+        self.at.extend(self.order.iter().map(|&j| {
+            let q = &states[j as usize];
+            [q.position[0], q.position[1], q.radius]
+        }));
+    }
+
+    /// Robot `i`'s smallest clearance to the bodies of bucket `c` where it
+    /// is below `best` (otherwise `best`).
+    fn nearest_in(
+        &self,
+        states: &[mrsim_proto::BodyState],
+        i: usize,
+        c: usize,
+        mut best: f64,
+    ) -> f64 {
+        let s = &states[i];
+        let range = self.start[c] as usize..self.start[c + 1] as usize;
+        for (&j, &[qx, qy, qr]) in self.order[range.clone()].iter().zip(&self.at[range]) {
+            if j as usize == i {
+                continue;
+            }
+            // No square root for a body clearly farther than the best so
+            // far (the margin covers the rounding of both sides).
+            let (dx, dy) = (qx - s.position[0], qy - s.position[1]);
+            let reach = best + qr + s.radius;
+            if reach >= 0.0 && dx * dx + dy * dy > reach * reach * (1.0 + 1e-9) + 1e-300 {
+                continue;
+            }
+            // As `centre_distance(q, s)`, the same expression as `brute`.
+            best = best.min((dx * dx + dy * dy).sqrt() - qr - s.radius);
+        }
+        best
+    }
+}
+
+/// The fine grid of one tick: cells of `cell` from `lo`, hashed into
+/// `1 << bits` buckets.
+#[derive(Clone, Copy)]
+struct Fine {
+    lo: [f64; 2],
+    cell: f64,
+    bits: u32,
+}
+
+impl Fine {
+    /// The cell index of coordinate `v` on axis `k`: truncated, not
+    /// floored (no libm call), which merges cells -1 and 0 but keeps the
+    /// index monotonic in `v`, all a search box needs. `as` saturates.
+    fn at(&self, v: f64, k: usize) -> i64 {
+        ((v - self.lo[k]) / self.cell) as i64
+    }
+
+    /// The bucket of cell (`x`, `y`).
+    fn bucket(&self, x: i64, y: i64) -> usize {
+        let h = (x as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            ^ (y as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F);
+        (h >> (64 - self.bits)) as usize
+    }
 }
 
 /// Distance between two bodies' centres: the plain square root of the sum
@@ -379,6 +488,22 @@ struct Cells {
 }
 
 impl Cells {
+    /// About one cell per body over the box `lo`..`hi`, never narrower than
+    /// the largest diameter, at most about 4n cells whatever the shape.
+    fn spanning(lo: [f64; 2], hi: [f64; 2], n: usize, rmax: f64) -> Self {
+        let (w, h) = ((hi[0] - lo[0]).max(1e-9), (hi[1] - lo[1]).max(1e-9));
+        let mut cell = (w * h / n as f64).sqrt().max(2.0 * rmax).max(1e-9);
+        while (w / cell + 1.0) * (h / cell + 1.0) > 4.0 * n as f64 + 4.0 {
+            cell *= 1.5;
+        }
+        Self {
+            lo,
+            cell,
+            nx: (w / cell) as usize + 1,
+            ny: (h / cell) as usize + 1,
+        }
+    }
+
     /// The cell column (or row) of coordinate `v` on axis `k`, clamped
     /// into the grid.
     fn at(&self, v: f64, k: usize) -> usize {
@@ -432,31 +557,51 @@ impl ClearanceGrid {
             }
             return;
         }
-        let (w, h) = ((hi[0] - lo[0]).max(1e-9), (hi[1] - lo[1]).max(1e-9));
-        let mut cell = (w * h / n as f64).sqrt().max(2.0 * rmax).max(1e-9);
-        // At most about 4n cells, whatever the shape.
-        while (w / cell + 1.0) * (h / cell + 1.0) > 4.0 * n as f64 + 4.0 {
-            cell *= 1.5;
-        }
-        let g = Cells {
-            lo,
-            cell,
-            nx: (w / cell) as usize + 1,
-            ny: (h / cell) as usize + 1,
-        };
-        self.bucket(states, g);
+        // Each robot's search reach: every body nearer than its bound has
+        // its centre within this distance of the robot's.
+        self.reach.clear();
+        self.reach
+            .extend((0..out.len()).map(|i| bound(i) + states[i].radius + rmax));
+        let fine = self.fine_grid(states, lo, hi, rmax);
+        let mut coarse: Option<Cells> = None;
         for (i, o) in out.iter_mut().enumerate() {
             let s = &states[i];
-            let b = bound(i);
-            // Bounded: every body nearer than `b` has its centre within
-            // `reach` of this robot's, so only the cells of that box count.
-            let reach = b + s.radius + rmax;
+            let reach = self.reach[i];
             if reach < 0.0 {
                 // Deeper than any overlap can be: nothing to search.
-                *o = b;
+                *o = bound(i);
                 continue;
             }
-            if reach.is_finite() && reach <= cell {
+            if let Some(f) = fine.filter(|f| reach <= f.cell) {
+                let (x0, x1) = (
+                    f.at(s.position[0] - reach, 0),
+                    f.at(s.position[0] + reach, 0),
+                );
+                let (y0, y1) = (
+                    f.at(s.position[1] - reach, 1),
+                    f.at(s.position[1] + reach, 1),
+                );
+                let mut best = f64::INFINITY;
+                for y in y0..=y1 {
+                    for x in x0..=x1 {
+                        best = self.fine.nearest_in(states, i, f.bucket(x, y), best);
+                    }
+                }
+                *o = best;
+                continue;
+            }
+            let g = *coarse.get_or_insert_with(|| {
+                let g = Cells::spanning(lo, hi, n, rmax);
+                self.coarse.sort(
+                    states,
+                    g.nx * g.ny,
+                    states
+                        .iter()
+                        .map(|s| g.at(s.position[1], 1) * g.nx + g.at(s.position[0], 0)),
+                );
+                g
+            });
+            if reach.is_finite() && reach <= g.cell {
                 let (x0, x1) = (
                     g.at(s.position[0] - reach, 0),
                     g.at(s.position[0] + reach, 0),
@@ -468,67 +613,55 @@ impl ClearanceGrid {
                 let mut best = f64::INFINITY;
                 for y in y0..=y1 {
                     for x in x0..=x1 {
-                        best = self.nearest_in(states, i, y * g.nx + x, best);
+                        best = self.coarse.nearest_in(states, i, y * g.nx + x, best);
                     }
                 }
                 *o = best;
                 continue;
             }
             // Unbounded (or a bound wider than a cell): rings outwards.
-            *o = self.rings(states, i, g, b, rmax);
+            *o = self.rings(states, i, g, bound(i), rmax);
         }
     }
 
-    /// Counting sort of the bodies into the cells of `g`.
-    fn bucket(&mut self, states: &[mrsim_proto::BodyState], g: Cells) {
-        let cells = g.nx * g.ny;
-        self.start.clear();
-        self.start.resize(cells + 1, 0);
-        self.cell_of.clear();
-        for s in states {
-            let c = g.at(s.position[1], 1) * g.nx + g.at(s.position[0], 0);
-            self.cell_of.push(c as u32);
-            self.start[c + 1] += 1;
-        }
-        for c in 0..cells {
-            self.start[c + 1] += self.start[c];
-        }
-        self.order.clear();
-        self.order.resize(states.len(), 0);
-        self.fill.clear();
-        self.fill.extend_from_slice(&self.start[..cells]);
-        for (j, &c) in self.cell_of.iter().enumerate() {
-            self.order[self.fill[c as usize] as usize] = j as u32;
-            self.fill[c as usize] += 1;
-        }
-    }
-
-    /// Robot `i`'s smallest clearance to the bodies of cell `c` where it is
-    /// below `best` (otherwise `best`).
-    fn nearest_in(
-        &self,
+    /// Sorts the bodies into the fine grid when nine in ten robots have a
+    /// finite reach: cells twice as wide as the largest of those reaches
+    /// (or the largest radius). `None` when too few robots are bounded.
+    fn fine_grid(
+        &mut self,
         states: &[mrsim_proto::BodyState],
-        i: usize,
-        c: usize,
-        mut best: f64,
-    ) -> f64 {
-        let s = &states[i];
-        for &j in &self.order[self.start[c] as usize..self.start[c + 1] as usize] {
-            let j = j as usize;
-            if j == i {
-                continue;
-            }
-            let q = &states[j];
-            // No square root for a body clearly farther than the best so
-            // far (the margin covers the rounding of both sides).
-            let (dx, dy) = (q.position[0] - s.position[0], q.position[1] - s.position[1]);
-            let reach = best + q.radius + s.radius;
-            if reach >= 0.0 && dx * dx + dy * dy > reach * reach * (1.0 + 1e-9) + 1e-300 {
-                continue;
-            }
-            best = best.min(centre_distance(q, s) - q.radius - s.radius);
+        lo: [f64; 2],
+        hi: [f64; 2],
+        rmax: f64,
+    ) -> Option<Fine> {
+        let robots = self.reach.len();
+        if robots < 16 {
+            return None;
         }
-        best
+        let k = robots * 9 / 10;
+        self.scratch.clear();
+        self.scratch.extend_from_slice(&self.reach);
+        let (_, p90, _) = self.scratch.select_nth_unstable_by(k, f64::total_cmp);
+        let cell = 2.0 * p90.max(rmax);
+        // Cell indices far beyond 2^53 would lose their meaning (and a
+        // search box its size): no fine grid at such scales.
+        let span = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+        if !cell.is_finite() || cell <= 0.0 || span / cell > 1e12 {
+            return None;
+        }
+        let bits = (2 * states.len())
+            .next_power_of_two()
+            .trailing_zeros()
+            .max(4);
+        let f = Fine { lo, cell, bits };
+        self.fine.sort(
+            states,
+            1 << bits,
+            states
+                .iter()
+                .map(|s| f.bucket(f.at(s.position[0], 0), f.at(s.position[1], 1))),
+        );
+        Some(f)
     }
 
     /// Robot `i`'s clearance by rings of cells around its own, stopping
@@ -561,7 +694,9 @@ impl ClearanceGrid {
                 while dx <= ring {
                     let x = cx + dx;
                     if x >= 0 && x < g.nx as isize {
-                        best = self.nearest_in(states, i, y as usize * g.nx + x as usize, best);
+                        best =
+                            self.coarse
+                                .nearest_in(states, i, y as usize * g.nx + x as usize, best);
                     }
                     dx += step;
                 }
@@ -712,6 +847,53 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn robots_with_small_bounds_get_the_same_clearance_from_the_fine_grid() {
+        let mut grid = ClearanceGrid::default();
+        let mut out = Vec::new();
+        // Scattered, and two long crossing lines (one coarse cell then
+        // holds dozens of bodies: what the fine grid is for).
+        let mut layouts: Vec<Vec<BodyState>> = [(40, 5.0), (500, 30.0), (1000, 3000.0)]
+            .iter()
+            .map(|&(n, spread)| scatter(n, 11 * n as u64, spread))
+            .collect();
+        let mut lines = scatter(600, 5, 1.0);
+        for (k, b) in lines.iter_mut().enumerate() {
+            let t = (k / 2) as f64 * 0.6 + 0.01 * (k % 7) as f64;
+            b.position = if k % 2 == 0 {
+                [t - 90.0, 0.3]
+            } else {
+                [0.2, t - 90.0]
+            };
+        }
+        layouts.push(lines);
+        for states in &layouts {
+            let n = states.len();
+            // Nine in ten bounds small (fine grid); a few wide or none
+            // (the coarse grid's box and rings).
+            let bound = |i: usize| match (i % 25, i % 4) {
+                (0, _) => f64::INFINITY,
+                (1, _) => 40.0,
+                (_, 0) => -1.0,
+                (_, 1) => 0.05 * (i % 7) as f64,
+                (_, 2) => brute(states, i) + 1e-9,
+                _ => brute(states, i) - 1e-9,
+            };
+            grid.clearances_below(states, n, bound, &mut out);
+            for (i, c) in out.iter().enumerate() {
+                let exact = brute(states, i);
+                assert_eq!(
+                    c.min(bound(i)).to_bits(),
+                    exact.min(bound(i)).to_bits(),
+                    "n {n} robot {i}: {c} with bound {}, exact {exact}",
+                    bound(i)
+                );
+            }
+        }
+        // The fine grid was used (nine in ten robots bounded).
+        assert!(!grid.fine.order.is_empty());
     }
 
     #[test]
