@@ -138,7 +138,10 @@ pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentEx
     link.joined();
     let mut header = SnapshotHeader::default();
     let mut bodies: Vec<BodyState> = Vec::with_capacity(driver.capacity);
-    let mut last_heard = Instant::now();
+    // When the last snapshot came (the clock read as the agent woke for
+    // it: one clock read a tick fewer).
+    let mut last_heard = now_ns();
+    let check_after = u64::try_from(opts.world_check_after.as_nanos()).unwrap_or(u64::MAX);
     loop {
         if link.termination_requested() {
             return driver.finish(AgentExit::Interrupted);
@@ -146,12 +149,12 @@ pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentEx
         link.wait(Duration::from_millis(100))?;
         let woke = now_ns();
         if !link.latest_snapshot(&mut header, &mut bodies)? {
-            if last_heard.elapsed() > opts.world_check_after && !link.world_alive() {
+            if woke.saturating_sub(last_heard) > check_after && !link.world_alive() {
                 return Err(AgentError::WorldGone);
             }
             continue;
         }
-        last_heard = Instant::now();
+        last_heard = woke;
         if header.finished != 0 {
             return driver.finish(AgentExit::Finished);
         }

@@ -183,12 +183,13 @@ impl Doorbell {
 
     /// An agent's side: returns at once if the doorbell rang since the last
     /// call, else sleeps until it rings, `timeout` passes, or a signal
-    /// arrives. True if it rang.
-    pub fn wait(&mut self, timeout: Duration) -> Result<bool, TransportError> {
+    /// arrives. Returns how many times it rang since the last call (each
+    /// ring follows one snapshot).
+    pub fn wait(&mut self, timeout: Duration) -> Result<u32, TransportError> {
         let ring = &self.words().ring;
         let now = ring.load(Ordering::Acquire);
         if now != self.seen || timeout.is_zero() {
-            let rang = now != self.seen;
+            let rang = now.wrapping_sub(self.seen);
             self.seen = now;
             return Ok(rang);
         }
@@ -223,7 +224,7 @@ impl Doorbell {
             }
         }
         let now = ring.load(Ordering::Acquire);
-        let rang = now != self.seen;
+        let rang = now.wrapping_sub(self.seen);
         self.seen = now;
         Ok(rang)
     }
@@ -264,8 +265,8 @@ mod tests {
         std::thread::sleep(Duration::from_millis(50));
         world.ring().expect("ring");
         let (rang, again) = waiter.join().expect("waiter");
-        assert!(rang);
-        assert!(!again);
+        assert_eq!(rang, 1);
+        assert_eq!(again, 0);
     }
 
     #[test]
@@ -274,8 +275,10 @@ mod tests {
         let world = Doorbell::create(&ns).expect("create");
         let mut agent = Doorbell::open(&ns).expect("open");
         world.ring().expect("ring");
+        world.ring().expect("ring");
         let t = Instant::now();
-        assert!(agent.wait(Duration::from_secs(10)).expect("wait"));
+        // Both rings are counted, and the wait did not sleep.
+        assert_eq!(agent.wait(Duration::from_secs(10)).expect("wait"), 2);
         assert!(t.elapsed() < Duration::from_secs(5));
     }
 
@@ -284,7 +287,7 @@ mod tests {
         let ns = ns("quiet");
         let _world = Doorbell::create(&ns).expect("create");
         let mut agent = Doorbell::open(&ns).expect("open");
-        assert!(!agent.wait(Duration::from_millis(5)).expect("wait"));
+        assert_eq!(agent.wait(Duration::from_millis(5)).expect("wait"), 0);
     }
 
     #[test]

@@ -784,22 +784,36 @@ where
     H: std::fmt::Debug + ZeroCopySend + Copy + 'static,
 {
     let mut got = false;
-    loop {
-        match sub.receive() {
-            Ok(Some(s)) => {
-                *header = *s.user_header();
-                out.clear();
-                out.extend_from_slice(s.payload());
-                got = true;
-            }
-            Ok(None) => return Ok(got),
-            Err(e) => {
-                return Err(TransportError::Receive {
-                    what,
-                    detail: format!("{e:?}"),
-                });
-            }
+    while receive_one(sub, what, header, out)? {
+        got = true;
+    }
+    Ok(got)
+}
+
+/// Copies the oldest sample waiting on `sub` (header and slice); false if
+/// none was waiting.
+fn receive_one<T, H>(
+    sub: &Subscriber<S, [T], H>,
+    what: &'static str,
+    header: &mut H,
+    out: &mut Vec<T>,
+) -> Result<bool, TransportError>
+where
+    T: std::fmt::Debug + ZeroCopySend + Copy + 'static,
+    H: std::fmt::Debug + ZeroCopySend + Copy + 'static,
+{
+    match sub.receive() {
+        Ok(Some(s)) => {
+            *header = *s.user_header();
+            out.clear();
+            out.extend_from_slice(s.payload());
+            Ok(true)
         }
+        Ok(None) => Ok(false),
+        Err(e) => Err(TransportError::Receive {
+            what,
+            detail: format!("{e:?}"),
+        }),
     }
 }
 
@@ -873,6 +887,9 @@ impl AgentTransport for ShmAgent {
         header: &mut SnapshotHeader,
         bodies: &mut Vec<BodyState>,
     ) -> Result<bool, TransportError> {
+        // Always to the empty queue: one ring is not always one sample (a
+        // new subscriber also gets the publisher's history, unrung), and
+        // taking the oldest of two left an agent a tick behind for good.
         receive_newest(&self.ports.snap_sub, "snapshot", header, bodies)
     }
 
