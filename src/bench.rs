@@ -11,7 +11,9 @@
 //! round trip (snapshot published -> command received by the world), wake-up
 //! latency, planner compute, deadline misses, tick jitter, all-in time
 //! (published -> last command in), CPU of the world and of the agents while
-//! the run ticked, and peak RSS of the world and of one agent. With
+//! the run ticked, the time the hypervisor stole from the run's CPUs (a
+//! virtual machine's own interference), and peak RSS of the world and of
+//! one agent. With
 //! `--baseline`, the same fan-out with bare iceoryx2 (`mrsim
 //! baseline-world`) per agent count.
 //!
@@ -149,6 +151,7 @@ pub fn row_from_run(
         Transport::Inproc => (process_cpu - agents_cpu).max(0.0),
     };
     let pct_of_wall = |s: f64| if wall > 0.0 { 100.0 * s / wall } else { 0.0 };
+    let steal = t["cpus_steal_s"].as_f64().map(pct_of_wall);
     let mb = |kb: Option<u64>| kb.map(|k| k as f64 / 1024.0);
     json!({
         "agents": agents,
@@ -160,6 +163,7 @@ pub fn row_from_run(
         "jitter_us_p99": pct(&t["jitter_us"], &["p99"])["p99"],
         "world_cpu_pct": pct_of_wall(world_cpu),
         "agents_cpu_pct": pct_of_wall(agents_cpu),
+        "steal_pct": steal,
         "world_rss_mb": mb(t["process_maxrss_kb"].as_u64()),
         "agent_rss_mb": mb(usage["agent_maxrss_kb"].as_u64()),
         "wake_us": pct(&t["wake_us"], ALL),
@@ -295,6 +299,7 @@ pub fn table(rows: &[Value]) -> String {
         "base p99",
         "world cpu%",
         "agents cpu%",
+        "steal%",
         "world MB",
         "agent MB",
     ];
@@ -318,6 +323,7 @@ pub fn table(rows: &[Value]) -> String {
                 f(&r["baseline_allin_us"]["p99"], 0),
                 f(&r["world_cpu_pct"], 1),
                 f(&r["agents_cpu_pct"], 1),
+                f(&r["steal_pct"], 1),
                 f(&r["world_rss_mb"], 1),
                 f(&r["agent_rss_mb"], 1),
             ]

@@ -74,6 +74,12 @@ fn a_tiny_bench_writes_one_row_per_combination_with_every_field_of_the_issue() {
             assert!(r[k].as_f64().is_some_and(|x| x >= 0.0), "{k}: {r:#}");
         }
         assert!(r["world_rss_mb"].as_f64().unwrap_or(0.0) > 0.0);
+        // From /proc/stat: a share of the wall time, or null without it.
+        let steal = &r["steal_pct"];
+        assert!(
+            steal.is_null() || steal.as_f64().is_some_and(|x| x >= 0.0),
+            "steal_pct: {r:#}"
+        );
         match r["transport"].as_str() {
             Some("shm") => assert!(r["agent_rss_mb"].as_f64().is_some_and(|x| x > 0.0), "{r:#}"),
             _ => assert!(

@@ -128,6 +128,11 @@ fn an_in_process_run_writes_the_same_outputs_and_timing_as_a_process_run() {
     // Realtime: one jitter sample per tick.
     assert_eq!(t["jitter_us"]["count"], m["ticks"]);
     assert!(t["process_maxrss_kb"].as_u64().unwrap_or(0) > 0, "{t:#}");
+    // Linux has /proc/stat: the time stolen from the run's CPUs.
+    assert!(
+        t["cpus_steal_s"].as_f64().is_some_and(|x| x >= 0.0),
+        "{t:#}"
+    );
 }
 
 #[test]

@@ -10,8 +10,8 @@
 
 use crate::live::LiveStats;
 use crate::metrics::{
-    ClearanceGrid, DurationHistogram, RobotAccumulator, RobotMetrics, RunMetrics, TimingMetrics,
-    process_usage,
+    ClearanceGrid, CpusTime, DurationHistogram, RobotAccumulator, RobotMetrics, RunMetrics,
+    TimingMetrics, process_usage,
 };
 use crate::physics::{Applied, Contact, Owner, World};
 use crate::record::Recorder;
@@ -688,6 +688,7 @@ pub fn run(
     lp.clock_start = Some(wall_start);
     lp.publish_stats(run_phase::RUNNING, true);
     let (cpu_start, _) = process_usage();
+    let cpus_start = CpusTime::now();
     let mut contacts = Vec::new();
     let mut prev: Vec<[f64; 2]> = lp.world.states()[..n].iter().map(|s| s.position).collect();
     while !interrupted && lp.tick < max_ticks {
@@ -821,6 +822,7 @@ pub fn run(
     lp.rec.tick(lp.tick, lp.time(), lp.world.states());
     let wall = wall_start.elapsed().as_secs_f64();
     let (cpu_end, maxrss_kb) = process_usage();
+    let cpus = cpus_start.zip(CpusTime::now()).map(|(a, b)| b.since(a));
     let timing = TimingMetrics {
         wall_s: wall,
         latency_us: lp.all[0].percentiles(),
@@ -831,6 +833,7 @@ pub fn run(
         world_tick_us: tick_cost.percentiles(),
         process_cpu_s: (cpu_end - cpu_start).max(0.0),
         process_maxrss_kb: maxrss_kb,
+        cpus_steal_s: cpus.map(|c| c.steal_s),
     };
 
     lp.publish_stats(run_phase::FINISHED, true);
