@@ -480,6 +480,30 @@ impl Buckets {
         }));
     }
 
+    /// Robot `i`'s smallest clearance to the bodies whose centres may lie
+    /// within `reach` of its own (infinity if none): the buckets of the
+    /// cells of that box, `cell(v, axis)` giving a coordinate's cell (never
+    /// decreasing in `v`) and `bucket(x, y)` a cell's bucket.
+    fn nearest_in_box(
+        &self,
+        states: &[mrsim_proto::BodyState],
+        i: usize,
+        reach: f64,
+        cell: impl Fn(f64, usize) -> i64,
+        bucket: impl Fn(i64, i64) -> usize,
+    ) -> f64 {
+        let p = states[i].position;
+        let (x0, x1) = (cell(p[0] - reach, 0), cell(p[0] + reach, 0));
+        let (y0, y1) = (cell(p[1] - reach, 1), cell(p[1] + reach, 1));
+        let mut best = f64::INFINITY;
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                best = self.nearest_in(states, i, bucket(x, y), best);
+            }
+        }
+        best
+    }
+
     /// Robot `i`'s smallest clearance to the bodies of bucket `c` where it
     /// is below `best` (otherwise `best`).
     fn nearest_in(
@@ -629,7 +653,6 @@ impl ClearanceGrid {
         let fine = self.fine_grid(states, lo, hi, rmax);
         let mut coarse: Option<Cells> = None;
         for (i, o) in out.iter_mut().enumerate() {
-            let s = &states[i];
             let reach = self.reach[i];
             if reach < 0.0 {
                 // Deeper than any overlap can be: nothing to search.
@@ -637,21 +660,13 @@ impl ClearanceGrid {
                 continue;
             }
             if let Some(f) = fine.filter(|f| reach <= f.cell) {
-                let (x0, x1) = (
-                    f.at(s.position[0] - reach, 0),
-                    f.at(s.position[0] + reach, 0),
+                *o = self.fine.nearest_in_box(
+                    states,
+                    i,
+                    reach,
+                    |v, k| f.at(v, k),
+                    |x, y| f.bucket(x, y),
                 );
-                let (y0, y1) = (
-                    f.at(s.position[1] - reach, 1),
-                    f.at(s.position[1] + reach, 1),
-                );
-                let mut best = f64::INFINITY;
-                for y in y0..=y1 {
-                    for x in x0..=x1 {
-                        best = self.fine.nearest_in(states, i, f.bucket(x, y), best);
-                    }
-                }
-                *o = best;
                 continue;
             }
             let g = *coarse.get_or_insert_with(|| {
@@ -666,21 +681,13 @@ impl ClearanceGrid {
                 g
             });
             if reach.is_finite() && reach <= g.cell {
-                let (x0, x1) = (
-                    g.at(s.position[0] - reach, 0),
-                    g.at(s.position[0] + reach, 0),
+                *o = self.coarse.nearest_in_box(
+                    states,
+                    i,
+                    reach,
+                    |v, k| g.at(v, k) as i64,
+                    |x, y| y as usize * g.nx + x as usize,
                 );
-                let (y0, y1) = (
-                    g.at(s.position[1] - reach, 1),
-                    g.at(s.position[1] + reach, 1),
-                );
-                let mut best = f64::INFINITY;
-                for y in y0..=y1 {
-                    for x in x0..=x1 {
-                        best = self.coarse.nearest_in(states, i, y * g.nx + x, best);
-                    }
-                }
-                *o = best;
                 continue;
             }
             // Unbounded (or a bound wider than a cell): rings outwards.

@@ -784,36 +784,22 @@ where
     H: std::fmt::Debug + ZeroCopySend + Copy + 'static,
 {
     let mut got = false;
-    while receive_one(sub, what, header, out)? {
-        got = true;
-    }
-    Ok(got)
-}
-
-/// Copies the oldest sample waiting on `sub` (header and slice); false if
-/// none was waiting.
-fn receive_one<T, H>(
-    sub: &Subscriber<S, [T], H>,
-    what: &'static str,
-    header: &mut H,
-    out: &mut Vec<T>,
-) -> Result<bool, TransportError>
-where
-    T: std::fmt::Debug + ZeroCopySend + Copy + 'static,
-    H: std::fmt::Debug + ZeroCopySend + Copy + 'static,
-{
-    match sub.receive() {
-        Ok(Some(s)) => {
-            *header = *s.user_header();
-            out.clear();
-            out.extend_from_slice(s.payload());
-            Ok(true)
+    loop {
+        match sub.receive() {
+            Ok(Some(s)) => {
+                *header = *s.user_header();
+                out.clear();
+                out.extend_from_slice(s.payload());
+                got = true;
+            }
+            Ok(None) => return Ok(got),
+            Err(e) => {
+                return Err(TransportError::Receive {
+                    what,
+                    detail: format!("{e:?}"),
+                });
+            }
         }
-        Ok(None) => Ok(false),
-        Err(e) => Err(TransportError::Receive {
-            what,
-            detail: format!("{e:?}"),
-        }),
     }
 }
 
