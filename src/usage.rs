@@ -80,6 +80,17 @@ impl<'a> Metered<'a> {
         }
     }
 
+    /// Reads the CPU clock at the first snapshot and at the last.
+    fn note(scope: Scope, start: &mut Option<f64>, end: &mut Option<f64>, header: &SnapshotHeader) {
+        if header.finished != 0 {
+            if end.is_none() {
+                *end = Some(rusage(scope).0);
+            }
+        } else if start.is_none() {
+            *start = Some(rusage(scope).0);
+        }
+    }
+
     /// What was used between the first and the last snapshot (up to now if
     /// the run did not finish).
     pub fn usage(&self) -> AgentUsage {
@@ -112,18 +123,24 @@ impl AgentTransport for Metered<'_> {
     ) -> Result<bool, TransportError> {
         let got = self.inner.latest_snapshot(header, bodies)?;
         if got {
-            if header.finished != 0 {
-                if self.end.is_none() {
-                    self.end = Some(rusage(self.scope).0);
-                }
-            } else if self.start.is_none() {
-                self.start = Some(rusage(self.scope).0);
-            }
+            Self::note(self.scope, &mut self.start, &mut self.end, header);
         }
         Ok(got)
     }
     fn send_command(&mut self, cmd: &CommandMsg) -> Result<(), TransportError> {
         self.inner.send_command(cmd)
+    }
+    fn with_latest_snapshot(
+        &mut self,
+        scratch: &mut (SnapshotHeader, Vec<BodyState>),
+        f: &mut mrsim_transport::SnapshotFn<'_>,
+    ) -> Result<bool, TransportError> {
+        let (scope, start, end) = (self.scope, &mut self.start, &mut self.end);
+        self.inner
+            .with_latest_snapshot(scratch, &mut |header, bodies, send| {
+                Self::note(scope, start, end, header);
+                f(header, bodies, send)
+            })
     }
     fn world_alive(&mut self) -> bool {
         self.inner.world_alive()

@@ -136,8 +136,11 @@ pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentEx
     };
     link.send_command(&driver.ready())?;
     link.joined();
-    let mut header = SnapshotHeader::default();
-    let mut bodies: Vec<BodyState> = Vec::with_capacity(driver.capacity);
+    // Where a transport that cannot lend its snapshot copies it.
+    let mut scratch = (
+        SnapshotHeader::default(),
+        Vec::<BodyState>::with_capacity(driver.capacity),
+    );
     // When the last snapshot came (the clock read as the agent woke for
     // it: one clock read a tick fewer).
     let mut last_heard = now_ns();
@@ -148,17 +151,27 @@ pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentEx
         }
         link.wait(Duration::from_millis(100))?;
         let woke = now_ns();
-        if !link.latest_snapshot(&mut header, &mut bodies)? {
+        let (mut finished, mut failed) = (false, None);
+        let got = link.with_latest_snapshot(&mut scratch, &mut |header, bodies, send| {
+            if header.finished != 0 {
+                finished = true;
+            } else if let Err(e) = driver.on_snapshot(header, bodies, woke, send) {
+                failed = Some(e);
+            }
+        })?;
+        if !got {
             if woke.saturating_sub(last_heard) > check_after && !link.world_alive() {
                 return Err(AgentError::WorldGone);
             }
             continue;
         }
         last_heard = woke;
-        if header.finished != 0 {
+        if let Some(e) = failed {
+            return Err(e);
+        }
+        if finished {
             return driver.finish(AgentExit::Finished);
         }
-        driver.on_snapshot(&header, &bodies, woke, &mut |m| link.send_command(m))?;
     }
 }
 

@@ -684,7 +684,15 @@ pub fn run(
     let max_ticks = scenario.max_ticks();
     let deadline_after = Duration::from_secs_f64(dt * scenario.world.deadline);
     let stall = Duration::from_secs_f64(scenario.world.stall_timeout);
-    let wall_start = Instant::now();
+    // Tick 0 costs what any tick costs: the channels are connected, and in
+    // realtime the agents get one tick's time to take up their side.
+    lp.link.prepare_ticks()?;
+    let settle = if realtime {
+        Duration::from_secs_f64(dt)
+    } else {
+        Duration::ZERO
+    };
+    let wall_start = Instant::now() + settle;
     lp.clock_start = Some(wall_start);
     lp.publish_stats(run_phase::RUNNING, true);
     let (cpu_start, _) = process_usage();

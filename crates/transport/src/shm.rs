@@ -141,14 +141,18 @@ fn wait_on(listener: &Listener<S>, timeout: Duration) -> Result<(), TransportErr
     let r = unsafe { libc::ppoll(&mut pfd, 1, &ts, std::ptr::null()) };
     if r < 0 {
         let e = std::io::Error::last_os_error();
-        if e.kind() == std::io::ErrorKind::Interrupted {
-            return Ok(());
+        if e.kind() != std::io::ErrorKind::Interrupted {
+            return Err(TransportError::Wait(format!("ppoll: {e}")));
         }
-        return Err(TransportError::Wait(format!("ppoll: {e}")));
     }
-    if r > 0 {
-        drain()?;
-    }
+    // Drained also after a timeout. A notifier sends its datagram only
+    // while the listener's shared state is not yet "notified", and a
+    // notifier that runs between the listener's reset of that state and
+    // its emptying of the socket leaves it "notified" with the datagram
+    // gone: no notifier sends again, and only a drain resets it. Seen at
+    // 256 agents under SCHED_FIFO, the world then woke only at each
+    // deadline, for the rest of the run (round trip p50 10.2 ms).
+    drain()?;
     Ok(())
 }
 
@@ -417,6 +421,19 @@ impl WorldTransport for ShmWorld {
         terminated(&self.terminated)
     }
 
+    fn prepare_ticks(&mut self) -> Result<(), TransportError> {
+        // The join-time connections go first (1000 agents' connections of
+        // both kinds at once raised the world's peak RSS by ~15 MB), then
+        // the snapshot publisher connects to every subscriber, and a ring
+        // with no snapshot wakes the agents to map their side (they find
+        // nothing to read, and wait again).
+        let _ = self.setup_pub.update_connections();
+        let _ = self.reply_pub.update_connections();
+        // Best effort: the first send connects whatever this could not.
+        let _ = self.snap_pub.update_connections();
+        self.bell.ring()
+    }
+
     fn cleanup_dead(&mut self) {
         let _ = self.node.try_cleanup_dead_nodes();
     }
@@ -437,12 +454,6 @@ impl WorldTransport for ShmWorld {
         // and join-reply subscribers, whose connections this unmaps.
         let _ = self.setup_pub.update_connections();
         let _ = self.reply_pub.update_connections();
-        // The snapshot publisher connects to the agents that subscribed
-        // since (the world publishes the statistics once more just before
-        // tick 0): left to the first snapshot's send, connecting to 256
-        // agents took ~7 ms of tick 0, after its publish time was stamped,
-        // and cost most agents their first deadline.
-        let _ = self.snap_pub.update_connections();
         send_slice(&self.stats_pub, "stats", &header, &robots[..n])
     }
 }
@@ -583,6 +594,24 @@ impl ShmAgent {
             wake,
         })
     }
+}
+
+/// Publishes `cmd` and wakes the world.
+fn send_command(
+    cmd_pub: &Publisher<S, CommandMsg, ()>,
+    wake: &Notifier<S>,
+    cmd: &CommandMsg,
+) -> Result<(), TransportError> {
+    cmd_pub.send_copy(*cmd).map_err(|e| TransportError::Send {
+        what: "command",
+        detail: format!("{e:?}"),
+    })?;
+    wake.notify_with_custom_event_id(EventId::new(events::COMMAND))
+        .map_err(|e| TransportError::Send {
+            what: "wake event",
+            detail: format!("{e:?}"),
+        })?;
+    Ok(())
 }
 
 /// Whether a live world process holds run `ns` (its iceoryx2 node is
@@ -880,21 +909,38 @@ impl AgentTransport for ShmAgent {
     }
 
     fn send_command(&mut self, cmd: &CommandMsg) -> Result<(), TransportError> {
-        self.ports
-            .cmd_pub
-            .send_copy(*cmd)
-            .map_err(|e| TransportError::Send {
-                what: "command",
-                detail: format!("{e:?}"),
-            })?;
-        self.ports
-            .wake
-            .notify_with_custom_event_id(EventId::new(events::COMMAND))
-            .map_err(|e| TransportError::Send {
-                what: "wake event",
-                detail: format!("{e:?}"),
-            })?;
-        Ok(())
+        send_command(&self.ports.cmd_pub, &self.ports.wake, cmd)
+    }
+
+    fn with_latest_snapshot(
+        &mut self,
+        _scratch: &mut (SnapshotHeader, Vec<BodyState>),
+        f: &mut crate::SnapshotFn<'_>,
+    ) -> Result<bool, TransportError> {
+        // The newest sample, the older ones released as we go (always to
+        // the empty queue: one ring is not always one sample, since a new
+        // subscriber also gets the publisher's history).
+        let mut newest = None;
+        loop {
+            match self.ports.snap_sub.receive() {
+                Ok(Some(s)) => newest = Some(s),
+                Ok(None) => break,
+                Err(e) => {
+                    return Err(TransportError::Receive {
+                        what: "snapshot",
+                        detail: format!("{e:?}"),
+                    });
+                }
+            }
+        }
+        let Some(sample) = newest else {
+            return Ok(false);
+        };
+        let (cmd_pub, wake) = (&self.ports.cmd_pub, &self.ports.wake);
+        f(sample.user_header(), sample.payload(), &mut |m| {
+            send_command(cmd_pub, wake, m)
+        });
+        Ok(true)
     }
 
     fn joined(&mut self) {
