@@ -227,8 +227,9 @@ pub fn read_run(dir: &Path) -> Result<RunMetrics> {
     let mut ratios = Vec::new();
     let mut clearance: Option<f64> = None;
     let mut all_arrived = true;
+    let none = Default::default();
     for r in &sc.robots {
-        let rm = m.robots.get(&r.name).cloned().unwrap_or_default();
+        let rm = m.robots.get(&r.name).unwrap_or(&none);
         match rm.time_to_goal {
             Some(t) if rm.reached_goal => arrived.push(t),
             _ => all_arrived = false,

@@ -338,9 +338,9 @@ impl CpusTime {
             if !allowed(cpu) {
                 continue;
             }
-            let v: Vec<u64> = f.map(|x| x.parse().unwrap_or(0)).collect();
             // user nice system idle iowait irq softirq steal ...
-            t.steal_s += v.get(7).copied().unwrap_or(0) as f64 / hz;
+            let steal: u64 = f.nth(7).and_then(|x| x.parse().ok()).unwrap_or(0);
+            t.steal_s += steal as f64 / hz;
             any = true;
         }
         any.then_some(t)
@@ -431,8 +431,16 @@ pub fn segment_distance(w: [[f64; 2]; 2], p: [f64; 2]) -> f64 {
 pub struct ClearanceGrid {
     coarse: Buckets,
     fine: Buckets,
-    reach: Vec<f64>,
+    /// The robots' search reaches, reordered to find the ninetieth
+    /// percentile.
     scratch: Vec<f64>,
+}
+
+/// True if a point at squared distance `d2` is clearly farther than `reach`
+/// (a margin covers the rounding of both sides): it can be ruled out without
+/// a square root. A negative reach rules nothing out.
+pub fn clearly_beyond(d2: f64, reach: f64) -> bool {
+    reach >= 0.0 && d2 > reach * reach * (1.0 + 1e-9) + 1e-300
 }
 
 /// Bodies sorted by bucket (a counting sort): bucket `c` holds bodies
@@ -519,11 +527,9 @@ impl Buckets {
             if j as usize == i {
                 continue;
             }
-            // No square root for a body clearly farther than the best so
-            // far (the margin covers the rounding of both sides).
+            // No square root for a body clearly farther than the best so far.
             let (dx, dy) = (qx - s.position[0], qy - s.position[1]);
-            let reach = best + qr + s.radius;
-            if reach >= 0.0 && dx * dx + dy * dy > reach * reach * (1.0 + 1e-9) + 1e-300 {
+            if clearly_beyond(dx * dx + dy * dy, best + qr + s.radius) {
                 continue;
             }
             // As `centre_distance(q, s)`, the same expression as `brute`.
@@ -647,13 +653,11 @@ impl ClearanceGrid {
         }
         // Each robot's search reach: every body nearer than its bound has
         // its centre within this distance of the robot's.
-        self.reach.clear();
-        self.reach
-            .extend((0..out.len()).map(|i| bound(i) + states[i].radius + rmax));
-        let fine = self.fine_grid(states, lo, hi, rmax);
+        let reach_of = |i: usize| bound(i) + states[i].radius + rmax;
+        let fine = self.fine_grid(states, out.len(), &reach_of, lo, hi, rmax);
         let mut coarse: Option<Cells> = None;
         for (i, o) in out.iter_mut().enumerate() {
-            let reach = self.reach[i];
+            let reach = reach_of(i);
             if reach < 0.0 {
                 // Deeper than any overlap can be: nothing to search.
                 *o = bound(i);
@@ -701,17 +705,18 @@ impl ClearanceGrid {
     fn fine_grid(
         &mut self,
         states: &[mrsim_proto::BodyState],
+        robots: usize,
+        reach_of: &dyn Fn(usize) -> f64,
         lo: [f64; 2],
         hi: [f64; 2],
         rmax: f64,
     ) -> Option<Fine> {
-        let robots = self.reach.len();
         if robots < 16 {
             return None;
         }
         let k = robots * 9 / 10;
         self.scratch.clear();
-        self.scratch.extend_from_slice(&self.reach);
+        self.scratch.extend((0..robots).map(reach_of));
         let (_, p90, _) = self.scratch.select_nth_unstable_by(k, f64::total_cmp);
         let cell = 2.0 * p90.max(rmax);
         // Cell indices far beyond 2^53 would lose their meaning (and a

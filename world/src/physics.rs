@@ -160,6 +160,26 @@ fn set_owner(owners: &mut Vec<Option<Owner>>, c: ColliderHandle, owner: Owner) {
     owners[i] = Some(owner);
 }
 
+/// Every body's state before the first refresh: robots, then obstacles,
+/// each with its id, kind and radius.
+fn initial_states(scenario: &Scenario) -> Vec<BodyState> {
+    let robots = scenario.robots.iter().map(|r| (body_kind::ROBOT, r.radius));
+    let obstacles = scenario
+        .obstacles
+        .iter()
+        .map(|o| (body_kind::OBSTACLE, o.radius));
+    robots
+        .chain(obstacles)
+        .enumerate()
+        .map(|(id, (kind, radius))| BodyState {
+            id: id as u32,
+            kind,
+            radius,
+            ..Default::default()
+        })
+        .collect()
+}
+
 fn v2(p: [f64; 2]) -> Vector {
     Vector::new(p[0] as f32, p[1] as f32)
 }
@@ -234,7 +254,7 @@ impl World {
             bodies: Vec::with_capacity(scenario.robots.len() + scenario.obstacles.len()),
             owners,
             commands: vec![Applied::BRAKE; scenario.robots.len()],
-            states: Vec::with_capacity(scenario.robots.len() + scenario.obstacles.len()),
+            states: initial_states(scenario),
             touching: Vec::new(),
             touching_next: Vec::new(),
             touch_tolerance: 1e-3 * scenario.length_unit.per_metre(),
@@ -434,28 +454,9 @@ impl World {
     }
 
     /// Refreshes the positions and velocities in `states` from the bodies
-    /// (built once; each body keeps its flags).
+    /// (each body keeps its id, kind, radius and flags).
     fn refresh_states(&mut self) {
         let n = self.robots.len();
-        if self.states.len() != n + self.motions.len() {
-            self.states.clear();
-            for i in 0..n {
-                self.states.push(BodyState {
-                    id: i as u32,
-                    kind: body_kind::ROBOT,
-                    radius: self.scenario.robots[i].radius,
-                    ..Default::default()
-                });
-            }
-            for k in 0..self.motions.len() {
-                self.states.push(BodyState {
-                    id: (n + k) as u32,
-                    kind: body_kind::OBSTACLE,
-                    radius: self.scenario.obstacles[k].radius,
-                    ..Default::default()
-                });
-            }
-        }
         for (s, h) in self.states.iter_mut().zip(&self.robots) {
             let (p, v) = self
                 .phys

@@ -461,13 +461,11 @@ impl Loop<'_> {
             let mut clear = self.clearance[i];
             for w in walls {
                 // Only a wall nearer than the smallest clearance so far can
-                // change it: the others are ruled out without a root (the
-                // margin covers rounding).
-                let reach = clear.min(acc.min_clearance) + s.radius;
-                if reach >= 0.0
-                    && crate::metrics::segment_distance_sq(*w, s.position)
-                        > reach * reach * (1.0 + 1e-9) + 1e-300
-                {
+                // change it: the others are ruled out without a root.
+                if crate::metrics::clearly_beyond(
+                    crate::metrics::segment_distance_sq(*w, s.position),
+                    clear.min(acc.min_clearance) + s.radius,
+                ) {
                     continue;
                 }
                 clear = clear.min(crate::metrics::segment_distance(*w, s.position) - s.radius);

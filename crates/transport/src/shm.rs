@@ -38,6 +38,7 @@ use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::port::update_connections::UpdateConnections;
 use iceoryx2::prelude::*;
+use iceoryx2::sample::Sample;
 use mrsim_proto::{
     BodyState, CommandMsg, JoinReply, JoinRequest, RobotStats, SnapshotHeader, StatsHeader, events,
     now_ns,
@@ -427,8 +428,7 @@ impl WorldTransport for ShmWorld {
         // the snapshot publisher connects to every subscriber, and a ring
         // with no snapshot wakes the agents to map their side (they find
         // nothing to read, and wait again).
-        let _ = self.setup_pub.update_connections();
-        let _ = self.reply_pub.update_connections();
+        self.update_join_connections();
         // Best effort: the first send connects whatever this could not.
         let _ = self.snap_pub.update_connections();
         self.bell.ring()
@@ -448,13 +448,19 @@ impl WorldTransport for ShmWorld {
             robot_count: n as u32,
             ..*header
         };
-        // Observers that subscribed since the last call get the setup's
-        // history only when its publisher updates its connections (cheap
-        // when nobody new came); agents that have joined closed their setup
-        // and join-reply subscribers, whose connections this unmaps.
+        self.update_join_connections();
+        send_slice(&self.stats_pub, "stats", &header, &robots[..n])
+    }
+}
+
+impl ShmWorld {
+    /// Observers that subscribed since the last call get the setup's
+    /// history only when its publisher updates its connections (cheap when
+    /// nobody new came); agents that have joined closed their setup and
+    /// join-reply subscribers, whose connections this unmaps.
+    fn update_join_connections(&self) {
         let _ = self.setup_pub.update_connections();
         let _ = self.reply_pub.update_connections();
-        send_slice(&self.stats_pub, "stats", &header, &robots[..n])
     }
 }
 
@@ -800,6 +806,34 @@ fn snapshot_subscriber(
         .map_err(|e| setup_err("snapshot subscriber", e))
 }
 
+/// The newest sample waiting on `sub`, the older ones received and
+/// released on the way; `None` if none was waiting. Always to the empty
+/// queue: one doorbell ring is not always one snapshot (a new subscriber
+/// also gets the publisher's history, unrung), and taking the oldest of
+/// two left an agent a tick behind for good.
+fn newest_sample<T, H>(
+    sub: &Subscriber<S, [T], H>,
+    what: &'static str,
+) -> Result<Option<Sample<S, [T], H>>, TransportError>
+where
+    T: std::fmt::Debug + ZeroCopySend + 'static,
+    H: std::fmt::Debug + ZeroCopySend + 'static,
+{
+    let mut newest = None;
+    loop {
+        match sub.receive() {
+            Ok(Some(s)) => newest = Some(s),
+            Ok(None) => return Ok(newest),
+            Err(e) => {
+                return Err(TransportError::Receive {
+                    what,
+                    detail: format!("{e:?}"),
+                });
+            }
+        }
+    }
+}
+
 /// Copies the newest sample waiting on `sub` (header and slice) and
 /// drops the older ones; false if none was waiting.
 fn receive_newest<T, H>(
@@ -812,24 +846,13 @@ where
     T: std::fmt::Debug + ZeroCopySend + Copy + 'static,
     H: std::fmt::Debug + ZeroCopySend + Copy + 'static,
 {
-    let mut got = false;
-    loop {
-        match sub.receive() {
-            Ok(Some(s)) => {
-                *header = *s.user_header();
-                out.clear();
-                out.extend_from_slice(s.payload());
-                got = true;
-            }
-            Ok(None) => return Ok(got),
-            Err(e) => {
-                return Err(TransportError::Receive {
-                    what,
-                    detail: format!("{e:?}"),
-                });
-            }
-        }
-    }
+    let Some(s) = newest_sample(sub, what)? else {
+        return Ok(false);
+    };
+    *header = *s.user_header();
+    out.clear();
+    out.extend_from_slice(s.payload());
+    Ok(true)
 }
 
 impl AgentTransport for ShmAgent {
@@ -902,9 +925,6 @@ impl AgentTransport for ShmAgent {
         header: &mut SnapshotHeader,
         bodies: &mut Vec<BodyState>,
     ) -> Result<bool, TransportError> {
-        // Always to the empty queue: one ring is not always one sample (a
-        // new subscriber also gets the publisher's history, unrung), and
-        // taking the oldest of two left an agent a tick behind for good.
         receive_newest(&self.ports.snap_sub, "snapshot", header, bodies)
     }
 
@@ -917,23 +937,7 @@ impl AgentTransport for ShmAgent {
         _scratch: &mut (SnapshotHeader, Vec<BodyState>),
         f: &mut crate::SnapshotFn<'_>,
     ) -> Result<bool, TransportError> {
-        // The newest sample, the older ones released as we go (always to
-        // the empty queue: one ring is not always one sample, since a new
-        // subscriber also gets the publisher's history).
-        let mut newest = None;
-        loop {
-            match self.ports.snap_sub.receive() {
-                Ok(Some(s)) => newest = Some(s),
-                Ok(None) => break,
-                Err(e) => {
-                    return Err(TransportError::Receive {
-                        what: "snapshot",
-                        detail: format!("{e:?}"),
-                    });
-                }
-            }
-        }
-        let Some(sample) = newest else {
+        let Some(sample) = newest_sample(&self.ports.snap_sub, "snapshot")? else {
             return Ok(false);
         };
         let (cmd_pub, wake) = (&self.ports.cmd_pub, &self.ports.wake);
