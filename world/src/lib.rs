@@ -18,6 +18,8 @@ pub mod path_metrics;
 pub mod physics;
 pub mod record;
 pub mod run;
+pub mod timings;
+pub mod tracking;
 
 pub use physics::{Applied, World, WorldError};
 pub use run::{RunOptions, RunOutcome, run};

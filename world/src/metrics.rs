@@ -161,18 +161,14 @@ pub struct RobotAccumulator {
     pub hold: u32,
     /// Time the current hold started.
     pub hold_start: f64,
-    /// Distance travelled.
-    pub path_length: f64,
     /// Contacts started with anything.
     pub collisions: u64,
-    /// Smallest surface distance to any other body or wall.
-    pub min_clearance: f64,
-    /// Largest speed.
-    pub max_speed: f64,
+    /// Smallest gap reported by its contacts (negative: overlap). The
+    /// clearance proper comes from the states ([`crate::tracking`]); a
+    /// robot's `min_clearance` is the smaller of the two.
+    pub min_contact_gap: f64,
     /// Realtime: ticks whose command came late or never.
     pub deadline_misses: u64,
-    /// Latency, wake-up and compute time of its commands.
-    pub timing: RobotTimings,
     /// Process id of the agent that last drove it.
     pub agent_pid: Option<u32>,
     /// Times lost.
@@ -181,8 +177,6 @@ pub struct RobotAccumulator {
     pub rejected: u64,
     /// Commands that came after their tick's deadline.
     pub late: u64,
-    /// Designated-path metrics, for a robot with a `path`.
-    pub path: Option<crate::path_metrics::PathAccumulator>,
 }
 
 /// One robot's row of metrics.json.
@@ -280,9 +274,14 @@ pub struct TimingMetrics {
     /// Snapshot published -> last command in, on ticks where every live
     /// agent answered in time, µs.
     pub allin_us: Percentiles,
-    /// The world's own work per tick (publish, record, apply, physics,
-    /// metrics; not the wait for commands), µs.
+    /// The world thread's own work per tick: publish, record, take in and
+    /// check the commands (not the wait for them), apply, physics, goal
+    /// test, µs. (The other metrics of the robots' motion and the
+    /// commands' timing histograms are computed off the tick loop.)
     pub world_tick_us: Percentiles,
+    /// Rapier's own step within it (all substeps), µs: the floor
+    /// `world_tick_us` compares with, the same bodies in the same tick.
+    pub physics_us: Percentiles,
     /// CPU seconds of the world's process during the tick loop (with the
     /// in-process transport this includes the agent threads).
     pub process_cpu_s: f64,

@@ -88,6 +88,8 @@ pub struct World {
     touch_tolerance: f64,
     walls: Vec<[[f64; 2]; 2]>,
     tick: u64,
+    /// Time spent in rapier's own step during the last tick, ns.
+    physics_ns: u64,
 }
 
 /// `v` shortened to length `max` if longer, keeping its direction, also
@@ -260,6 +262,7 @@ impl World {
             touch_tolerance: 1e-3 * scenario.length_unit.per_metre(),
             walls,
             tick: 0,
+            physics_ns: 0,
         };
         world.refresh_states();
         Ok(world)
@@ -299,6 +302,12 @@ impl World {
         }
     }
 
+    /// Time the last [`World::step`] spent in rapier's own step (all its
+    /// substeps), ns: the floor the world's tick is measured against.
+    pub fn physics_ns(&self) -> u64 {
+        self.physics_ns
+    }
+
     /// The command robot `i` is following.
     pub fn command(&self, i: usize) -> Applied {
         self.commands.get(i).copied().unwrap_or(Applied::BRAKE)
@@ -320,6 +329,7 @@ impl World {
         for m in &mut self.motions {
             m.begin_tick(&self.bodies);
         }
+        self.physics_ns = 0;
         for _ in 0..sub {
             for (i, handle) in self.robots.iter().enumerate() {
                 let spec = &self.scenario.robots[i];
@@ -360,7 +370,9 @@ impl World {
                     body.set_next_kinematic_translation(v2(m.position));
                 }
             }
+            let t = std::time::Instant::now();
             self.phys.step();
+            self.physics_ns += t.elapsed().as_nanos() as u64;
             self.detect_contacts(contacts);
         }
         self.tick += 1;

@@ -9,7 +9,11 @@
 //! is pending after [`BATCH_AGE`]): one wake-up of the thread per tick cost
 //! the loop a futex wake, about 7 % of the world's tick at 64 robots.
 //! Batch buffers are returned to the loop for reuse.
+//!
+//! The same thread computes the robots' motion metrics from the states it
+//! writes ([`crate::tracking`]) and hands them back at the end.
 
+use crate::tracking::Tracker;
 use crossbeam::channel::{Receiver, RecvTimeoutError, Sender, bounded, unbounded};
 use mrsim_proto::{BodyState, body_kind};
 use std::fs::File;
@@ -41,15 +45,16 @@ enum Msg {
 pub struct Recorder {
     tx: Option<Sender<Msg>>,
     recycled: Receiver<Batch>,
-    thread: Option<JoinHandle<std::io::Result<()>>>,
+    thread: Option<JoinHandle<std::io::Result<Tracker>>>,
     pending: Batch,
     oldest: Option<Instant>,
 }
 
 impl Recorder {
     /// Creates trajectory.csv and events.jsonl in `dir` and starts the
-    /// thread. `names[i]` is body i's name.
-    pub fn start(dir: &Path, names: Vec<String>) -> std::io::Result<Self> {
+    /// thread. `names[i]` is body i's name; `tracker` takes in every tick's
+    /// states, in order.
+    pub fn start(dir: &Path, names: Vec<String>, mut tracker: Tracker) -> std::io::Result<Self> {
         let mut traj = BufWriter::with_capacity(1 << 16, File::create(dir.join("trajectory.csv"))?);
         let mut events = BufWriter::new(File::create(dir.join("events.jsonl"))?);
         writeln!(traj, "tick,time,body,kind,x,y,vx,vy")?;
@@ -73,6 +78,7 @@ impl Recorder {
                             for &(tick, time, count) in &batch.ticks {
                                 let bodies = &batch.bodies[from..from + count];
                                 from += count;
+                                tracker.track(bodies);
                                 // A tick's rows go to the buffer in one piece, so
                                 // the file only ever ends after a whole tick.
                                 block.clear();
@@ -109,7 +115,7 @@ impl Recorder {
                 }
                 traj.flush()?;
                 events.flush()?;
-                Ok(())
+                Ok(tracker)
             })?;
         Ok(Self {
             tx: Some(tx),
@@ -161,18 +167,20 @@ impl Recorder {
         }
     }
 
-    /// Flushes and stops the thread.
-    pub fn finish(mut self) -> std::io::Result<()> {
-        self.stop()
+    /// Flushes and stops the thread; the tracker has taken in every tick
+    /// recorded.
+    pub fn finish(&mut self) -> std::io::Result<Tracker> {
+        self.stop()?
+            .ok_or_else(|| std::io::Error::other("recorder thread already stopped"))
     }
 
-    fn stop(&mut self) -> std::io::Result<()> {
+    fn stop(&mut self) -> std::io::Result<Option<Tracker>> {
         self.send_pending();
         self.tx.take();
         match self.thread.take().map(JoinHandle::join) {
-            Some(Ok(r)) => r,
+            Some(Ok(r)) => r.map(Some),
             Some(Err(_)) => Err(std::io::Error::other("recorder thread panicked")),
-            None => Ok(()),
+            None => Ok(None),
         }
     }
 }

@@ -10,11 +10,13 @@
 
 use crate::live::LiveStats;
 use crate::metrics::{
-    ClearanceGrid, CpusTime, DurationHistogram, RobotAccumulator, RobotMetrics, RunMetrics,
-    TimingMetrics, process_usage,
+    CpusTime, DurationHistogram, RobotAccumulator, RobotMetrics, RunMetrics, TimingMetrics,
+    process_usage,
 };
 use crate::physics::{Applied, Contact, Owner, World};
 use crate::record::Recorder;
+use crate::timings::TimingRecorder;
+use crate::tracking::Tracker;
 use mrsim_proto::{
     CommandMsg, FixedStr, JoinReply, JoinRequest, PROTOCOL_VERSION, SnapshotHeader, StatsHeader,
     agent_state, command_kind, flags, now_ns, run_phase,
@@ -108,10 +110,9 @@ struct Loop<'a> {
     published_ns: u64,
     /// Latest receive time of a command accepted this tick.
     last_in_ns: u64,
-    /// Every robot's round trip, wake-up and compute, together.
-    all: [DurationHistogram; 3],
-    grid: ClearanceGrid,
-    clearance: Vec<f64>,
+    /// Every command's round trip, wake-up and compute, on their way to
+    /// the histograms of their own thread.
+    timings: TimingRecorder,
     /// Commands taken from the transport, reused from drain to drain.
     inbox: Vec<(CommandMsg, u64)>,
     last_pid_check: Instant,
@@ -311,17 +312,14 @@ impl Loop<'_> {
             self.event(json!({"type": "agent_rejoined", "robot": name, "pid": pid}));
             self.log(&format!("agent for {name} answered again and rejoined"));
         }
-        self.acc[i].timing.record_ns(
+        self.timings.record(
+            i,
             received_ns.saturating_sub(self.published_ns),
             cmd.woke_ns.saturating_sub(self.published_ns),
             cmd.compute_ns,
         );
         self.got[i] = Some(cmd);
         self.last_in_ns = self.last_in_ns.max(received_ns);
-        let [lat, wake, compute] = &mut self.all;
-        lat.record_ns(received_ns.saturating_sub(self.published_ns));
-        wake.record_ns(cmd.woke_ns.saturating_sub(self.published_ns));
-        compute.record_ns(cmd.compute_ns);
     }
 
     fn lose(&mut self, i: usize, reason: String) {
@@ -428,7 +426,7 @@ impl Loop<'_> {
             for o in [c.a, c.b] {
                 if let Owner::Robot(i) = o {
                     self.acc[i].collisions += 1;
-                    self.acc[i].min_clearance = self.acc[i].min_clearance.min(c.gap);
+                    self.acc[i].min_contact_gap = self.acc[i].min_contact_gap.min(c.gap);
                 }
             }
             let n = self.agents.len();
@@ -442,38 +440,13 @@ impl Loop<'_> {
         }
     }
 
-    fn update_metrics(&mut self, prev: &[[f64; 2]]) {
-        let states = self.world.states();
-        let n = self.agents.len();
+    /// The goal test after a step. The other metrics of the robots' motion
+    /// come from the recorded states, off this loop ([`crate::tracking`]).
+    fn update_goals(&mut self) {
         let time = self.time();
-        let walls = self.world.walls();
         let mut reached = Vec::new();
-        // Only a clearance below the smallest one recorded changes anything.
-        let acc = &self.acc;
-        self.grid
-            .clearances_below(states, n, |i| acc[i].min_clearance, &mut self.clearance);
-        for i in 0..n {
-            let s = &states[i];
-            let spec = &self.world.scenario.robots[i];
-            let acc = &mut self.acc[i];
-            acc.path_length += (s.position[0] - prev[i][0]).hypot(s.position[1] - prev[i][1]);
-            acc.max_speed = acc.max_speed.max(s.velocity[0].hypot(s.velocity[1]));
-            let mut clear = self.clearance[i];
-            for w in walls {
-                // Only a wall nearer than the smallest clearance so far can
-                // change it: the others are ruled out without a root.
-                if crate::metrics::clearly_beyond(
-                    crate::metrics::segment_distance_sq(*w, s.position),
-                    clear.min(acc.min_clearance) + s.radius,
-                ) {
-                    continue;
-                }
-                clear = clear.min(crate::metrics::segment_distance(*w, s.position) - s.radius);
-            }
-            acc.min_clearance = acc.min_clearance.min(clear);
-            if let Some(p) = &mut acc.path {
-                p.record(s.position);
-            }
+        let robots = self.world.states().iter().zip(&self.world.scenario.robots);
+        for (i, ((s, spec), acc)) in robots.zip(&mut self.acc).enumerate() {
             // Goal test (Ko & Choi eq 22): within tolerance N ticks running.
             let d = (spec.goal[0] - s.position[0]).hypot(spec.goal[1] - s.position[1]);
             if d <= spec.goal_tolerance {
@@ -506,19 +479,24 @@ impl Loop<'_> {
         if !force && !self.live.due(now) {
             return;
         }
-        for (i, row) in self.live.robots_mut().iter_mut().enumerate() {
-            let acc = &mut self.acc[i];
-            let (p50, p99, commands) = acc.timing.histograms()[0].p50_p99_us();
-            row.state = match self.agents[i] {
+        let (acc, agents, rows) = (&self.acc, &self.agents, self.live.robots_mut());
+        self.timings.live(|latency| {
+            for (i, row) in rows.iter_mut().enumerate() {
+                let l = latency.get(i).copied().unwrap_or_default();
+                row.latency_p50_us = l.p50_us;
+                row.latency_p99_us = l.p99_us;
+                row.commands = l.commands;
+            }
+        });
+        for (i, row) in rows.iter_mut().enumerate() {
+            let acc = &acc[i];
+            row.state = match agents[i] {
                 Agent::Waiting => agent_state::WAITING,
                 Agent::Live { .. } => agent_state::LIVE,
                 Agent::Lost { .. } => agent_state::LOST,
             };
             row.reached_goal = u32::from(acc.reached_goal);
             row.agent_pid = acc.agent_pid.unwrap_or(0);
-            row.latency_p50_us = p50;
-            row.latency_p99_us = p99;
-            row.commands = commands;
             row.deadline_misses = acc.deadline_misses;
             row.collisions = acc.collisions;
             row.commands_rejected = acc.rejected;
@@ -589,7 +567,8 @@ pub fn run(
         &json!({"run_id": opts.run_id, "out_dir": out_dir, "scenario": scenario}),
     )
     .map_err(|e| out_err("setup")(e.into()))?;
-    let rec = Recorder::start(&dir, names.clone()).map_err(out_err("trajectory.csv"))?;
+    let tracker = Tracker::new(&scenario, world.walls());
+    let rec = Recorder::start(&dir, names.clone(), tracker).map_err(out_err("trajectory.csv"))?;
     link.publish_setup(&setup)?;
 
     let realtime = scenario.world.mode == Mode::Realtime;
@@ -600,15 +579,13 @@ pub fn run(
         opts,
         names,
         agents: vec![Agent::Waiting; n],
-        acc: scenario
-            .robots
-            .iter()
-            .map(|r| RobotAccumulator {
-                min_clearance: f64::INFINITY,
-                path: crate::path_metrics::PathAccumulator::new(&r.path, r.boundary),
+        acc: vec![
+            RobotAccumulator {
+                min_contact_gap: f64::INFINITY,
                 ..Default::default()
-            })
-            .collect(),
+            };
+            n
+        ],
         got: vec![None; n],
         garbage: vec![false; n],
         collisions_total: 0,
@@ -619,9 +596,7 @@ pub fn run(
         tick: 0,
         published_ns: 0,
         last_in_ns: 0,
-        all: Default::default(),
-        grid: ClearanceGrid::default(),
-        clearance: Vec::with_capacity(n),
+        timings: TimingRecorder::start(n).map_err(out_err("metrics.json"))?,
         inbox: Vec::with_capacity(n),
         last_pid_check: Instant::now(),
         pid_checks: 0,
@@ -632,6 +607,7 @@ pub fn run(
     let mut jitter = DurationHistogram::default();
     let mut allin = DurationHistogram::default();
     let mut tick_cost = DurationHistogram::default();
+    let mut physics = DurationHistogram::default();
 
     // Join: every robot's agent must be there before the clock starts.
     let join_start = Instant::now();
@@ -696,7 +672,6 @@ pub fn run(
     let (cpu_start, _) = process_usage();
     let cpus_start = CpusTime::now();
     let mut contacts = Vec::new();
-    let mut prev: Vec<[f64; 2]> = lp.world.states()[..n].iter().map(|s| s.position).collect();
     while !interrupted && lp.tick < max_ticks {
         if lp.link.termination_requested() {
             interrupted = true;
@@ -736,11 +711,15 @@ pub fn run(
         lp.rec.tick(lp.tick, lp.time(), lp.world.states());
         let mut own = pub_instant.elapsed();
 
-        // Collect this tick's commands.
+        // Collect this tick's commands (taking them in is the world's own
+        // work; waiting for them is not).
         loop {
+            let drain_start = Instant::now();
             lp.drain(realtime)?;
+            own += drain_start.elapsed();
             lp.check_pids();
             lp.rec.send_if_due();
+            lp.timings.send_if_due();
             if lp.all_answered() || lp.link.termination_requested() {
                 break;
             }
@@ -806,12 +785,10 @@ pub fn run(
         }
 
         lp.world.step(&mut contacts);
+        physics.record_ns(lp.world.physics_ns());
         lp.tick += 1;
         lp.record_contacts(&contacts);
-        lp.update_metrics(&prev);
-        for (p, s) in prev.iter_mut().zip(lp.world.states()) {
-            *p = s.position;
-        }
+        lp.update_goals();
         own += work_start.elapsed();
         tick_cost.record_ns(own.as_nanos() as u64);
         lp.publish_stats(run_phase::RUNNING, false);
@@ -828,15 +805,18 @@ pub fn run(
     lp.rec.tick(lp.tick, lp.time(), lp.world.states());
     let wall = wall_start.elapsed().as_secs_f64();
     let (cpu_end, maxrss_kb) = process_usage();
+    // Every command's timings recorded (the live summary too).
+    let mut timings = lp.timings.finish().map_err(out_err("metrics.json"))?;
     let cpus = cpus_start.zip(CpusTime::now()).map(|(a, b)| b.since(a));
     let timing = TimingMetrics {
         wall_s: wall,
-        latency_us: lp.all[0].percentiles(),
-        wake_us: lp.all[1].percentiles(),
-        compute_us: lp.all[2].percentiles(),
+        latency_us: timings.all[0].percentiles(),
+        wake_us: timings.all[1].percentiles(),
+        compute_us: timings.all[2].percentiles(),
         jitter_us: jitter.percentiles(),
         allin_us: allin.percentiles(),
         world_tick_us: tick_cost.percentiles(),
+        physics_us: physics.percentiles(),
         process_cpu_s: (cpu_end - cpu_start).max(0.0),
         process_maxrss_kb: maxrss_kb,
         cpus_steal_s: cpus.map(|c| c.steal_s),
@@ -858,22 +838,27 @@ pub fn run(
         lp.event(json!({"type": "interrupted"}));
     }
 
+    // Every tick's states taken in: the motion metrics are complete.
+    let tracker = lp.rec.finish().map_err(out_err("trajectory.csv"))?;
     let robots = scenario
         .robots
         .iter()
-        .zip(&mut lp.acc)
-        .map(|(spec, a)| {
-            let [latency, wake, compute] = a.timing.histograms();
+        .zip(&lp.acc)
+        .zip(&mut timings.robots)
+        .zip(tracker.robots())
+        .map(|(((spec, a), t), m)| {
+            let [latency, wake, compute] = t.histograms();
+            let min_clearance = m.min_clearance.min(a.min_contact_gap);
             (
                 spec.name.clone(),
                 RobotMetrics {
                     planner: spec.planner.clone(),
                     reached_goal: a.reached_goal,
                     time_to_goal: a.time_to_goal,
-                    path_length: a.path_length,
+                    path_length: m.path_length,
                     collisions: a.collisions,
-                    min_clearance: a.min_clearance.is_finite().then_some(a.min_clearance),
-                    max_speed: a.max_speed,
+                    min_clearance: min_clearance.is_finite().then_some(min_clearance),
+                    max_speed: m.max_speed,
                     deadline_misses: a.deadline_misses,
                     latency_us: latency.percentiles(),
                     wake_us: wake.percentiles(),
@@ -882,8 +867,8 @@ pub fn run(
                     lost: a.lost,
                     commands_rejected: a.rejected,
                     commands_late: a.late,
-                    path_deviation: a.path.as_ref().map(|p| p.deviation()),
-                    boundary_violations: a.path.as_ref().and_then(|p| p.boundary_violations()),
+                    path_deviation: m.path.as_ref().map(|p| p.deviation()),
+                    boundary_violations: m.path.as_ref().and_then(|p| p.boundary_violations()),
                 },
             )
         })
@@ -912,7 +897,6 @@ pub fn run(
         interrupted,
         timing,
     };
-    lp.rec.finish().map_err(out_err("trajectory.csv"))?;
     let text =
         serde_json::to_string_pretty(&metrics).map_err(|e| out_err("metrics.json")(e.into()))?;
     std::fs::write(dir.join("metrics.json"), text).map_err(out_err("metrics.json"))?;

@@ -1,0 +1,254 @@
+//! The commands' timings, recorded off the tick loop.
+//!
+//! Every accepted command brings three durations: its round trip
+//! (snapshot published -> command received), the agent's wake-up
+//! (published -> awake) and the planner's compute time. The world keeps a
+//! histogram of each per robot and for the whole run. Recorded on the tick
+//! loop, that was six histogram records per robot and tick, each in memory
+//! of its own: at 1000 robots, in-process and lockstep, a quarter of the
+//! world thread's samples, nearly as many as rapier's step (`perf`,
+//! BENCHMARKS.md, "Fifth round").
+//!
+//! The loop now appends each command's timings to one flat buffer and
+//! hands the buffer over in batches (of [`BATCH`] samples, or whatever is
+//! pending after [`BATCH_AGE`]) to a thread that owns the histograms and
+//! runs at low priority ([`mrsim_transport::background_thread`]). The live
+//! view reads each robot's latency median and 99th percentile from a
+//! summary that thread refreshes every [`LIVE_PERIOD`]; the run's end
+//! takes the histograms back ([`TimingRecorder::finish`]), every sample in
+//! them.
+
+use crate::metrics::{DurationHistogram, RobotTimings};
+use crossbeam::channel::{Receiver, Sender, bounded, unbounded};
+use std::sync::{Arc, Mutex, PoisonError};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+/// Samples handed to the thread at once, at most.
+pub const BATCH: usize = 4096;
+
+/// Longest a sample waits in the loop before it is handed over.
+pub const BATCH_AGE: Duration = Duration::from_millis(100);
+
+/// How often the thread refreshes the live summary (as often as the live
+/// statistics are published: [`crate::live::LiveStats::PERIOD`]).
+pub const LIVE_PERIOD: Duration = crate::live::LiveStats::PERIOD;
+
+/// One command's timings: round trip, wake-up and compute, ns.
+#[derive(Debug, Clone, Copy)]
+struct Sample {
+    robot: u32,
+    ns: [u64; 3],
+}
+
+/// A robot's round trip as the live view shows it.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct LiveLatency {
+    /// Median round trip, µs.
+    pub p50_us: f64,
+    /// 99th percentile round trip, µs.
+    pub p99_us: f64,
+    /// Commands recorded.
+    pub commands: u64,
+}
+
+/// Every histogram of a run's timings.
+#[derive(Debug, Clone)]
+pub struct Timings {
+    /// Robot i's round trip, wake-up and compute histograms.
+    pub robots: Vec<RobotTimings>,
+    /// Every robot's round trip, wake-up and compute, together (three
+    /// significant digits).
+    pub all: [DurationHistogram; 3],
+}
+
+impl Timings {
+    fn new(robots: usize) -> Self {
+        Self {
+            robots: vec![RobotTimings::default(); robots],
+            all: Default::default(),
+        }
+    }
+
+    fn record(&mut self, batch: &[Sample]) {
+        for s in batch {
+            let [l, w, c] = s.ns;
+            if let Some(r) = self.robots.get_mut(s.robot as usize) {
+                r.record_ns(l, w, c);
+            }
+        }
+        // One histogram at a time: each stays in cache for the batch.
+        for (k, h) in self.all.iter_mut().enumerate() {
+            for s in batch {
+                h.record_ns(s.ns[k]);
+            }
+        }
+    }
+
+    fn summarize(&mut self, out: &mut Vec<LiveLatency>) {
+        out.clear();
+        out.extend(self.robots.iter_mut().map(|r| {
+            let (p50_us, p99_us, commands) = r.histograms()[0].p50_p99_us();
+            LiveLatency {
+                p50_us,
+                p99_us,
+                commands,
+            }
+        }));
+    }
+}
+
+/// The tick loop's handle on the timing thread.
+pub struct TimingRecorder {
+    tx: Option<Sender<Vec<Sample>>>,
+    recycled: Receiver<Vec<Sample>>,
+    pending: Vec<Sample>,
+    oldest: Option<Instant>,
+    live: Arc<Mutex<Vec<LiveLatency>>>,
+    thread: Option<JoinHandle<Timings>>,
+}
+
+impl TimingRecorder {
+    /// Starts the thread, with empty histograms for `robots` robots.
+    pub fn start(robots: usize) -> std::io::Result<Self> {
+        // Room for a few seconds of batches: the loop waits only if the
+        // thread falls that far behind.
+        let (tx, rx) = bounded::<Vec<Sample>>(256);
+        let (back_tx, recycled) = unbounded();
+        let live = Arc::new(Mutex::new(vec![LiveLatency::default(); robots]));
+        let shared = Arc::clone(&live);
+        let thread = std::thread::Builder::new()
+            .name("timings".into())
+            .spawn(move || {
+                mrsim_transport::background_thread();
+                let mut t = Timings::new(robots);
+                let mut summary = Vec::with_capacity(robots);
+                let mut refresh = |t: &mut Timings| {
+                    t.summarize(&mut summary);
+                    let mut live = shared.lock().unwrap_or_else(PoisonError::into_inner);
+                    std::mem::swap(&mut *live, &mut summary);
+                };
+                let mut refreshed = Instant::now();
+                for batch in rx {
+                    t.record(&batch);
+                    let _ = back_tx.send(batch);
+                    if refreshed.elapsed() >= LIVE_PERIOD {
+                        refresh(&mut t);
+                        refreshed = Instant::now();
+                    }
+                }
+                refresh(&mut t);
+                t
+            })?;
+        Ok(Self {
+            tx: Some(tx),
+            recycled,
+            pending: Vec::with_capacity(BATCH),
+            oldest: None,
+            live,
+            thread: Some(thread),
+        })
+    }
+
+    /// Records one command of robot `robot`: its round trip, wake-up and
+    /// compute time, ns.
+    pub fn record(&mut self, robot: usize, latency: u64, wake: u64, compute: u64) {
+        self.pending.push(Sample {
+            robot: robot as u32,
+            ns: [latency, wake, compute],
+        });
+        self.oldest.get_or_insert_with(Instant::now);
+        if self.pending.len() >= BATCH {
+            self.send_pending();
+        }
+    }
+
+    /// Hands the pending samples over if the oldest has waited
+    /// [`BATCH_AGE`] (the loop calls it every tick and while it waits).
+    pub fn send_if_due(&mut self) {
+        if self.oldest.is_some_and(|t| t.elapsed() >= BATCH_AGE) {
+            self.send_pending();
+        }
+    }
+
+    fn send_pending(&mut self) {
+        self.oldest = None;
+        if self.pending.is_empty() {
+            return;
+        }
+        let mut next = self.recycled.try_recv().unwrap_or_default();
+        next.clear();
+        let batch = std::mem::replace(&mut self.pending, next);
+        if let Some(tx) = &self.tx {
+            let _ = tx.send(batch);
+        }
+    }
+
+    /// Calls `f` with every robot's live round trip, as of the thread's
+    /// last refresh (at most [`LIVE_PERIOD`] plus [`BATCH_AGE`] old).
+    pub fn live<R>(&self, f: impl FnOnce(&[LiveLatency]) -> R) -> R {
+        f(&self.live.lock().unwrap_or_else(PoisonError::into_inner))
+    }
+
+    /// Hands over what is pending, waits for the thread to record it, and
+    /// returns every histogram; the live summary is then up to date too.
+    /// An error only if the thread panicked (a bug): the histograms are
+    /// then lost, and the error says so.
+    pub fn finish(&mut self) -> std::io::Result<Timings> {
+        self.send_pending();
+        self.tx.take();
+        match self.thread.take().map(JoinHandle::join) {
+            Some(Ok(t)) => Ok(t),
+            Some(Err(_)) => Err(std::io::Error::other("the timing thread panicked")),
+            None => Err(std::io::Error::other(
+                "the timing thread was already finished",
+            )),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_sample_reaches_the_histograms_whatever_the_batches() {
+        let robots = 3;
+        let mut rec = TimingRecorder::start(robots).expect("thread");
+        let mut direct = Timings::new(robots);
+        let mut samples = Vec::new();
+        for k in 1..=(2 * BATCH as u64 + 17) {
+            let robot = (k % robots as u64) as u32;
+            let s = Sample {
+                robot,
+                ns: [k * 1000, 2 * k * 1777, 3 * k * 9000],
+            };
+            rec.record(robot as usize, s.ns[0], s.ns[1], s.ns[2]);
+            samples.push(s);
+            if k % 1000 == 0 {
+                rec.send_if_due();
+            }
+        }
+        direct.record(&samples);
+        let mut got = rec.finish().expect("finished");
+        for (g, d) in got.all.iter().zip(&direct.all) {
+            assert_eq!(g.percentiles(), d.percentiles());
+            assert_eq!(g.percentiles().count, samples.len() as u64);
+        }
+        for (g, d) in got.robots.iter_mut().zip(direct.robots.iter_mut()) {
+            for (a, b) in g.histograms().into_iter().zip(d.histograms()) {
+                assert_eq!(a.percentiles(), b.percentiles());
+            }
+        }
+        // The live summary is the final one.
+        let live = rec.live(|l| l.to_vec());
+        let mut expect = Vec::new();
+        direct.summarize(&mut expect);
+        assert_eq!(live, expect);
+        assert_eq!(
+            live.iter().map(|l| l.commands).sum::<u64>(),
+            samples.len() as u64
+        );
+        assert!(rec.finish().is_err(), "finishing twice is an error");
+    }
+}

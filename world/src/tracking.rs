@@ -1,0 +1,173 @@
+//! The metrics of the robots' motion, computed off the tick loop.
+//!
+//! Path length, top speed, smallest clearance to other bodies and walls,
+//! and the designated-path deviation are functions of the bodies' states
+//! alone, tick after tick. The recording thread already gets every tick's
+//! states, in order, to write trajectory.csv ([`crate::record`]); it feeds
+//! them to a [`Tracker`] too, and hands the tracker back when the run
+//! ends. On the tick loop they were a fifth of the world thread's samples
+//! at 1000 robots, in-process and lockstep (the clearance grid most of it;
+//! `perf`, BENCHMARKS.md, "Fifth round"), and the loop waited for them
+//! before it published the next tick.
+//!
+//! What the loop must know at once stays there: goals reached (they flag
+//! the robot in the next snapshot and can end the run), contacts (events
+//! as they happen) and deadline misses.
+
+use crate::metrics::{ClearanceGrid, clearly_beyond, segment_distance, segment_distance_sq};
+use crate::path_metrics::PathAccumulator;
+use mrsim_proto::BodyState;
+use mrsim_scenario::Scenario;
+
+/// One robot's motion metrics so far.
+#[derive(Debug, Clone)]
+pub struct RobotMotion {
+    /// Distance travelled.
+    pub path_length: f64,
+    /// Largest speed.
+    pub max_speed: f64,
+    /// Smallest surface distance to any other body or wall (infinity if
+    /// there never was one).
+    pub min_clearance: f64,
+    /// Designated-path metrics, for a robot with a `path`.
+    pub path: Option<PathAccumulator>,
+}
+
+/// Motion metrics of every robot, fed one tick's states at a time.
+#[derive(Debug, Clone)]
+pub struct Tracker {
+    robots: Vec<RobotMotion>,
+    walls: Vec<[[f64; 2]; 2]>,
+    /// Robots' positions at the previous tick; `None` before the first.
+    prev: Option<Vec<[f64; 2]>>,
+    grid: ClearanceGrid,
+    clearance: Vec<f64>,
+}
+
+impl Tracker {
+    /// For the robots of `scenario` (the first bodies of every tick's
+    /// states), among `walls`.
+    pub fn new(scenario: &Scenario, walls: &[[[f64; 2]; 2]]) -> Self {
+        Self {
+            robots: scenario
+                .robots
+                .iter()
+                .map(|r| RobotMotion {
+                    path_length: 0.0,
+                    max_speed: 0.0,
+                    min_clearance: f64::INFINITY,
+                    path: PathAccumulator::new(&r.path, r.boundary),
+                })
+                .collect(),
+            walls: walls.to_vec(),
+            prev: None,
+            grid: ClearanceGrid::default(),
+            clearance: Vec::new(),
+        }
+    }
+
+    /// Takes in the next tick's states. The first tick's only says where
+    /// the robots start: the metrics count from the first step on.
+    pub fn track(&mut self, states: &[BodyState]) {
+        let n = self.robots.len().min(states.len());
+        let Some(prev) = &mut self.prev else {
+            self.prev = Some(states[..n].iter().map(|s| s.position).collect());
+            return;
+        };
+        // Only a clearance below the smallest one recorded changes anything.
+        let robots = &self.robots;
+        self.grid
+            .clearances_below(states, n, |i| robots[i].min_clearance, &mut self.clearance);
+        for (i, (s, p)) in states[..n].iter().zip(prev.iter_mut()).enumerate() {
+            let m = &mut self.robots[i];
+            m.path_length += (s.position[0] - p[0]).hypot(s.position[1] - p[1]);
+            *p = s.position;
+            m.max_speed = m.max_speed.max(s.velocity[0].hypot(s.velocity[1]));
+            let mut clear = self.clearance[i];
+            for w in &self.walls {
+                // Only a wall nearer than the smallest clearance so far can
+                // change it: the others are ruled out without a root.
+                if clearly_beyond(
+                    segment_distance_sq(*w, s.position),
+                    clear.min(m.min_clearance) + s.radius,
+                ) {
+                    continue;
+                }
+                clear = clear.min(segment_distance(*w, s.position) - s.radius);
+            }
+            m.min_clearance = m.min_clearance.min(clear);
+            if let Some(path) = &mut m.path {
+                path.record(s.position);
+            }
+        }
+    }
+
+    /// Every robot's metrics, in scenario order.
+    pub fn robots(&self) -> &[RobotMotion] {
+        &self.robots
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mrsim_proto::body_kind;
+
+    fn disc(x: f64, y: f64, vx: f64) -> BodyState {
+        BodyState {
+            kind: body_kind::ROBOT,
+            position: [x, y],
+            velocity: [vx, 0.0],
+            radius: 0.5,
+            ..Default::default()
+        }
+    }
+
+    fn two_robots() -> Scenario {
+        let toml = r#"
+            name = "t"
+            [world]
+            arena = { min = [0.0, 0.0], max = [10.0, 10.0] }
+            [[robot]]
+            name = "a"
+            start = [1.0, 5.0]
+            goal = [9.0, 5.0]
+            radius = 0.5
+            [[robot]]
+            name = "b"
+            start = [4.0, 5.0]
+            goal = [1.0, 5.0]
+            radius = 0.5
+        "#;
+        mrsim_scenario::parse(toml, "t.toml")
+            .expect("scenario")
+            .scenario
+    }
+
+    #[test]
+    fn the_first_tick_sets_the_start_and_later_ones_add_up() {
+        let mut t = Tracker::new(&two_robots(), &[]);
+        t.track(&[disc(1.0, 5.0, 0.0), disc(4.0, 5.0, 0.0)]);
+        // Before any step: nothing travelled, nothing measured.
+        assert_eq!(t.robots()[0].path_length, 0.0);
+        assert!(t.robots()[0].min_clearance.is_infinite());
+        t.track(&[disc(2.0, 5.0, 1.0), disc(4.0, 5.0, 0.0)]);
+        t.track(&[disc(2.5, 5.0, 3.0), disc(4.0, 5.0, 0.0)]);
+        let a = &t.robots()[0];
+        assert!((a.path_length - 1.5).abs() < 1e-12);
+        assert_eq!(a.max_speed, 3.0);
+        // Closest at the last tick: centres 1.5 apart, radii 0.5 each.
+        assert!((a.min_clearance - 0.5).abs() < 1e-12, "{}", a.min_clearance);
+        assert!((t.robots()[1].min_clearance - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_wall_nearer_than_any_body_sets_the_clearance() {
+        let mut t = Tracker::new(&two_robots(), &[[[0.0, 5.7], [10.0, 5.7]]]);
+        t.track(&[disc(1.0, 5.0, 0.0), disc(4.0, 5.0, 0.0)]);
+        t.track(&[disc(1.0, 5.0, 0.0), disc(4.0, 5.0, 0.0)]);
+        for r in t.robots() {
+            assert!((r.min_clearance - 0.2).abs() < 1e-12, "{}", r.min_clearance);
+        }
+    }
+}
