@@ -169,6 +169,7 @@ pub fn row_from_run(
         "wake_us": pct(&t["wake_us"], ALL),
         "compute_us": pct(&t["compute_us"], ALL),
         "world_tick_us": pct(&t["world_tick_us"], ALL),
+        "physics_us": pct(&t["physics_us"], ALL),
         "ticks": ticks,
         "deadline_misses": misses,
         "wall_s": wall,

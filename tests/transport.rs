@@ -122,8 +122,18 @@ fn an_in_process_run_writes_the_same_outputs_and_timing_as_a_process_run() {
         "jitter_us",
         "allin_us",
         "world_tick_us",
+        "physics_us",
     ] {
         assert!(t[k]["p99"].is_number(), "timing.{k}: {t:#}");
+    }
+    // Rapier's step is measured within the world's tick, once per tick.
+    assert_eq!(t["physics_us"]["count"], t["world_tick_us"]["count"]);
+    for q in ["p50", "p99", "max"] {
+        let (phys, tick) = (t["physics_us"][q].as_f64(), t["world_tick_us"][q].as_f64());
+        assert!(
+            phys.zip(tick).is_some_and(|(p, w)| p > 0.0 && p <= w),
+            "{q}: {t:#}"
+        );
     }
     // Realtime: one jitter sample per tick.
     assert_eq!(t["jitter_us"]["count"], m["ticks"]);
