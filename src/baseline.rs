@@ -5,7 +5,9 @@
 //! minimal payload (the tick number out, agent index and
 //! tick back), agents that reply at once, and no mrsim protocol (no
 //! snapshot, join, ownership, physics or recording). Its all-replies-in
-//! time is the floor mrsim's own all-in time is compared against.
+//! time is the floor mrsim's own all-in time is compared against, and its
+//! per-reply round trip (tick published -> that agent's reply taken in) the
+//! floor of mrsim's round trip.
 
 use anyhow::{Context, Result, anyhow};
 use clap::Args;
@@ -188,6 +190,7 @@ fn world_inner(args: &WorldArgs, ns: &Namespace) -> Result<i32> {
     let deadline = period.mul_f64(args.deadline.clamp(0.01, 1.0));
     let ticks = (args.duration * args.rate).round().max(1.0) as u64;
     let mut allin = DurationHistogram::default();
+    let mut roundtrip = DurationHistogram::default();
     let mut misses = 0u64;
     let mut got = vec![u64::MAX; n];
     let t0 = Instant::now() + Duration::from_millis(50);
@@ -212,6 +215,7 @@ fn world_inner(args: &WorldArgs, ns: &Namespace) -> Result<i32> {
                     got[i as usize] = tick;
                     answered += 1;
                     last_in = now_ns();
+                    roundtrip.record_ns(last_in.saturating_sub(published));
                 }
             }
             if answered == n {
@@ -233,7 +237,8 @@ fn world_inner(args: &WorldArgs, ns: &Namespace) -> Result<i32> {
     let p = allin.percentiles();
     let v = serde_json::json!({
         "agents": n, "rate_hz": args.rate, "ticks": ticks,
-        "allin_us": p, "miss_rate": misses as f64 / (ticks as f64 * n as f64),
+        "allin_us": p, "roundtrip_us": roundtrip.percentiles(),
+        "miss_rate": misses as f64 / (ticks as f64 * n as f64),
     });
     std::fs::write(&args.out, format!("{v:#}\n"))
         .with_context(|| format!("writing {}", args.out.display()))?;

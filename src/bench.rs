@@ -298,6 +298,7 @@ pub fn table(rows: &[Value]) -> String {
         "jit p99",
         "allin p99",
         "base p99",
+        "base rt p99",
         "world cpu%",
         "agents cpu%",
         "steal%",
@@ -322,6 +323,7 @@ pub fn table(rows: &[Value]) -> String {
                 f(&r["jitter_us_p99"], 0),
                 f(&r["allin_us"]["p99"], 0),
                 f(&r["baseline_allin_us"]["p99"], 0),
+                f(&r["baseline_roundtrip_us"]["p99"], 0),
                 f(&r["world_cpu_pct"], 1),
                 f(&r["agents_cpu_pct"], 1),
                 f(&r["steal_pct"], 1),
@@ -498,6 +500,7 @@ pub fn main(args: &BenchArgs) -> Result<i32> {
             let b = run_baseline(&exe, &out, n, args)?;
             for row in &mut batch {
                 row["baseline_allin_us"] = pct(&b["allin_us"], &["p50", "p99"]);
+                row["baseline_roundtrip_us"] = pct(&b["roundtrip_us"], &["p50", "p99"]);
             }
             progress.done += 1;
         }

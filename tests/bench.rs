@@ -53,7 +53,7 @@ fn a_tiny_bench_writes_one_row_per_combination_with_every_field_of_the_issue() {
         }
         // Null only if no tick had every reply in time (a very busy machine).
         for k in ["p50", "p99"] {
-            for f in ["allin_us", "baseline_allin_us"] {
+            for f in ["allin_us", "baseline_allin_us", "baseline_roundtrip_us"] {
                 let v = r[f]
                     .get(k)
                     .unwrap_or_else(|| panic!("{f}.{k} missing: {r:#}"));
@@ -99,6 +99,7 @@ fn a_tiny_bench_writes_one_row_per_combination_with_every_field_of_the_issue() {
         "allin_us_p50",
         "miss_rate",
         "baseline_allin_us_p99",
+        "baseline_roundtrip_us_p99",
     ] {
         assert!(
             lines[0].split(',').any(|c| c == col),
