@@ -144,6 +144,8 @@ pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentEx
     // When the last snapshot came (the clock read as the agent woke for
     // it: one clock read a tick fewer).
     let mut last_heard = now_ns();
+    // A snapshot has come (after it, a wake-up without one is spurious).
+    let mut heard_one = false;
     let check_after = u64::try_from(opts.world_check_after.as_nanos()).unwrap_or(u64::MAX);
     loop {
         if link.termination_requested() {
@@ -153,6 +155,7 @@ pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentEx
         let woke = now_ns();
         let (mut finished, mut failed) = (false, None);
         let got = link.with_latest_snapshot(&mut scratch, &mut |header, bodies, send| {
+            heard_one = true;
             if header.finished != 0 {
                 finished = true;
             } else if let Err(e) = driver.on_snapshot(header, bodies, woke, send) {
@@ -162,6 +165,13 @@ pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentEx
         if !got {
             if woke.saturating_sub(last_heard) > check_after && !link.world_alive() {
                 return Err(AgentError::WorldGone);
+            }
+            if !heard_one {
+                // Before the first snapshot a wake-up is the world's
+                // call to take up the tick's channels (this receive just
+                // did): say ready again, and the world starts the clock
+                // once every agent has (`WorldTransport::prepare_ticks`).
+                link.send_command(&driver.ready())?;
             }
             continue;
         }

@@ -658,9 +658,32 @@ pub fn run(
     let max_ticks = scenario.max_ticks();
     let deadline_after = Duration::from_secs_f64(dt * scenario.world.deadline);
     let stall = Duration::from_secs_f64(scenario.world.stall_timeout);
-    // Tick 0 costs what any tick costs: the channels are connected, and in
-    // realtime the agents get one tick's time to take up their side.
-    lp.link.prepare_ticks()?;
+    // Tick 0 costs what any tick costs: the channels are connected, the
+    // agents take up their side (and, over a transport that says so, each
+    // says ready again once it has), and in realtime tick 0 comes one tick
+    // after that.
+    let was_ready = std::mem::replace(&mut lp.ready, vec![false; n]);
+    if lp.link.prepare_ticks()? {
+        // A run that cannot wait starts anyway: an agent of this protocol
+        // answers at once, and tick 0's deadline still holds for the rest.
+        let limit = Duration::from_secs(2) + Duration::from_millis(5 * n as u64);
+        let started = Instant::now();
+        while !interrupted && !lp.all_ready() && started.elapsed() < limit {
+            if lp.link.termination_requested() {
+                interrupted = true;
+                break;
+            }
+            lp.link.wait(Duration::from_millis(20))?;
+            lp.drain(false)?;
+            lp.got.iter_mut().for_each(|g| *g = None);
+            lp.check_pids();
+        }
+        if !lp.all_ready() {
+            lp.log("not every agent took up the tick's channels in time; starting anyway");
+        }
+    } else {
+        lp.ready = was_ready;
+    }
     let settle = if realtime {
         Duration::from_secs_f64(dt)
     } else {

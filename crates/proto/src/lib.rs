@@ -12,8 +12,11 @@ use iceoryx2::prelude::ZeroCopySend;
 /// Bumped whenever a wire type changes shape or meaning. An agent whose
 /// version differs from the world's is refused at join time. Version 3:
 /// snapshots ring the run's doorbell (a futex word in shared memory)
-/// instead of the tick event.
-pub const PROTOCOL_VERSION: u32 = 3;
+/// instead of the tick event. Version 4: an agent says ready a second
+/// time once it has taken up the tick's channels (on each wake-up without
+/// a snapshot before its first), and the world starts the clock when all
+/// have.
+pub const PROTOCOL_VERSION: u32 = 4;
 
 /// Longest robot name, in bytes, that fits a [`JoinRequest`].
 pub const MAX_NAME_LEN: usize = 64;

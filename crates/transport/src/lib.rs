@@ -101,8 +101,14 @@ pub trait WorldTransport {
     /// connected to its subscribers inside tick 0's send and each agent
     /// mapped its side at its first receive: at 256 agents ~7 ms, and up
     /// to a third of them missed tick 0.
-    fn prepare_ticks(&mut self) -> Result<(), TransportError> {
-        Ok(())
+    ///
+    /// True if each agent then says so with a second ready command (the
+    /// agents' loop sends one on every wake-up that brings no snapshot
+    /// before its first, [`mrsim_proto::command_kind::READY`]), so the
+    /// world can wait for all of them before tick 0: on two cores 256
+    /// agents taking up their side at once can take longer than a tick.
+    fn prepare_ticks(&mut self) -> Result<bool, TransportError> {
+        Ok(false)
     }
     /// Publishes the run's live statistics for observers (a few times per
     /// second at most). Must not block; a transport without observers

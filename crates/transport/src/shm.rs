@@ -422,7 +422,7 @@ impl WorldTransport for ShmWorld {
         terminated(&self.terminated)
     }
 
-    fn prepare_ticks(&mut self) -> Result<(), TransportError> {
+    fn prepare_ticks(&mut self) -> Result<bool, TransportError> {
         // The join-time connections go first (1000 agents' connections of
         // both kinds at once raised the world's peak RSS by ~15 MB), then
         // the snapshot publisher connects to every subscriber, and a ring
@@ -431,7 +431,8 @@ impl WorldTransport for ShmWorld {
         self.update_join_connections();
         // Best effort: the first send connects whatever this could not.
         let _ = self.snap_pub.update_connections();
-        self.bell.ring()
+        self.bell.ring()?;
+        Ok(true)
     }
 
     fn cleanup_dead(&mut self) {
