@@ -677,6 +677,9 @@ pub fn run(
             lp.drain(false)?;
             lp.got.iter_mut().for_each(|g| *g = None);
             lp.check_pids();
+            // Also lets go of the join-time connections of agents that
+            // closed them since (the world's peak RSS at 1000 robots).
+            lp.publish_stats(run_phase::JOINING, false);
         }
         if !lp.all_ready() {
             lp.log("not every agent took up the tick's channels in time; starting anyway");
