@@ -11,6 +11,7 @@
 //! everything a researcher needs afterwards ([`record`]).
 #![warn(missing_docs)]
 
+pub mod batch;
 pub mod live;
 pub mod metrics;
 pub mod motion;

@@ -13,8 +13,9 @@
 //! The same thread computes the robots' motion metrics from the states it
 //! writes ([`crate::tracking`]) and hands them back at the end.
 
+use crate::batch::{Batch, Batcher};
 use crate::tracking::Tracker;
-use crossbeam::channel::{Receiver, RecvTimeoutError, Sender, bounded, unbounded};
+use crossbeam::channel::{RecvTimeoutError, bounded, unbounded};
 use mrsim_proto::{BodyState, body_kind};
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -30,24 +31,31 @@ pub const BATCH_AGE: Duration = Duration::from_millis(100);
 
 /// Consecutive ticks' bodies, concatenated.
 #[derive(Default)]
-struct Batch {
+struct Ticks {
     /// (tick, time, bodies in it), in order.
     ticks: Vec<(u64, f64, usize)>,
     bodies: Vec<BodyState>,
 }
 
+impl Batch for Ticks {
+    fn is_empty(&self) -> bool {
+        self.ticks.is_empty()
+    }
+    fn clear(&mut self) {
+        self.ticks.clear();
+        self.bodies.clear();
+    }
+}
+
 enum Msg {
-    Ticks(Batch),
+    Ticks(Ticks),
     Event(String),
 }
 
 /// The recording thread's handle.
 pub struct Recorder {
-    tx: Option<Sender<Msg>>,
-    recycled: Receiver<Batch>,
+    batches: Batcher<Ticks, Msg>,
     thread: Option<JoinHandle<std::io::Result<Tracker>>>,
-    pending: Batch,
-    oldest: Option<Instant>,
 }
 
 impl Recorder {
@@ -126,21 +134,20 @@ impl Recorder {
                 Ok(tracker)
             })?;
         Ok(Self {
-            tx: Some(tx),
-            recycled,
+            batches: Batcher::new(tx, recycled, Ticks::default(), Msg::Ticks),
             thread: Some(thread),
-            pending: Batch::default(),
-            oldest: None,
         })
     }
 
     /// Queues one tick's bodies; they go to the thread with the batch.
     pub fn tick(&mut self, tick: u64, time: f64, bodies: &[BodyState]) {
-        self.pending.ticks.push((tick, time, bodies.len()));
-        self.pending.bodies.extend_from_slice(bodies);
-        let oldest = *self.oldest.get_or_insert_with(Instant::now);
-        if self.pending.ticks.len() >= BATCH_TICKS || oldest.elapsed() >= BATCH_AGE {
-            self.send_pending();
+        let pending = self.batches.pending();
+        pending.ticks.push((tick, time, bodies.len()));
+        pending.bodies.extend_from_slice(bodies);
+        if pending.ticks.len() >= BATCH_TICKS {
+            self.batches.send();
+        } else {
+            self.batches.send_if_older(BATCH_AGE);
         }
     }
 
@@ -148,29 +155,12 @@ impl Recorder {
     /// loop calls it while it waits for commands, so a stalled run's last
     /// ticks still reach the disk within about a second.
     pub fn send_if_due(&mut self) {
-        if self.oldest.is_some_and(|t| t.elapsed() >= BATCH_AGE) {
-            self.send_pending();
-        }
-    }
-
-    /// Sends the ticks queued so far to the thread.
-    fn send_pending(&mut self) {
-        self.oldest = None;
-        if self.pending.ticks.is_empty() {
-            return;
-        }
-        let mut next = self.recycled.try_recv().unwrap_or_default();
-        next.ticks.clear();
-        next.bodies.clear();
-        let batch = std::mem::replace(&mut self.pending, next);
-        if let Some(tx) = &self.tx {
-            let _ = tx.send(Msg::Ticks(batch));
-        }
+        self.batches.send_if_older(BATCH_AGE);
     }
 
     /// Queues one event (a JSON object).
     pub fn event(&self, value: serde_json::Value) {
-        if let Some(tx) = &self.tx {
+        if let Some(tx) = self.batches.sender() {
             let _ = tx.send(Msg::Event(value.to_string()));
         }
     }
@@ -183,8 +173,7 @@ impl Recorder {
     }
 
     fn stop(&mut self) -> std::io::Result<Option<Tracker>> {
-        self.send_pending();
-        self.tx.take();
+        self.batches.close();
         match self.thread.take().map(JoinHandle::join) {
             Some(Ok(r)) => r.map(Some),
             Some(Err(_)) => Err(std::io::Error::other("recorder thread panicked")),

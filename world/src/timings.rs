@@ -18,8 +18,9 @@
 //! takes the histograms back ([`TimingRecorder::finish`]), every sample in
 //! them.
 
+use crate::batch::Batcher;
 use crate::metrics::{DurationHistogram, RobotTimings};
-use crossbeam::channel::{Receiver, Sender, bounded, unbounded};
+use crossbeam::channel::{bounded, unbounded};
 use std::sync::{Arc, Mutex, PoisonError};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
@@ -100,10 +101,7 @@ impl Timings {
 
 /// The tick loop's handle on the timing thread.
 pub struct TimingRecorder {
-    tx: Option<Sender<Vec<Sample>>>,
-    recycled: Receiver<Vec<Sample>>,
-    pending: Vec<Sample>,
-    oldest: Option<Instant>,
+    batches: Batcher<Vec<Sample>, Vec<Sample>>,
     live: Arc<Mutex<Vec<LiveLatency>>>,
     thread: Option<JoinHandle<Timings>>,
 }
@@ -141,10 +139,7 @@ impl TimingRecorder {
                 t
             })?;
         Ok(Self {
-            tx: Some(tx),
-            recycled,
-            pending: Vec::with_capacity(BATCH),
-            oldest: None,
+            batches: Batcher::new(tx, recycled, Vec::with_capacity(BATCH), |b| b),
             live,
             thread: Some(thread),
         })
@@ -153,35 +148,20 @@ impl TimingRecorder {
     /// Records one command of robot `robot`: its round trip, wake-up and
     /// compute time, ns.
     pub fn record(&mut self, robot: usize, latency: u64, wake: u64, compute: u64) {
-        self.pending.push(Sample {
+        let pending = self.batches.pending();
+        pending.push(Sample {
             robot: robot as u32,
             ns: [latency, wake, compute],
         });
-        self.oldest.get_or_insert_with(Instant::now);
-        if self.pending.len() >= BATCH {
-            self.send_pending();
+        if pending.len() >= BATCH {
+            self.batches.send();
         }
     }
 
     /// Hands the pending samples over if the oldest has waited
     /// [`BATCH_AGE`] (the loop calls it every tick and while it waits).
     pub fn send_if_due(&mut self) {
-        if self.oldest.is_some_and(|t| t.elapsed() >= BATCH_AGE) {
-            self.send_pending();
-        }
-    }
-
-    fn send_pending(&mut self) {
-        self.oldest = None;
-        if self.pending.is_empty() {
-            return;
-        }
-        let mut next = self.recycled.try_recv().unwrap_or_default();
-        next.clear();
-        let batch = std::mem::replace(&mut self.pending, next);
-        if let Some(tx) = &self.tx {
-            let _ = tx.send(batch);
-        }
+        self.batches.send_if_older(BATCH_AGE);
     }
 
     /// Calls `f` with every robot's live round trip, as of the thread's
@@ -195,8 +175,7 @@ impl TimingRecorder {
     /// An error only if the thread panicked (a bug): the histograms are
     /// then lost, and the error says so.
     pub fn finish(&mut self) -> std::io::Result<Timings> {
-        self.send_pending();
-        self.tx.take();
+        self.batches.close();
         match self.thread.take().map(JoinHandle::join) {
             Some(Ok(t)) => Ok(t),
             Some(Err(_)) => Err(std::io::Error::other("the timing thread panicked")),
