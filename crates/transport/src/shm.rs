@@ -199,7 +199,14 @@ impl ShmWorld {
         max_bodies: usize,
         max_setup_len: usize,
     ) -> Result<Self, TransportError> {
-        let cfg = config(ns)?;
+        let mut cfg = config(ns)?;
+        // Room for every agent's join port closing with a re-asked request
+        // still queued (the world's subscribers only): with the default 128,
+        // a 1000-agent join discarded the duplicates with ~200 warnings of
+        // 40 kB each on stderr.
+        cfg.defaults
+            .publish_subscribe
+            .subscriber_expired_connection_buffer = cap.agents();
         let node = node(&cfg, WORLD_NODE)?;
         ns.make_private();
         // A crashed earlier run of the same id may have left dead nodes.
