@@ -528,11 +528,12 @@ impl Buckets {
             }
             // No square root for a body clearly farther than the best so far.
             let (dx, dy) = (qx - s.position[0], qy - s.position[1]);
-            if clearly_beyond(dx * dx + dy * dy, best + qr + s.radius) {
+            let d2 = dx * dx + dy * dy;
+            if clearly_beyond(d2, best + qr + s.radius) {
                 continue;
             }
             // As `centre_distance(q, s)`, the same expression as `brute`.
-            best = best.min((dx * dx + dy * dy).sqrt() - qr - s.radius);
+            best = best.min(d2.sqrt() - qr - s.radius);
         }
         best
     }

@@ -399,6 +399,20 @@ impl Loop<'_> {
         drained
     }
 
+    /// One round of waiting before the clock starts: joins and ready
+    /// commands taken in, pids checked, and the live statistics published
+    /// (which also lets go of the join-time connections of agents that
+    /// closed theirs: the world's peak RSS at 1000 robots).
+    fn before_start(&mut self, wait: Duration) -> Result<(), TransportError> {
+        self.link.wait(wait)?;
+        self.drain(false)?;
+        // Commands before the first tick are from nobody we know yet.
+        self.got.iter_mut().for_each(|g| *g = None);
+        self.check_pids();
+        self.publish_stats(run_phase::JOINING, false);
+        Ok(())
+    }
+
     /// Every live agent has said it is ready.
     fn all_ready(&self) -> bool {
         self.agents
@@ -645,12 +659,7 @@ pub fn run(
                 secs: t.as_secs_f64(),
             });
         }
-        lp.link.wait(Duration::from_millis(50))?;
-        lp.drain(false)?;
-        // Commands before the first tick are from nobody we know yet.
-        lp.got.iter_mut().for_each(|g| *g = None);
-        lp.check_pids();
-        lp.publish_stats(run_phase::JOINING, false);
+        lp.before_start(Duration::from_millis(50))?;
     }
     lp.log("all agents joined; running");
 
@@ -662,8 +671,9 @@ pub fn run(
     // agents take up their side (and, over a transport that says so, each
     // says ready again once it has), and in realtime tick 0 comes one tick
     // after that.
-    let was_ready = std::mem::replace(&mut lp.ready, vec![false; n]);
     if lp.link.prepare_ticks()? {
+        // The second ready commands wait in the transport until drained.
+        lp.ready.fill(false);
         // A run that cannot wait starts anyway: an agent of this protocol
         // answers at once, and tick 0's deadline still holds for the rest.
         let limit = Duration::from_secs(2) + Duration::from_millis(5 * n as u64);
@@ -673,19 +683,11 @@ pub fn run(
                 interrupted = true;
                 break;
             }
-            lp.link.wait(Duration::from_millis(20))?;
-            lp.drain(false)?;
-            lp.got.iter_mut().for_each(|g| *g = None);
-            lp.check_pids();
-            // Also lets go of the join-time connections of agents that
-            // closed them since (the world's peak RSS at 1000 robots).
-            lp.publish_stats(run_phase::JOINING, false);
+            lp.before_start(Duration::from_millis(20))?;
         }
         if !lp.all_ready() {
             lp.log("not every agent took up the tick's channels in time; starting anyway");
         }
-    } else {
-        lp.ready = was_ready;
     }
     let settle = if realtime {
         Duration::from_secs_f64(dt)
