@@ -101,6 +101,14 @@ fn a_stranger_is_refused_with_a_clear_message_and_the_run_is_unaffected() {
         .args(["agent", "--robot", "a", "--run", &id])
         .spawn()
         .expect("a");
+    // a has joined before anyone else asks for it (on a busy machine the
+    // second agent for a could otherwise ask first, and be accepted).
+    let joined = |line: &str| line.contains("\"agent_joined\"") && line.contains("\"robot\":\"a\"");
+    let start = std::time::Instant::now();
+    while !std::fs::read_to_string(out.join("events.jsonl")).is_ok_and(|t| t.lines().any(joined)) {
+        assert!(start.elapsed().as_secs() < 30, "agent a did not join");
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
     // Wrong robot name.
     let o = mrsim()
         .args(["agent", "--robot", "zz", "--run", &id, "--timeout", "20"])
