@@ -68,7 +68,14 @@ pub fn run_scenario(
     let workers = std::thread::available_parallelism()
         .map_or(1, |p| p.get())
         .clamp(1, n.max(1));
-    let (mut link, sides, pool) = mrsim_transport::inproc::pooled_channels(n, workers, stop);
+    // In lockstep the world and the workers poll briefly for each other's
+    // next message instead of sleeping at once (see `pooled_channels`).
+    let spin = if scenario.world.mode == mrsim_scenario::Mode::Lockstep {
+        Duration::from_micros(200)
+    } else {
+        Duration::ZERO
+    };
+    let (mut link, sides, pool) = mrsim_transport::inproc::pooled_channels(n, workers, stop, spin);
     // Worker w drives the robots i with i % workers == w.
     let mut adopt = Vec::with_capacity(workers);
     let mut worker_handles = Vec::with_capacity(workers);

@@ -40,6 +40,8 @@ pub struct InprocWorld {
     asked_by: std::collections::HashMap<u64, usize>,
     stop: Arc<AtomicBool>,
     alive: Arc<AtomicBool>,
+    /// How [`WorldTransport::wait`] waits for the workers.
+    poll: Poll,
 }
 
 /// One agent's side of an in-process run.
@@ -90,6 +92,7 @@ pub fn channels(agents: usize, stop: Arc<AtomicBool>) -> (InprocWorld, Vec<Inpro
             asked_by: std::collections::HashMap::new(),
             stop,
             alive,
+            poll: Poll::default(),
         },
         sides,
     )
@@ -101,17 +104,31 @@ pub struct InprocWorker {
     rx: Receiver<ToAgent>,
     tx: Sender<ToWorld>,
     stop: Arc<AtomicBool>,
+    poll: Poll,
 }
 
 /// Creates a world side, `agents` agent sides (to join with) and `workers`
 /// worker sides (to answer snapshots with), all connected. `stop` plays the
 /// role of SIGTERM for every side.
+///
+/// `spin` is how long the world and the workers poll for the other's next
+/// message before they block ([`Duration::ZERO`]: they block at once). In
+/// lockstep with few robots the world and its workers hand each tick back
+/// and forth within tens of microseconds, and a blocked thread takes about
+/// as long again to be woken on a virtual machine (a halted vCPU must be
+/// woken by the host), so polling keeps the wake-ups off the critical path.
+/// A side polls only while its previous wait was shorter than `spin`: with
+/// many robots a wait is hundreds of microseconds, and polling through it
+/// would take the CPU from the threads that do the work. In real time the
+/// next snapshot is a tick away, so pass zero.
 pub fn pooled_channels(
     agents: usize,
     workers: usize,
     stop: Arc<AtomicBool>,
+    spin: Duration,
 ) -> (InprocWorld, Vec<InprocAgent>, Vec<InprocWorker>) {
     let (mut world, sides) = channels(agents, stop.clone());
+    world.poll = Poll::new(spin);
     let tx = sides
         .first()
         .map(|s| s.tx.clone())
@@ -124,6 +141,7 @@ pub fn pooled_channels(
             rx: wrx,
             tx: tx.clone(),
             stop: stop.clone(),
+            poll: Poll::new(spin),
         });
     }
     (world, sides, pool)
@@ -143,7 +161,7 @@ pub enum WorkerEvent {
 impl InprocWorker {
     /// Waits up to `timeout` for the next snapshot.
     pub fn next(&self, timeout: Duration) -> WorkerEvent {
-        let first = match self.rx.recv_timeout(timeout) {
+        let first = match self.poll.recv(&self.rx, timeout) {
             Ok(m) => m,
             Err(crossbeam::channel::RecvTimeoutError::Timeout) => return WorkerEvent::Idle,
             Err(crossbeam::channel::RecvTimeoutError::Disconnected) => {
@@ -176,6 +194,63 @@ impl InprocWorker {
     /// True once the run was asked to stop.
     pub fn termination_requested(&self) -> bool {
         self.stop.load(Ordering::Relaxed)
+    }
+}
+
+/// How a side waits for its next message: poll for up to `spin`, then
+/// block; poll only while the previous wait was shorter than `spin`.
+#[derive(Debug, Default)]
+struct Poll {
+    spin: Duration,
+    /// The previous wait, from the call to the message.
+    last: std::cell::Cell<Duration>,
+}
+
+impl Poll {
+    fn new(spin: Duration) -> Self {
+        Self {
+            spin,
+            last: std::cell::Cell::new(Duration::ZERO),
+        }
+    }
+
+    /// True if the next wait starts by polling.
+    fn polls(&self) -> bool {
+        !self.spin.is_zero() && self.last.get() < self.spin
+    }
+
+    /// Receives from `rx` within `timeout`. The poll yields the CPU between
+    /// tries, so a thread whose turn it is (the world stepping, a worker
+    /// planning) sharing the core is delayed by no more than a context
+    /// switch per try.
+    fn recv<T>(
+        &self,
+        rx: &Receiver<T>,
+        timeout: Duration,
+    ) -> Result<T, crossbeam::channel::RecvTimeoutError> {
+        use crossbeam::channel::{RecvTimeoutError, TryRecvError};
+        let start = std::time::Instant::now();
+        let got = if self.polls() {
+            let spin = self.spin.min(timeout);
+            loop {
+                match rx.try_recv() {
+                    Ok(m) => break Ok(m),
+                    Err(TryRecvError::Disconnected) => break Err(RecvTimeoutError::Disconnected),
+                    Err(TryRecvError::Empty) => {}
+                }
+                let spent = start.elapsed();
+                if spent >= spin {
+                    break rx.recv_timeout(timeout.saturating_sub(spent));
+                }
+                std::thread::yield_now();
+            }
+        } else {
+            rx.recv_timeout(timeout)
+        };
+        if got.is_ok() {
+            self.last.set(start.elapsed());
+        }
+        got
     }
 }
 
@@ -220,7 +295,7 @@ impl WorldTransport for InprocWorld {
 
     fn wait(&mut self, timeout: Duration) -> Result<(), TransportError> {
         if self.pending.is_empty() {
-            match self.rx.recv_timeout(timeout) {
+            match self.poll.recv(&self.rx, timeout) {
                 Ok(m) => self.pending.push(m),
                 Err(crossbeam::channel::RecvTimeoutError::Timeout) => {}
                 Err(crossbeam::channel::RecvTimeoutError::Disconnected) => {
@@ -363,5 +438,60 @@ impl AgentTransport for InprocAgent {
 
     fn termination_requested(&self) -> bool {
         self.stop.load(Ordering::Relaxed)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crossbeam::channel::RecvTimeoutError;
+
+    #[test]
+    fn a_polling_side_gets_a_message_sent_while_it_polls() {
+        let (tx, rx) = unbounded();
+        let poll = Poll::new(Duration::from_secs(5));
+        let sender = std::thread::spawn(move || {
+            std::thread::sleep(Duration::from_millis(2));
+            tx.send(7u32)
+        });
+        assert_eq!(poll.recv(&rx, Duration::from_secs(10)), Ok(7));
+        assert!(sender.join().is_ok_and(|r| r.is_ok()));
+    }
+
+    #[test]
+    fn a_polling_side_sees_the_sender_gone_and_an_empty_channel_time_out() {
+        let (tx, rx) = unbounded::<u32>();
+        let poll = Poll::new(Duration::from_millis(1));
+        assert_eq!(
+            poll.recv(&rx, Duration::from_millis(5)),
+            Err(RecvTimeoutError::Timeout)
+        );
+        drop(tx);
+        assert_eq!(
+            poll.recv(&rx, Duration::from_millis(5)),
+            Err(RecvTimeoutError::Disconnected)
+        );
+    }
+
+    #[test]
+    fn a_side_polls_only_while_its_waits_are_shorter_than_the_spin() {
+        let (tx, rx) = unbounded();
+        let poll = Poll::new(Duration::from_millis(200));
+        assert!(poll.polls());
+        // A wait of at least 300 ms: the next one blocks at once.
+        let sender = std::thread::spawn(move || {
+            std::thread::sleep(Duration::from_millis(300));
+            let _ = tx.send(1u32);
+            tx
+        });
+        assert_eq!(poll.recv(&rx, Duration::from_secs(10)), Ok(1));
+        assert!(!poll.polls());
+        // A message already waiting is a short wait: polling resumes.
+        let tx = sender.join().expect("sender");
+        let _ = tx.send(2);
+        assert_eq!(poll.recv(&rx, Duration::from_secs(10)), Ok(2));
+        assert!(poll.polls());
+        // Zero spin never polls.
+        assert!(!Poll::new(Duration::ZERO).polls());
     }
 }
