@@ -51,6 +51,11 @@ type S = ipc::Service;
 /// Name of the world's iceoryx2 node.
 pub const WORLD_NODE: &str = "mrsim-world";
 
+/// The most join replies an agent's reply subscriber buffers. Every agent
+/// sees every reply, so with hundreds joining at once a small buffer drops
+/// an agent's own reply before it polls (it would then ask again).
+const REPLY_BUFFER_MAX: usize = 128;
+
 fn setup_err(what: impl Into<String>, e: impl std::fmt::Debug) -> TransportError {
     TransportError::Setup {
         what: what.into(),
@@ -265,16 +270,25 @@ impl ShmWorld {
         let reply = node
             .service_builder(&service_name("mrsim/join-reply")?)
             .publish_subscribe::<JoinReply>()
-            // Every agent sees every reply: with hundreds joining at once,
-            // a small buffer drops an agent's own reply before it polls.
-            .subscriber_max_buffer_size((agents + 2).clamp(8, 128))
+            .subscriber_max_buffer_size((agents + 2).clamp(8, REPLY_BUFFER_MAX))
             .max_publishers(1)
             .max_subscribers(agents + 2)
             .max_nodes(nodes)
             .create()
             .map_err(|e| setup_err("service mrsim/join-reply", e))?;
+        // iceoryx2 sizes every connection by the publisher's worst case:
+        // every subscriber's buffer full of distinct replies, here 1002 x
+        // 130 samples at 1000 agents, which made each agent's join-reply
+        // connection 132 kB (64 kB of it resident in the world, 45 MB of
+        // the world's peak RSS while a thousand agents joined). Replies go
+        // to every subscriber alike, so a buffer holds only the newest
+        // replies: in use at once are at most a buffer's worth, the ones
+        // the agents hold while reading (two each at most), and the one
+        // being sent. Twice that leaves a margin.
+        let reply_samples = 2 * (REPLY_BUFFER_MAX + 2 * (agents + 2) + 1);
         let reply_pub = reply
             .publisher_builder()
+            .override_sample_preallocation(move |_| reply_samples)
             .create()
             .map_err(|e| setup_err("join-reply publisher", e))?;
 
