@@ -1,7 +1,8 @@
 //! The raw iceoryx2 baseline of `mrsim bench --baseline`: the same fan-out
 //! as a run (one world process publishing a tick over iceoryx2 and waking
 //! every agent process with the run's doorbell, as a run does; each agent
-//! answering over iceoryx2 and waking the world with an event), with a
+//! answering over iceoryx2 and counting its answer on the doorbell, the
+//! last answer waking the world, as in a run), with a
 //! minimal payload (the tick number out, agent index and
 //! tick back), agents that reply at once, and no mrsim protocol (no
 //! snapshot, join, ownership, physics or recording). Its all-replies-in
@@ -95,7 +96,7 @@ fn world_inner(args: &WorldArgs, ns: &Namespace) -> Result<i32> {
     let n = args.agents;
     let node = make_node(ns, "base-world")?;
     // Before the services: an agent that finds them finds the doorbell.
-    let bell = Doorbell::create(ns).map_err(|e| anyhow!("{e}"))?;
+    let mut bell = Doorbell::create(ns).map_err(|e| anyhow!("{e}"))?;
     let nodes = n + 4;
     let tick_pub = node
         .service_builder(&name("base/tick")?)
@@ -200,6 +201,7 @@ fn world_inner(args: &WorldArgs, ns: &Namespace) -> Result<i32> {
             wait_until(&wake, at);
             while let Ok(Some(_)) = reply_sub.receive() {}
         }
+        bell.expect(tick, n);
         let published = now_ns();
         let pub_at = Instant::now();
         tick_pub
@@ -226,7 +228,8 @@ fn world_inner(args: &WorldArgs, ns: &Namespace) -> Result<i32> {
                 misses += (n - answered) as u64;
                 break;
             }
-            wait_until(&wake, pub_at + deadline);
+            let left = (pub_at + deadline).saturating_duration_since(Instant::now());
+            bell.wait_answers(left).map_err(|e| anyhow!("{e}"))?;
         }
     }
     for _ in 0..2 {
@@ -315,7 +318,7 @@ pub fn agent(args: &AgentArgs) -> Result<i32> {
                 reply_pub
                     .send_copy([args.index, t])
                     .map_err(|e| anyhow!("send reply: {e:?}"))?;
-                wake.notify().map_err(|e| anyhow!("notify: {e:?}"))?;
+                bell.answered(t).map_err(|e| anyhow!("{e}"))?;
             }
             None if last_heard.elapsed() > Duration::from_secs(70) => {
                 return Err(anyhow!(

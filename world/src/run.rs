@@ -735,6 +735,12 @@ pub fn run(
             finished: 0,
             body_count: lp.world.states().len() as u32,
         };
+        let live = lp
+            .agents
+            .iter()
+            .filter(|a| matches!(a, Agent::Live { .. }))
+            .count();
+        lp.link.expect_answers(lp.tick, live);
         lp.link.publish_snapshot(&header, lp.world.states())?;
         lp.rec.tick(lp.tick, lp.time(), lp.world.states());
         let mut own = pub_instant.elapsed();

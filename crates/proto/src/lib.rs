@@ -15,8 +15,9 @@ use iceoryx2::prelude::ZeroCopySend;
 /// instead of the tick event. Version 4: an agent says ready a second
 /// time once it has taken up the tick's channels (on each wake-up without
 /// a snapshot before its first), and the world starts the clock when all
-/// have.
-pub const PROTOCOL_VERSION: u32 = 4;
+/// have. Version 5: an agent counts its answer to a tick on the doorbell
+/// page instead of notifying the world, and the last answer wakes it.
+pub const PROTOCOL_VERSION: u32 = 5;
 
 /// Longest robot name, in bytes, that fits a [`JoinRequest`].
 pub const MAX_NAME_LEN: usize = 64;

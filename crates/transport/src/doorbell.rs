@@ -18,6 +18,20 @@
 //! moved means "look for a new snapshot": the snapshot itself always comes
 //! through iceoryx2, so a spurious or merged ring costs one empty receive.
 //!
+//! The same page counts the agents' answers, so that the world is woken
+//! once per tick, by the last answer it waits for, rather than by every
+//! command (an iceoryx2 notify per command was a `sendto` by each agent and
+//! up to one wake-up of the world per command). Before publishing tick t
+//! the world sets the `answers` word to t's tag (its low 16 bits) with a
+//! count of zero, and the count it waits for. An agent that has published
+//! its command for tick t adds one to the count if the tag is still t's
+//! (an answer to an older tick is not counted), and the answer that brings
+//! the count to the expected one, or past it, wakes the world
+//! (`FUTEX_WAKE`). The world, like an agent, remembers the word as it last
+//! saw it and sleeps only while it still holds that; the command is
+//! published before it is counted, so a count the world has seen comes
+//! with its command already in.
+//!
 //! The file lives in /dev/shm under the run's prefix (so
 //! [`crate::Namespace::remove_leftovers`] removes it, and
 //! [`crate::Namespace::make_private`] keeps it private). The world creates
@@ -38,12 +52,84 @@ const LEN: usize = 4096;
 /// doorbell being created, or some other file under the name).
 const MAGIC: u32 = 0x6d72_6462; // "mrdb"
 
-/// The words of the doorbell, each on its own cache line.
+/// The words of the doorbell, each group on its own cache line.
 #[repr(C, align(64))]
 struct Words {
     magic: AtomicU32,
     _pad: [u8; 60],
     ring: AtomicU32,
+    _pad2: [u8; 60],
+    /// Tick tag (high 16 bits) and answers counted (low 16 bits).
+    answers: AtomicU32,
+    /// The count of answers that wakes the world.
+    expected: AtomicU32,
+}
+
+/// The tag of `tick` in the `answers` word.
+fn tag(tick: u64) -> u32 {
+    ((tick & 0xffff) as u32) << 16
+}
+
+/// The most answers one tick can count.
+const MAX_COUNT: u32 = 0xffff;
+
+/// `FUTEX_WAIT` on `word` while it holds `seen`, for at most `timeout`.
+/// Returns normally when woken, when the word no longer held `seen`, on
+/// time-out and on a signal: the caller looks at the word and its flags.
+fn futex_wait(word: &AtomicU32, seen: u32, timeout: Duration) -> Result<(), TransportError> {
+    let ts = libc::timespec {
+        tv_sec: timeout.as_secs().min(i32::MAX as u64) as libc::time_t,
+        tv_nsec: timeout.subsec_nanos() as libc::c_long,
+    };
+    // SAFETY: a futex wait on an aligned u32 of a live shared mapping,
+    // with a valid relative timeout.
+    let r = unsafe {
+        libc::syscall(
+            libc::SYS_futex,
+            word.as_ptr(),
+            libc::FUTEX_WAIT,
+            seen,
+            &ts as *const libc::timespec,
+            std::ptr::null::<u32>(),
+            0u32,
+        )
+    };
+    if r < 0 {
+        match std::io::Error::last_os_error().raw_os_error() {
+            // Changed before we slept, timed out, or a signal.
+            Some(libc::EAGAIN | libc::ETIMEDOUT | libc::EINTR) => {}
+            _ => {
+                return Err(TransportError::Wait(format!(
+                    "futex wait: {}",
+                    std::io::Error::last_os_error()
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// `FUTEX_WAKE` of up to `waiters` sleeping on `word`.
+fn futex_wake(word: &AtomicU32, waiters: i32, what: &'static str) -> Result<(), TransportError> {
+    // SAFETY: a futex wake on an aligned u32 of a live shared mapping.
+    let r = unsafe {
+        libc::syscall(
+            libc::SYS_futex,
+            word.as_ptr(),
+            libc::FUTEX_WAKE,
+            waiters,
+            std::ptr::null::<libc::timespec>(),
+            std::ptr::null::<u32>(),
+            0u32,
+        )
+    };
+    if r < 0 {
+        return Err(TransportError::Send {
+            what,
+            detail: format!("futex wake: {}", std::io::Error::last_os_error()),
+        });
+    }
+    Ok(())
 }
 
 /// One side's mapping of a run's doorbell.
@@ -53,6 +139,8 @@ pub struct Doorbell {
     owned: Option<PathBuf>,
     /// The ring count this side last saw (agents).
     seen: u32,
+    /// The answers word as the world last saw it.
+    answers_seen: u32,
 }
 
 // SAFETY: the mapping is only accessed through atomics, and is unmapped
@@ -111,6 +199,7 @@ impl Doorbell {
             words,
             owned: Some(path),
             seen: 0,
+            answers_seen: 0,
         };
         bell.words().magic.store(MAGIC, Ordering::Release);
         Ok(bell)
@@ -139,6 +228,7 @@ impl Doorbell {
             words,
             owned: None,
             seen: 0,
+            answers_seen: 0,
         };
         if bell.words().magic.load(Ordering::Acquire) != MAGIC {
             return Err(err(
@@ -160,25 +250,7 @@ impl Doorbell {
     pub fn ring(&self) -> Result<(), TransportError> {
         let ring = &self.words().ring;
         ring.fetch_add(1, Ordering::Release);
-        // SAFETY: a futex wake on an aligned u32 of a live shared mapping.
-        let r = unsafe {
-            libc::syscall(
-                libc::SYS_futex,
-                ring.as_ptr(),
-                libc::FUTEX_WAKE,
-                i32::MAX,
-                std::ptr::null::<libc::timespec>(),
-                std::ptr::null::<u32>(),
-                0u32,
-            )
-        };
-        if r < 0 {
-            return Err(TransportError::Send {
-                what: "tick doorbell",
-                detail: format!("futex wake: {}", std::io::Error::last_os_error()),
-            });
-        }
-        Ok(())
+        futex_wake(ring, i32::MAX, "tick doorbell")
     }
 
     /// An agent's side: returns at once if the doorbell rang since the last
@@ -193,40 +265,62 @@ impl Doorbell {
             self.seen = now;
             return Ok(rang);
         }
-        let ts = libc::timespec {
-            tv_sec: timeout.as_secs().min(i32::MAX as u64) as libc::time_t,
-            tv_nsec: timeout.subsec_nanos() as libc::c_long,
-        };
-        // SAFETY: a futex wait on an aligned u32 of a live shared mapping,
-        // with a valid relative timeout.
-        let r = unsafe {
-            libc::syscall(
-                libc::SYS_futex,
-                ring.as_ptr(),
-                libc::FUTEX_WAIT,
-                self.seen,
-                &ts as *const libc::timespec,
-                std::ptr::null::<u32>(),
-                0u32,
-            )
-        };
-        if r < 0 {
-            match std::io::Error::last_os_error().raw_os_error() {
-                // Rang before we slept, timed out, or a signal: the caller
-                // looks at the count below and at its own flags.
-                Some(libc::EAGAIN | libc::ETIMEDOUT | libc::EINTR) => {}
-                _ => {
-                    return Err(TransportError::Wait(format!(
-                        "futex wait: {}",
-                        std::io::Error::last_os_error()
-                    )));
-                }
-            }
-        }
+        futex_wait(ring, self.seen, timeout)?;
         let now = ring.load(Ordering::Acquire);
         let rang = now.wrapping_sub(self.seen);
         self.seen = now;
         Ok(rang)
+    }
+
+    /// The world's side, before it publishes tick `tick`: the answers to
+    /// it start counting from zero, and the `count`-th wakes the world.
+    pub fn expect(&mut self, tick: u64, count: usize) {
+        let w = self.words();
+        w.expected
+            .store((count as u32).min(MAX_COUNT), Ordering::Relaxed);
+        w.answers.store(tag(tick), Ordering::Release);
+        self.answers_seen = tag(tick);
+    }
+
+    /// An agent's side, once its command for tick `tick` is published:
+    /// counts it if the world still waits for answers to that tick, and
+    /// wakes the world if it was the last (or later).
+    pub fn answered(&self, tick: u64) -> Result<(), TransportError> {
+        let w = self.words();
+        let mut now = w.answers.load(Ordering::Relaxed);
+        loop {
+            if now & !MAX_COUNT != tag(tick) || now & MAX_COUNT == MAX_COUNT {
+                // An answer to an older tick, or (past 65535) not counted.
+                return Ok(());
+            }
+            match w
+                .answers
+                .compare_exchange_weak(now, now + 1, Ordering::AcqRel, Ordering::Relaxed)
+            {
+                Ok(_) => break,
+                Err(changed) => now = changed,
+            }
+        }
+        if (now + 1) & MAX_COUNT >= w.expected.load(Ordering::Relaxed) {
+            futex_wake(&w.answers, 1, "answer count")?;
+        }
+        Ok(())
+    }
+
+    /// The world's side: returns at once if answers were counted since the
+    /// last call (or since [`Doorbell::expect`]), else sleeps until the
+    /// answer it waits for wakes it, `timeout` passes, or a signal arrives.
+    /// True if answers were counted.
+    pub fn wait_answers(&mut self, timeout: Duration) -> Result<bool, TransportError> {
+        let answers = &self.words().answers;
+        let now = answers.load(Ordering::Acquire);
+        if now == self.answers_seen && !timeout.is_zero() {
+            futex_wait(answers, now, timeout)?;
+        }
+        let now = answers.load(Ordering::Acquire);
+        let counted = now != self.answers_seen;
+        self.answers_seen = now;
+        Ok(counted)
     }
 }
 
@@ -308,5 +402,45 @@ mod tests {
         let e = Doorbell::open(&ns).err().expect("refused");
         assert!(e.to_string().contains("expected 4096"), "{e}");
         let _ = std::fs::remove_file(path(&ns));
+    }
+
+    #[test]
+    fn the_last_expected_answer_wakes_the_world() {
+        let ns = ns("answers");
+        let mut world = Doorbell::create(&ns).expect("create");
+        let agent = Doorbell::open(&ns).expect("open");
+        world.expect(41, 3);
+        agent.answered(41).expect("answer");
+        agent.answered(41).expect("answer");
+        // Counted since the world last looked: it does not sleep.
+        assert!(world.wait_answers(Duration::from_secs(60)).expect("wait"));
+        // Nothing new: a short wait times out.
+        assert!(!world.wait_answers(Duration::from_millis(5)).expect("wait"));
+        let waiter = std::thread::spawn(move || {
+            let t = Instant::now();
+            let counted = world.wait_answers(Duration::from_secs(60)).expect("wait");
+            (counted, t.elapsed())
+        });
+        std::thread::sleep(Duration::from_millis(50));
+        agent.answered(41).expect("answer");
+        let (counted, slept) = waiter.join().expect("waiter");
+        assert!(counted);
+        // Woken by the third answer, not by the 60 s timeout.
+        assert!(slept < Duration::from_secs(30), "{slept:?}");
+    }
+
+    #[test]
+    fn an_answer_to_an_older_tick_is_not_counted() {
+        let ns = ns("late");
+        let mut world = Doorbell::create(&ns).expect("create");
+        let agent = Doorbell::open(&ns).expect("open");
+        world.expect(7, 1);
+        agent.answered(6).expect("answer");
+        assert!(!world.wait_answers(Duration::ZERO).expect("look"));
+        agent.answered(7).expect("answer");
+        assert!(world.wait_answers(Duration::ZERO).expect("look"));
+        // The next tick starts from zero again.
+        world.expect(8, 1);
+        assert!(!world.wait_answers(Duration::ZERO).expect("look"));
     }
 }

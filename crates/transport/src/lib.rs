@@ -76,6 +76,13 @@ pub trait WorldTransport {
     /// Blocks until an agent wakes the world or `timeout` passes (may return
     /// early, spuriously: callers check the clock).
     fn wait(&mut self, timeout: Duration) -> Result<(), TransportError>;
+    /// Called before each snapshot is published: `count` agents are to
+    /// answer tick `tick`. A transport that can count the answers wakes the
+    /// world once, when the last of them is in, instead of on every
+    /// command; from the first call on, [`WorldTransport::wait`] may sleep
+    /// through other wake-ups (join requests, ready commands) for a few
+    /// milliseconds. The default wakes the world on every command.
+    fn expect_answers(&mut self, _tick: u64, _count: usize) {}
     /// Hands every command received since the last call to `f`, with the
     /// time it was taken in (CLOCK_MONOTONIC ns).
     fn drain_commands(&mut self, f: &mut dyn FnMut(CommandMsg, u64)) -> Result<(), TransportError>;

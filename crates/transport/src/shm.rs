@@ -11,7 +11,8 @@
 //! | `mrsim/join` | publish-subscribe `JoinRequest` | agents -> world |
 //! | `mrsim/join-reply` | publish-subscribe `JoinReply` | world -> agents |
 //! | `mrsim/command` | publish-subscribe `CommandMsg` | agents -> world |
-//! | `mrsim/wake` | event, notifier-dead event | agents -> world |
+//! | `mrsim/wake` | event (ready, join requests), notifier-dead event | agents -> world |
+//! | `/dev/shm/PREFIXdoorbell` | futex word: the tick's answers counted, the last wakes | agents -> world |
 //! | `mrsim/stats` | publish-subscribe `[RobotStats]` + `StatsHeader`, history 1 | world -> observers |
 //!
 //! An observer ([`ShmObserver`]) only subscribes to `setup`, `snapshot` and
@@ -26,7 +27,10 @@
 //! Each tick's wake-up of the agents is the doorbell, not an iceoryx2
 //! event: one futex wake for all agents instead of a datagram per agent
 //! (see [`crate::doorbell`] for the measurements). The snapshot itself, and
-//! everything else, goes through iceoryx2.
+//! everything else, goes through iceoryx2. Likewise an agent's answer to a
+//! tick is counted on the doorbell page rather than notified: the world is
+//! woken once, by the last answer it waits for, instead of by every
+//! command.
 
 use crate::doorbell::Doorbell;
 use crate::{
@@ -193,7 +197,15 @@ pub struct ShmWorld {
     stats_pub: Publisher<S, [RobotStats], StatsHeader>,
     max_robots: usize,
     replies_pending: bool,
+    /// Set once the world waits for answers counted on the doorbell
+    /// ([`WorldTransport::expect_answers`]).
+    counting: bool,
 }
+
+/// The longest the world sleeps on the answer count before it looks at
+/// its iceoryx2 listener (join requests, ready commands and dead notifiers
+/// of agents restarting during the run).
+const ANSWER_SLICE: Duration = Duration::from_millis(5);
 
 impl ShmWorld {
     /// Creates every service of the run. Fails if another world of the same
@@ -339,6 +351,7 @@ impl ShmWorld {
             stats_pub,
             max_robots: cap.robots,
             replies_pending: false,
+            counting: false,
         })
     }
 }
@@ -371,7 +384,20 @@ impl WorldTransport for ShmWorld {
     }
 
     fn wait(&mut self, timeout: Duration) -> Result<(), TransportError> {
-        wait_on(&self.wake, timeout)
+        if !self.counting {
+            return wait_on(&self.wake, timeout);
+        }
+        // What the listener has (a restarted agent's join, a dead
+        // notifier) is taken in with the commands after this returns.
+        wait_on(&self.wake, Duration::ZERO)?;
+        self.bell
+            .wait_answers(timeout.min(ANSWER_SLICE))
+            .map(|_| ())
+    }
+
+    fn expect_answers(&mut self, tick: u64, count: usize) {
+        self.bell.expect(tick, count);
+        self.counting = true;
     }
 
     fn drain_commands(&mut self, f: &mut dyn FnMut(CommandMsg, u64)) -> Result<(), TransportError> {
@@ -624,16 +650,22 @@ impl ShmAgent {
     }
 }
 
-/// Publishes `cmd` and wakes the world.
+/// Publishes `cmd` and tells the world: an answer to a tick is counted on
+/// the doorbell (the last one the world waits for wakes it), a ready
+/// command wakes it through its listener.
 fn send_command(
     cmd_pub: &Publisher<S, CommandMsg, ()>,
     wake: &Notifier<S>,
+    bell: &Doorbell,
     cmd: &CommandMsg,
 ) -> Result<(), TransportError> {
     cmd_pub.send_copy(*cmd).map_err(|e| TransportError::Send {
         what: "command",
         detail: format!("{e:?}"),
     })?;
+    if cmd.kind != mrsim_proto::command_kind::READY {
+        return bell.answered(cmd.tick);
+    }
     wake.notify_with_custom_event_id(EventId::new(events::COMMAND))
         .map_err(|e| TransportError::Send {
             what: "wake event",
@@ -951,7 +983,7 @@ impl AgentTransport for ShmAgent {
     }
 
     fn send_command(&mut self, cmd: &CommandMsg) -> Result<(), TransportError> {
-        send_command(&self.ports.cmd_pub, &self.ports.wake, cmd)
+        send_command(&self.ports.cmd_pub, &self.ports.wake, &self.bell, cmd)
     }
 
     fn with_latest_snapshot(
@@ -962,9 +994,9 @@ impl AgentTransport for ShmAgent {
         let Some(sample) = newest_sample(&self.ports.snap_sub, "snapshot")? else {
             return Ok(false);
         };
-        let (cmd_pub, wake) = (&self.ports.cmd_pub, &self.ports.wake);
+        let (cmd_pub, wake, bell) = (&self.ports.cmd_pub, &self.ports.wake, &self.bell);
         f(sample.user_header(), sample.payload(), &mut |m| {
-            send_command(cmd_pub, wake, m)
+            send_command(cmd_pub, wake, bell, m)
         });
         Ok(true)
     }
