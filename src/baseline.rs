@@ -248,9 +248,9 @@ fn world_inner(args: &WorldArgs, ns: &Namespace) -> Result<i32> {
     Ok(0)
 }
 
-/// Waits as the world's tick loop does (`mrsim_world::run`): on the
-/// listener while far from `until` (its socket timeout is rounded up to
-/// whole jiffies), in short sleeps in the last few milliseconds.
+/// Waits for the next tick's time: on the listener (only hellos notify
+/// it) while far from `until`, since its socket timeout is rounded up to
+/// whole jiffies, and in short sleeps in the last few milliseconds.
 fn wait_until(listener: &iceoryx2::port::listener::Listener<S>, until: Instant) {
     let left = until.saturating_duration_since(Instant::now());
     // At least a millisecond: a socket timeout below a microsecond reads as

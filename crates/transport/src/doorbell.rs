@@ -345,11 +345,17 @@ mod tests {
         Namespace::new(&format!("doorbell-{tag}-{}", std::process::id())).expect("namespace")
     }
 
+    /// A world's doorbell and an agent's side of it.
+    fn pair(tag: &str) -> (Doorbell, Doorbell) {
+        let ns = ns(tag);
+        let world = Doorbell::create(&ns).expect("create");
+        let agent = Doorbell::open(&ns).expect("open");
+        (world, agent)
+    }
+
     #[test]
     fn a_ring_wakes_a_waiting_agent_and_is_seen_once() {
-        let ns = ns("wake");
-        let world = Doorbell::create(&ns).expect("create");
-        let mut agent = Doorbell::open(&ns).expect("open");
+        let (world, mut agent) = pair("wake");
         let waiter = std::thread::spawn(move || {
             let rang = agent.wait(Duration::from_secs(10)).expect("wait");
             // Seen once: the next wait times out.
@@ -365,9 +371,7 @@ mod tests {
 
     #[test]
     fn a_ring_before_the_wait_is_not_lost() {
-        let ns = ns("early");
-        let world = Doorbell::create(&ns).expect("create");
-        let mut agent = Doorbell::open(&ns).expect("open");
+        let (world, mut agent) = pair("early");
         world.ring().expect("ring");
         world.ring().expect("ring");
         let t = Instant::now();
@@ -378,9 +382,7 @@ mod tests {
 
     #[test]
     fn a_wait_without_a_ring_times_out() {
-        let ns = ns("quiet");
-        let _world = Doorbell::create(&ns).expect("create");
-        let mut agent = Doorbell::open(&ns).expect("open");
+        let (_world, mut agent) = pair("quiet");
         assert_eq!(agent.wait(Duration::from_millis(5)).expect("wait"), 0);
     }
 
@@ -406,9 +408,7 @@ mod tests {
 
     #[test]
     fn the_last_expected_answer_wakes_the_world() {
-        let ns = ns("answers");
-        let mut world = Doorbell::create(&ns).expect("create");
-        let agent = Doorbell::open(&ns).expect("open");
+        let (mut world, agent) = pair("answers");
         world.expect(41, 3);
         agent.answered(41).expect("answer");
         agent.answered(41).expect("answer");
@@ -431,9 +431,7 @@ mod tests {
 
     #[test]
     fn an_answer_to_an_older_tick_is_not_counted() {
-        let ns = ns("late");
-        let mut world = Doorbell::create(&ns).expect("create");
-        let agent = Doorbell::open(&ns).expect("open");
+        let (mut world, agent) = pair("late");
         world.expect(7, 1);
         agent.answered(6).expect("answer");
         assert!(!world.wait_answers(Duration::ZERO).expect("look"));
