@@ -76,6 +76,7 @@ impl Recorder {
                 let period = Duration::from_secs(1);
                 let mut last_flush = Instant::now();
                 let mut block = Vec::with_capacity(1 << 12);
+                let mut labels = Labels::default();
                 loop {
                     // Wake at least once a period, so rows reach the disk
                     // even while the tick loop waits (a lockstep stall).
@@ -89,23 +90,19 @@ impl Recorder {
                                 tracker.track(bodies);
                                 // A tick's rows go to the buffer in one piece, so
                                 // the file only ever ends after a whole tick.
+                                // `tick,time,` is the same on every row of it.
                                 block.clear();
-                                for b in bodies {
-                                    let name =
-                                        names.get(b.id as usize).map(String::as_str).unwrap_or("?");
-                                    let kind: &[u8] = if b.kind == body_kind::ROBOT {
-                                        b"robot"
-                                    } else {
-                                        b"obstacle"
-                                    };
+                                push_u64(&mut block, tick);
+                                block.push(b',');
+                                push_fixed6(&mut block, time);
+                                block.push(b',');
+                                let prefix = block.len();
+                                for (k, b) in bodies.iter().enumerate() {
+                                    if k > 0 {
+                                        block.extend_from_within(..prefix);
+                                    }
                                     // tick,time,body,kind,x,y,vx,vy
-                                    push_u64(&mut block, tick);
-                                    block.push(b',');
-                                    push_fixed6(&mut block, time);
-                                    block.push(b',');
-                                    block.extend_from_slice(name.as_bytes());
-                                    block.push(b',');
-                                    block.extend_from_slice(kind);
+                                    block.extend_from_slice(labels.of(b, &names));
                                     for v in [b.position, b.velocity].into_iter().flatten() {
                                         block.push(b',');
                                         push_fixed6(&mut block, v);
@@ -182,17 +179,63 @@ impl Recorder {
     }
 }
 
+/// Each body's `name,kind` as its rows spell it, made once per body.
+#[derive(Default)]
+struct Labels {
+    /// By body id: the kind it was made for, and the bytes.
+    by_id: Vec<Option<(u32, Vec<u8>)>>,
+}
+
+impl Labels {
+    /// `name,kind` of `b` (`?` for an id without a name).
+    fn of(&mut self, b: &BodyState, names: &[String]) -> &[u8] {
+        let id = b.id as usize;
+        if self.by_id.len() <= id {
+            self.by_id.resize(id + 1, None);
+        }
+        let slot = &mut self.by_id[id];
+        if slot.as_ref().is_none_or(|(kind, _)| *kind != b.kind) {
+            let name = names.get(id).map_or("?", String::as_str);
+            let kind = if b.kind == body_kind::ROBOT {
+                "robot"
+            } else {
+                "obstacle"
+            };
+            *slot = Some((b.kind, format!("{name},{kind}").into_bytes()));
+        }
+        slot.as_ref().map_or(&[], |(_, bytes)| bytes.as_slice())
+    }
+}
+
+/// The two-digit decimal strings "00" to "99", concatenated.
+const DIGIT_PAIRS: &[u8; 200] = b"\
+0001020304050607080910111213141516171819\
+2021222324252627282930313233343536373839\
+4041424344454647484950515253545556575859\
+6061626364656667686970717273747576777879\
+8081828384858687888990919293949596979899";
+
+/// Writes the last two decimal digits of `n` (below 100) at `out[0..2]`.
+fn two_digits(out: &mut [u8], n: u64) {
+    let i = 2 * n as usize;
+    out[..2].copy_from_slice(&DIGIT_PAIRS[i..i + 2]);
+}
+
 /// Appends `n` in decimal.
 fn push_u64(out: &mut Vec<u8>, mut n: u64) {
     let mut digits = [0u8; 20];
     let mut i = digits.len();
-    loop {
+    while n >= 100 {
+        i -= 2;
+        two_digits(&mut digits[i..], n % 100);
+        n /= 100;
+    }
+    if n >= 10 {
+        i -= 2;
+        two_digits(&mut digits[i..], n);
+    } else {
         i -= 1;
-        digits[i] = b'0' + (n % 10) as u8;
-        n /= 10;
-        if n == 0 {
-            break;
-        }
+        digits[i] = b'0' + n as u8;
     }
     out.extend_from_slice(&digits[i..]);
 }
@@ -207,25 +250,31 @@ fn push_u64(out: &mut Vec<u8>, mut n: u64) {
 /// magnitudes and non-finite values take `format!`'s own path.
 fn push_fixed6(out: &mut Vec<u8>, x: f64) {
     let s = (x * 1e6).abs();
-    let frac = s - s.floor();
-    if !(s < 1e15 && (frac - 0.5).abs() > s * 4e-16) {
-        // Not finite, too large, or too near a half to round here.
+    if s.is_nan() || s >= 1e15 {
+        // Not a number, or too large (infinite) to round here.
         let _ = write!(out, "{x:.6}");
         return;
     }
-    let n = s.round() as u64;
+    // `s` is below 2^50: the cast is its floor, and `s - floor` is exact
+    // (no call into libm for `floor` and `round`).
+    let whole = s as u64;
+    let frac = s - whole as f64;
+    if (frac - 0.5).abs() <= s * 4e-16 {
+        // Too near a half to round here.
+        let _ = write!(out, "{x:.6}");
+        return;
+    }
+    let n = whole + u64::from(frac > 0.5);
     if x.is_sign_negative() {
         // As Rust does: a negative value that rounds to zero keeps its sign.
         out.push(b'-');
     }
     push_u64(out, n / 1_000_000);
-    let mut f = n % 1_000_000;
-    let mut digits = [b'0'; 7];
-    digits[0] = b'.';
-    for d in digits[1..].iter_mut().rev() {
-        *d = b'0' + (f % 10) as u8;
-        f /= 10;
-    }
+    let f = n % 1_000_000;
+    let mut digits = [b'.'; 7];
+    two_digits(&mut digits[1..], f / 10_000);
+    two_digits(&mut digits[3..], f / 100 % 100);
+    two_digits(&mut digits[5..], f % 100);
     out.extend_from_slice(&digits);
 }
 

@@ -80,9 +80,13 @@ impl Tracker {
             .clearances_below(states, n, |i| robots[i].min_clearance, &mut self.clearance);
         for (i, (s, p)) in states[..n].iter().zip(prev.iter_mut()).enumerate() {
             let m = &mut self.robots[i];
-            m.path_length += (s.position[0] - p[0]).hypot(s.position[1] - p[1]);
+            // Plain square roots: `hypot`'s overflow guard is a libm call per
+            // use, and positions and speeds are nowhere near 1e150.
+            let (dx, dy) = (s.position[0] - p[0], s.position[1] - p[1]);
+            m.path_length += (dx * dx + dy * dy).sqrt();
             *p = s.position;
-            m.max_speed = m.max_speed.max(s.velocity[0].hypot(s.velocity[1]));
+            let [vx, vy] = s.velocity;
+            m.max_speed = m.max_speed.max((vx * vx + vy * vy).sqrt());
             let mut clear = self.clearance[i];
             for w in &self.walls {
                 // Only a wall nearer than the smallest clearance so far can
