@@ -15,11 +15,12 @@
 use crate::usage::{AgentUsage, Scope};
 use mrsim_agents::{AgentExit, Driver};
 use mrsim_scenario::Scenario;
+use mrsim_transport::AgentTransport;
 use mrsim_transport::inproc::{InprocWorker, WorkerEvent};
 use mrsim_world::metrics::RunMetrics;
 use std::path::Path;
 use std::sync::Arc;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Duration;
 
 /// Why an in-process run failed.
@@ -65,27 +66,42 @@ pub fn run_scenario(
 ) -> Result<InprocOutcome, InprocError> {
     let world = mrsim_world::World::new(scenario)?;
     let n = scenario.robots.len();
-    let workers = std::thread::available_parallelism()
-        .map_or(1, |p| p.get())
-        .clamp(1, n.max(1));
+    let cpus = std::thread::available_parallelism().map_or(1, |p| p.get());
+    let lockstep = scenario.world.mode == mrsim_scenario::Mode::Lockstep;
+    // In lockstep the world's thread plans too while it waits (it has
+    // nothing else to do), so the pool has one worker fewer than CPUs.
+    let workers = if lockstep { cpus - 1 } else { cpus }.clamp(1, n.max(1));
     // In lockstep the world and the workers poll briefly for each other's
     // next message instead of sleeping at once (see `pooled_channels`).
-    let spin = if scenario.world.mode == mrsim_scenario::Mode::Lockstep {
+    let spin = if lockstep {
         Duration::from_micros(200)
     } else {
         Duration::ZERO
     };
-    let (mut link, sides, pool) = mrsim_transport::inproc::pooled_channels(n, workers, stop, spin);
-    // Worker w drives the robots i with i % workers == w.
-    let mut adopt = Vec::with_capacity(workers);
+    let (mut link, sides, pool_sides) =
+        mrsim_transport::inproc::pooled_channels(n, workers, stop, spin);
+    let reach = scenario
+        .robots
+        .iter()
+        .map(|r| r.sensing_range + r.radius)
+        .filter(|r| r.is_finite())
+        .reduce(f64::max);
+    let pool = Arc::new(Pool::new(n, reach, workers + usize::from(lockstep)));
+    if lockstep {
+        let (pool, mut hand) = (pool.clone(), Hand::default());
+        link.help_with(Box::new(move |h, b| {
+            let start = mrsim_proto::now_ns();
+            hand.answer(&pool, h, b);
+            pool.note_help(mrsim_proto::now_ns().saturating_sub(start));
+            std::mem::take(&mut hand.batch)
+        }));
+    }
     let mut worker_handles = Vec::with_capacity(workers);
-    for (w, side) in pool.into_iter().enumerate() {
-        let (tx, rx) = crossbeam::channel::unbounded::<Driver>();
-        adopt.push(tx);
-        let expected = (w..n).step_by(workers).count();
+    for (w, side) in pool_sides.into_iter().enumerate() {
+        let pool = pool.clone();
         let handle = std::thread::Builder::new()
             .name(format!("agents-{w}"))
-            .spawn(move || drive(side, rx, expected))
+            .spawn(move || drive(side, &pool))
             .map_err(|source| InprocError::Spawn {
                 robot: format!("worker {w}"),
                 source,
@@ -95,16 +111,19 @@ pub fn run_scenario(
     let mut handles = Vec::with_capacity(n);
     for (i, (robot, mut side)) in scenario.robots.iter().zip(sides).enumerate() {
         let opts = mrsim_agents::AgentOptions::new(&robot.name);
-        let to_worker = adopt[i % workers].clone();
+        let pool = pool.clone();
         let handle = std::thread::Builder::new()
             .name(format!("agent-{}", robot.name))
             // Planners keep little on the stack; 1000 agents fit easily.
             .stack_size(512 * 1024)
             .spawn(move || match mrsim_agents::join(&mut side, &opts) {
                 Ok(Some(driver)) => {
-                    // A worker that is gone (the run ended) drops it.
-                    let _ = to_worker.send(driver);
-                    None
+                    // Into the pool first, then ready: the world starts
+                    // the run once every robot is ready, and the first
+                    // snapshot must find every driver in the pool.
+                    let ready = driver.ready();
+                    pool.adopt(i, driver);
+                    side.send_command(&ready).err().map(|e| e.to_string())
                 }
                 Ok(None) => None,
                 Err(e) => Some(e.to_string()),
@@ -115,7 +134,6 @@ pub fn run_scenario(
             })?;
         handles.push(handle);
     }
-    drop(adopt);
     let opts = mrsim_world::RunOptions {
         out_dir: out_dir.to_path_buf(),
         run_id: run_id.to_string(),
@@ -125,7 +143,8 @@ pub fn run_scenario(
     };
     let outcome = mrsim_world::run(world, &mut link, opts);
     // Dropping the world's side disconnects the channels: an agent still
-    // waiting sees the world gone and ends.
+    // waiting sees the world gone and ends (and the helper lets go of the
+    // pool).
     drop(link);
     let mut agent_errors = Vec::with_capacity(n);
     for h in handles {
@@ -134,28 +153,45 @@ pub fn run_scenario(
                 .unwrap_or_else(|_| Some("the agent thread panicked".to_string())),
         );
     }
-    // A worker's CPU time is shared equally among its robots.
-    let mut agent_usage = vec![AgentUsage::default(); n];
-    for (w, h) in worker_handles.into_iter().enumerate() {
-        let (usage, errors) = h.join().unwrap_or_else(|_| {
-            (
-                AgentUsage::default(),
-                vec![(None, "the worker thread panicked".to_string())],
-            )
-        });
-        let mine: Vec<usize> = (w..n).step_by(workers).collect();
-        for &i in &mine {
-            agent_usage[i] = AgentUsage {
-                cpu_s: usage.cpu_s / mine.len().max(1) as f64,
-                maxrss_kb: usage.maxrss_kb,
-            };
+    let mut exit = AgentExit::Finished;
+    let mut cpu_s = 0.0;
+    let mut maxrss_kb = 0;
+    for h in worker_handles {
+        match h.join() {
+            Ok((e, usage)) => {
+                if e == AgentExit::Interrupted {
+                    exit = e;
+                }
+                cpu_s += usage.cpu_s;
+                maxrss_kb = maxrss_kb.max(usage.maxrss_kb);
+            }
+            Err(_) => pool.fail(None, "the worker thread panicked".to_string()),
         }
-        for (robot, e) in errors {
-            for &j in mine.iter().filter(|&&j| robot.is_none_or(|i| i == j)) {
-                agent_errors[j].get_or_insert_with(|| e.clone());
+    }
+    let (drivers, errors, help_ns) = pool.finish();
+    for d in drivers {
+        let id = d.robot_id();
+        if let Err(e) = d.finish(exit) {
+            agent_errors[id].get_or_insert_with(|| e.to_string());
+        }
+    }
+    for (robot, e) in errors {
+        for (j, slot) in agent_errors.iter_mut().enumerate() {
+            if robot.is_none_or(|i| i == j) {
+                slot.get_or_insert_with(|| e.clone());
             }
         }
     }
+    // The pool's CPU time (the workers', and the world's thread while it
+    // planned) is shared equally among the robots.
+    let cpu_s = cpu_s + help_ns as f64 * 1e-9;
+    let agent_usage = vec![
+        AgentUsage {
+            cpu_s: cpu_s / n.max(1) as f64,
+            maxrss_kb,
+        };
+        n
+    ];
     Ok(InprocOutcome {
         metrics: outcome?.metrics,
         agent_errors,
@@ -163,98 +199,180 @@ pub fn run_scenario(
     })
 }
 
-/// A worker thread: adopts the drivers of the robots that joined, and on
-/// each snapshot plans for all of them and sends their commands in one
-/// batch. Ends on the run's last snapshot, when asked to stop, or when the
-/// world is gone. Returns its CPU time (from the first snapshot to the
-/// end) and the errors of the robots it drove, by robot index (`None`:
-/// every robot of this worker).
-fn drive(
-    side: InprocWorker,
-    adopt: crossbeam::channel::Receiver<Driver>,
-    expected: usize,
-) -> (AgentUsage, Vec<(Option<usize>, String)>) {
-    let mut drivers: Vec<Driver> = Vec::with_capacity(expected);
-    let mut latest: Option<(
-        mrsim_proto::SnapshotHeader,
-        std::sync::Arc<[mrsim_proto::BodyState]>,
-    )> = None;
-    let mut errors = Vec::new();
+/// Every robot's [`Driver`], in chunks of consecutive robots. For each
+/// snapshot the workers (and in lockstep the world's thread) claim chunks
+/// one at a time until none is left, so a thread that comes late to a
+/// tick (woken late, or sharing its CPU) takes fewer of them instead of
+/// holding the tick up.
+struct Pool {
+    /// Chunk `k` holds the drivers of robots `k * size .. (k + 1) * size`
+    /// that have joined.
+    chunks: Vec<std::sync::Mutex<Vec<Driver>>>,
+    size: usize,
+    /// The tick being answered (low 32 bits) in the high half, and the
+    /// next chunk to claim for it in the low half.
+    claims: AtomicU64,
+    /// The largest finite sensing reach of the robots (sizes the grid).
+    reach: Option<f64>,
+    errors: std::sync::Mutex<Vec<RobotError>>,
+    /// Time the world's thread spent planning, ns.
+    help_ns: AtomicU64,
+}
+
+/// An error of robot `.0` (`None`: of every robot).
+type RobotError = (Option<usize>, String);
+
+/// Locks `m`, also after another thread panicked holding it (what it
+/// guards stays usable: a driver or a list).
+fn lock<T>(m: &std::sync::Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+impl Pool {
+    /// A pool for `n` robots whose largest finite reach is `reach`,
+    /// answered by `threads` threads.
+    fn new(n: usize, reach: Option<f64>, threads: usize) -> Self {
+        // About eight chunks a thread: enough for a late thread to leave
+        // its share to the others, few enough that claiming costs little.
+        let size = (n / (8 * threads.max(1))).clamp(1, 32);
+        Self {
+            chunks: (0..n.div_ceil(size))
+                .map(|_| std::sync::Mutex::new(Vec::with_capacity(size)))
+                .collect(),
+            size,
+            claims: AtomicU64::new(u64::MAX),
+            reach,
+            errors: std::sync::Mutex::new(Vec::new()),
+            help_ns: AtomicU64::new(0),
+        }
+    }
+
+    /// Takes in the driver of robot `i`.
+    fn adopt(&self, i: usize, d: Driver) {
+        if let Some(chunk) = self.chunks.get(i / self.size) {
+            lock(chunk).push(d);
+        }
+    }
+
+    /// The next chunk to answer `tick` with, if any is left. A thread
+    /// still on an older tick gets none once a newer one has started.
+    fn claim(&self, tick: u64) -> Option<usize> {
+        let tag = tick & 0xffff_ffff;
+        let mut now = self.claims.load(Ordering::Acquire);
+        loop {
+            let (at, next) = (now >> 32, now & 0xffff_ffff);
+            let (k, new) = if now == u64::MAX || at != tag {
+                // The first claim for this tick, unless the tick is older
+                // than the one being answered.
+                if now != u64::MAX && (tag.wrapping_sub(at) & 0xffff_ffff) >= 1 << 31 {
+                    return None;
+                }
+                (0, (tag << 32) | 1)
+            } else {
+                (next as usize, now + 1)
+            };
+            if k >= self.chunks.len() {
+                return None;
+            }
+            match self
+                .claims
+                .compare_exchange_weak(now, new, Ordering::AcqRel, Ordering::Acquire)
+            {
+                Ok(_) => return Some(k),
+                Err(changed) => now = changed,
+            }
+        }
+    }
+
+    fn fail(&self, robot: Option<usize>, e: String) {
+        lock(&self.errors).push((robot, e));
+    }
+
+    fn note_help(&self, ns: u64) {
+        self.help_ns.fetch_add(ns, Ordering::Relaxed);
+    }
+
+    /// Every driver, the errors, and the world thread's planning time.
+    fn finish(&self) -> (Vec<Driver>, Vec<RobotError>, u64) {
+        let drivers = self
+            .chunks
+            .iter()
+            .flat_map(|c| std::mem::take(&mut *lock(c)))
+            .collect();
+        let errors = std::mem::take(&mut *lock(&self.errors));
+        (drivers, errors, self.help_ns.load(Ordering::Relaxed))
+    }
+}
+
+/// What a thread answering snapshots keeps between them: its grid, and the
+/// batch of commands it is making.
+#[derive(Default)]
+struct Hand {
+    grid: Grid,
+    near: Vec<u32>,
+    batch: Vec<mrsim_proto::CommandMsg>,
+}
+
+impl Hand {
+    /// Claims chunks of `pool` for this snapshot until none is left, and
+    /// plans for their robots into `self.batch`. A robot's compute time
+    /// starts where the previous robot's ended (the clock is read once per
+    /// robot), its wake-up where this thread's previous robot ended.
+    fn answer(
+        &mut self,
+        pool: &Pool,
+        h: &mrsim_proto::SnapshotHeader,
+        b: &[mrsim_proto::BodyState],
+    ) {
+        let mut gridded = None;
+        let mut clock = mrsim_proto::now_ns();
+        while let Some(k) = pool.claim(h.tick) {
+            let gridded = *gridded.get_or_insert_with(|| self.grid.build(b, pool.reach));
+            for d in lock(&pool.chunks[k]).iter_mut() {
+                let among = gridded && self.grid.near(d, b, &mut self.near);
+                let near = among.then_some(self.near.as_slice());
+                let batch = &mut self.batch;
+                clock = d
+                    .on_snapshot_among(h, b, near, clock, Some(clock), &mut |m| {
+                        batch.push(*m);
+                        Ok(())
+                    })
+                    .unwrap_or_else(|e| {
+                        pool.fail(Some(d.robot_id()), e.to_string());
+                        mrsim_proto::now_ns()
+                    });
+            }
+        }
+    }
+}
+
+/// A worker thread: on each snapshot, answers for the chunks of robots it
+/// claims and sends their commands in one batch. Ends on the run's last
+/// snapshot, when asked to stop, or when the world is gone. Returns how
+/// the robots' control ended, and its CPU time (from the first snapshot
+/// to the end).
+fn drive(side: InprocWorker, pool: &Pool) -> (AgentExit, AgentUsage) {
+    let mut hand = Hand::default();
     let mut cpu_start = None;
-    let mut batch = Vec::with_capacity(expected);
-    let mut grid = Grid::default();
-    let mut near = Vec::new();
-    // The largest reach of this worker's robots (it sizes the grid's cells).
-    let mut reach: Option<f64> = None;
-    // One robot's turn, from `clock` (the end of the previous robot's: it
-    // is when this robot "wakes" and starts planning); returns the clock at
-    // its end.
-    let step = |d: &mut Driver,
-                h: &mrsim_proto::SnapshotHeader,
-                b: &[mrsim_proto::BodyState],
-                near: Option<&[u32]>,
-                clock: u64,
-                batch: &mut Vec<mrsim_proto::CommandMsg>,
-                errors: &mut Vec<(Option<usize>, String)>| {
-        let r = d.on_snapshot_among(h, b, near, clock, Some(clock), &mut |m| {
-            batch.push(*m);
-            Ok(())
-        });
-        r.unwrap_or_else(|e| {
-            errors.push((Some(d.robot_id()), e.to_string()));
-            mrsim_proto::now_ns()
-        })
-    };
     let exit = loop {
         if side.termination_requested() {
             break AgentExit::Interrupted;
         }
-        // Robots that joined since: they answer the newest snapshot at once
-        // (in lockstep the world waits for them).
-        let mut adopted = false;
-        while let Ok(mut d) = adopt.try_recv() {
-            batch.push(d.ready());
-            if let Some((h, b)) = &latest {
-                let clock = mrsim_proto::now_ns();
-                step(&mut d, h, b, None, clock, &mut batch, &mut errors);
-            }
-            reach = [reach, d.reach()].into_iter().flatten().reduce(f64::max);
-            drivers.push(d);
-            adopted = true;
-        }
-        if adopted && let Err(e) = side.send_commands(std::mem::take(&mut batch)) {
-            errors.push((None, e.to_string()));
-            break AgentExit::Finished;
-        }
-        // Poll often for newcomers until every robot of this worker joined
-        // (one whose join failed keeps it polling, which costs little).
-        let timeout = if drivers.len() >= expected {
-            Duration::from_millis(100)
-        } else {
-            Duration::from_millis(5)
-        };
-        match side.next(timeout) {
+        match side.next(Duration::from_millis(100)) {
             WorkerEvent::Snapshot(h, b) => {
                 if h.finished != 0 {
                     break AgentExit::Finished;
                 }
                 cpu_start.get_or_insert_with(|| crate::usage::rusage(Scope::Thread).0);
-                let gridded = grid.build(&b, reach);
-                let mut clock = mrsim_proto::now_ns();
-                for d in drivers.iter_mut() {
-                    let among = gridded && grid.near(d, &b, &mut near);
-                    let near = among.then_some(near.as_slice());
-                    clock = step(d, &h, &b, near, clock, &mut batch, &mut errors);
-                }
-                if let Err(e) = side.send_commands(std::mem::take(&mut batch)) {
-                    errors.push((None, e.to_string()));
+                hand.answer(pool, &h, &b);
+                if let Err(e) = side.send_commands(std::mem::take(&mut hand.batch)) {
+                    pool.fail(None, e.to_string());
                     break AgentExit::Finished;
                 }
-                latest = Some((h, b));
             }
             WorkerEvent::Idle => {}
             WorkerEvent::WorldGone => {
-                errors.push((None, mrsim_agents::AgentError::WorldGone.to_string()));
+                pool.fail(None, mrsim_agents::AgentError::WorldGone.to_string());
                 break AgentExit::Finished;
             }
         }
@@ -264,13 +382,7 @@ fn drive(
         cpu_s: cpu_start.map_or(0.0, |s| (cpu_end - s).max(0.0)),
         maxrss_kb,
     };
-    for d in drivers {
-        let id = d.robot_id();
-        if let Err(e) = d.finish(exit) {
-            errors.push((Some(id), e.to_string()));
-        }
-    }
-    (usage, errors)
+    (exit, usage)
 }
 
 /// The bodies of one snapshot bucketed in square cells at least as wide as
@@ -368,6 +480,51 @@ impl Grid {
 mod tests {
     use super::*;
     use mrsim_proto::BodyState;
+
+    /// Claims `tick` until none is left.
+    fn claim_all(pool: &Pool, tick: u64) -> Vec<usize> {
+        std::iter::from_fn(|| pool.claim(tick)).collect()
+    }
+
+    #[test]
+    fn each_chunk_is_claimed_once_per_tick_and_again_for_the_next() {
+        let pool = Pool::new(64, Some(3.0), 2);
+        let chunks = pool.chunks.len();
+        assert_eq!(chunks, 16, "64 robots for 2 threads: chunks of 4");
+        assert_eq!(claim_all(&pool, 1), (0..chunks).collect::<Vec<_>>());
+        assert_eq!(pool.claim(1), None);
+        assert_eq!(claim_all(&pool, 2), (0..chunks).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn a_thread_still_on_an_older_tick_claims_nothing() {
+        let pool = Pool::new(64, None, 2);
+        assert_eq!(pool.claim(7), Some(0));
+        assert_eq!(pool.claim(6), None);
+        assert_eq!(pool.claim(7), Some(1));
+        // The tick counter's low 32 bits wrap: still newer.
+        let pool = Pool::new(8, None, 1);
+        assert_eq!(pool.claim(u64::from(u32::MAX)), Some(0));
+        assert_eq!(pool.claim(1 << 32), Some(0));
+        assert_eq!(pool.claim(u64::from(u32::MAX)), None);
+    }
+
+    #[test]
+    fn threads_claiming_at_once_share_out_every_chunk_exactly_once() {
+        let pool = Pool::new(1000, None, 4);
+        let chunks = pool.chunks.len();
+        for tick in 1..=50 {
+            let mut got: Vec<usize> = std::thread::scope(|s| {
+                let hands: Vec<_> = (0..4).map(|_| s.spawn(|| claim_all(&pool, tick))).collect();
+                hands
+                    .into_iter()
+                    .flat_map(|h| h.join().expect("claiming thread"))
+                    .collect()
+            });
+            got.sort_unstable();
+            assert_eq!(got, (0..chunks).collect::<Vec<_>>(), "tick {tick}");
+        }
+    }
 
     #[test]
     fn grid_candidates_hold_every_body_within_reach_in_index_order() {

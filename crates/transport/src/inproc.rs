@@ -42,7 +42,16 @@ pub struct InprocWorld {
     alive: Arc<AtomicBool>,
     /// How [`WorldTransport::wait`] waits for the workers.
     poll: Poll,
+    /// Planning the world's thread does itself while it waits (see
+    /// [`InprocWorld::help_with`]), and the snapshot it has yet to help with.
+    helper: Option<Helper>,
+    to_help: Option<(SnapshotHeader, Arc<[BodyState]>)>,
 }
+
+/// Work the world's thread takes on while it waits for a snapshot's
+/// commands: given the snapshot, it returns commands it made (none when
+/// nothing was left to do).
+pub type Helper = Box<dyn FnMut(&SnapshotHeader, &Arc<[BodyState]>) -> Vec<CommandMsg> + Send>;
 
 /// One agent's side of an in-process run.
 pub struct InprocAgent {
@@ -93,6 +102,8 @@ pub fn channels(agents: usize, stop: Arc<AtomicBool>) -> (InprocWorld, Vec<Inpro
             stop,
             alive,
             poll: Poll::default(),
+            helper: None,
+            to_help: None,
         },
         sides,
     )
@@ -264,6 +275,17 @@ impl InprocWorld {
     fn pump(&mut self) {
         self.pending.extend(self.rx.try_iter());
     }
+
+    /// Lends the world's thread to the workers: on its first
+    /// [`WorldTransport::wait`] after each snapshot, the world runs
+    /// `helper` on that snapshot and takes the commands it returns as
+    /// received. In lockstep the world has nothing else to do until the
+    /// commands are in, and a pool of one worker fewer plus the world's
+    /// thread keeps one busy thread per CPU instead of more threads than
+    /// CPUs taking turns.
+    pub fn help_with(&mut self, helper: Helper) {
+        self.helper = Some(helper);
+    }
 }
 
 impl WorldTransport for InprocWorld {
@@ -281,6 +303,9 @@ impl WorldTransport for InprocWorld {
     ) -> Result<(), TransportError> {
         let h = *header;
         let shared: Arc<[BodyState]> = Arc::from(bodies);
+        if self.helper.is_some() {
+            self.to_help = Some((h, shared.clone()));
+        }
         let to = if self.workers.is_empty() {
             &self.agents
         } else {
@@ -294,6 +319,13 @@ impl WorldTransport for InprocWorld {
     }
 
     fn wait(&mut self, timeout: Duration) -> Result<(), TransportError> {
+        if let (Some(help), Some((h, b))) = (self.helper.as_mut(), self.to_help.take()) {
+            let cmds = help(&h, &b);
+            if !cmds.is_empty() {
+                self.pending.push(ToWorld::Commands(cmds, now_ns()));
+                return Ok(());
+            }
+        }
         if self.pending.is_empty() {
             match self.poll.recv(&self.rx, timeout) {
                 Ok(m) => self.pending.push(m),
@@ -445,6 +477,43 @@ impl AgentTransport for InprocAgent {
 mod tests {
     use super::*;
     use crossbeam::channel::RecvTimeoutError;
+
+    #[test]
+    fn a_helping_world_takes_its_own_commands_once_per_snapshot() {
+        let stop = Arc::new(AtomicBool::new(false));
+        let (mut world, _sides, pool) = pooled_channels(2, 1, stop, Duration::ZERO);
+        let helped = Arc::new(std::sync::atomic::AtomicU64::new(0));
+        let seen = helped.clone();
+        world.help_with(Box::new(move |h, b| {
+            seen.fetch_add(1, Ordering::Relaxed);
+            vec![CommandMsg {
+                robot_id: b.len() as u32 - 1,
+                tick: h.tick,
+                ..Default::default()
+            }]
+        }));
+        let header = SnapshotHeader {
+            tick: 3,
+            ..Default::default()
+        };
+        world
+            .publish_snapshot(&header, &[BodyState::default(); 2])
+            .expect("publish");
+        // The worker still gets the snapshot.
+        assert!(matches!(
+            pool[0].next(Duration::from_secs(1)),
+            WorkerEvent::Snapshot(h, _) if h.tick == 3
+        ));
+        let mut got = Vec::new();
+        world.wait(Duration::from_secs(1)).expect("wait");
+        world
+            .drain_commands(&mut |c, _| got.push((c.robot_id, c.tick)))
+            .expect("drain");
+        assert_eq!(got, [(1, 3)]);
+        // Helped once: the next wait waits for the workers.
+        world.wait(Duration::from_millis(5)).expect("wait");
+        assert_eq!(helped.load(Ordering::Relaxed), 1);
+    }
 
     #[test]
     fn a_polling_side_gets_a_message_sent_while_it_polls() {
