@@ -6,11 +6,20 @@
 //! bound for the IPC cost.
 //!
 //! Each agent joins in a thread of its own, exactly as an agent process
-//! does; once joined it hands its [`Driver`] to one of a few worker threads
-//! (one per CPU this process may run on), which receive each snapshot once
-//! and answer for all their robots in one batch. A thread per agent woken
-//! by every snapshot cost two context switches per agent per tick, which
-//! bounded 64 robots at about 20x real time on two cores.
+//! does; once joined it hands its [`Driver`] to a shared pool. A few worker
+//! threads (one per CPU this process may run on) receive each snapshot once,
+//! claim chunks of the pool's robots until none is left, and answer for
+//! them in one batch each. A thread per agent woken by every snapshot cost
+//! two context switches per agent per tick, which bounded 64 robots at
+//! about 20x real time on two cores.
+//!
+//! In lockstep the world's thread is one of the claimants: it has nothing
+//! else to do until the commands are in, so it plans too (through
+//! `InprocWorld::help_with`) and the pool has one worker fewer. One busy
+//! thread per CPU hands a tick over faster than more threads than CPUs
+//! taking turns, and claiming chunks instead of owning robots lets a
+//! thread that comes late to a tick (its CPU taken by the recorder, say)
+//! leave its share to the others.
 
 use crate::usage::{AgentUsage, Scope};
 use mrsim_agents::{AgentExit, Driver};
