@@ -128,6 +128,10 @@ pub fn build_planner(spec: &RobotSpec) -> Result<Box<dyn Planner>, mrsim_planner
     mrsim_planners::build(&spec.planner, &planner_params(spec))
 }
 
+/// How often (at most) [`run`] asks its transport whether the process is
+/// to stop: 50 ms, so a stop is heard within that and one wait (100 ms).
+const STOP_CHECK_EVERY_NS: u64 = 50_000_000;
+
 /// Joins the run as `opts.robot` and drives it until the world ends the
 /// run, the process is asked to stop, or something fails.
 pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentExit, AgentError> {
@@ -147,12 +151,20 @@ pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentEx
     // A snapshot has come (after it, a wake-up without one is spurious).
     let mut heard_one = false;
     let check_after = u64::try_from(opts.world_check_after.as_nanos()).unwrap_or(u64::MAX);
+    // When the agent last asked whether it is to stop (over iceoryx2 the
+    // question takes a process-wide lock: asked every few ticks, not
+    // every tick).
+    let mut asked_to_stop_at = 0;
+    let mut woke = last_heard;
     loop {
-        if link.termination_requested() {
-            return driver.finish(AgentExit::Interrupted);
+        if woke.saturating_sub(asked_to_stop_at) >= STOP_CHECK_EVERY_NS {
+            asked_to_stop_at = woke;
+            if link.termination_requested() {
+                return driver.finish(AgentExit::Interrupted);
+            }
         }
         link.wait(Duration::from_millis(100))?;
-        let woke = now_ns();
+        woke = now_ns();
         let (mut finished, mut failed) = (false, None);
         let got = link.with_latest_snapshot(&mut scratch, &mut |header, bodies, send| {
             heard_one = true;
