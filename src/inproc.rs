@@ -131,8 +131,12 @@ pub fn run_scenario(
                     // the run once every robot is ready, and the first
                     // snapshot must find every driver in the pool.
                     let ready = driver.ready();
-                    pool.adopt(i, driver);
-                    side.send_command(&ready).err().map(|e| e.to_string())
+                    let answer = pool.adopt(i, driver);
+                    std::iter::once(&ready)
+                        .chain(&answer)
+                        .try_for_each(|m| side.send_command(m))
+                        .err()
+                        .map(|e| e.to_string())
                 }
                 Ok(None) => None,
                 Err(e) => Some(e.to_string()),
@@ -226,7 +230,12 @@ struct Pool {
     errors: std::sync::Mutex<Vec<RobotError>>,
     /// Time the world's thread spent planning, ns.
     help_ns: AtomicU64,
+    /// The newest snapshot being answered (for a robot that joins late).
+    latest: std::sync::Mutex<Option<Snapshot>>,
 }
+
+/// A snapshot as the workers get it.
+type Snapshot = (mrsim_proto::SnapshotHeader, Arc<[mrsim_proto::BodyState]>);
 
 /// An error of robot `.0` (`None`: of every robot).
 type RobotError = (Option<usize>, String);
@@ -253,13 +262,41 @@ impl Pool {
             reach,
             errors: std::sync::Mutex::new(Vec::new()),
             help_ns: AtomicU64::new(0),
+            latest: std::sync::Mutex::new(None),
         }
     }
 
-    /// Takes in the driver of robot `i`.
-    fn adopt(&self, i: usize, d: Driver) {
-        if let Some(chunk) = self.chunks.get(i / self.size) {
-            lock(chunk).push(d);
+    /// Takes in the driver of robot `i`. If a snapshot is being answered
+    /// already, the robot answers it at once (its chunk may be done, and in
+    /// lockstep the world waits for every robot that joined): returns that
+    /// command, to be sent after the robot's ready.
+    fn adopt(&self, i: usize, mut d: Driver) -> Vec<mrsim_proto::CommandMsg> {
+        let mut answer = Vec::new();
+        let Some(chunk) = self.chunks.get(i / self.size) else {
+            return answer;
+        };
+        // The chunk stays locked until the driver is in: a thread answering
+        // this snapshot either finds it answered or has done the chunk.
+        let mut chunk = lock(chunk);
+        let latest = lock(&self.latest).clone();
+        if let Some((h, b)) = latest {
+            let sent = d.on_snapshot(&h, &b, mrsim_proto::now_ns(), &mut |m| {
+                answer.push(*m);
+                Ok(())
+            });
+            if let Err(e) = sent {
+                self.fail(Some(d.robot_id()), e.to_string());
+            }
+        }
+        chunk.push(d);
+        answer
+    }
+
+    /// Notes the snapshot being answered, if it is the newest.
+    fn saw(&self, h: &mrsim_proto::SnapshotHeader, b: &Arc<[mrsim_proto::BodyState]>) {
+        let mut latest = lock(&self.latest);
+        if latest.as_ref().is_none_or(|(seen, _)| seen.tick < h.tick) {
+            *latest = Some((*h, b.clone()));
         }
     }
 
@@ -331,8 +368,9 @@ impl Hand {
         &mut self,
         pool: &Pool,
         h: &mrsim_proto::SnapshotHeader,
-        b: &[mrsim_proto::BodyState],
+        b: &Arc<[mrsim_proto::BodyState]>,
     ) {
+        pool.saw(h, b);
         let mut gridded = None;
         let mut clock = mrsim_proto::now_ns();
         while let Some(k) = pool.claim(h.tick) {
