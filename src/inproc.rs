@@ -573,6 +573,95 @@ mod tests {
         }
     }
 
+    /// The driver of a one-robot run's robot, joined over the in-process
+    /// transport as an agent thread joins.
+    fn joined_driver() -> Driver {
+        use mrsim_transport::WorldTransport;
+        let scenario = mrsim_scenario::parse(
+            r#"
+            name = "late"
+            [world]
+            arena = { min = [0.0, 0.0], max = [10.0, 10.0] }
+            [[robot]]
+            name = "a"
+            start = [1.0, 5.0]
+            goal = [9.0, 5.0]
+            planner = "homing"
+            "#,
+            "late.toml",
+        )
+        .expect("scenario")
+        .scenario;
+        let stop = Arc::new(AtomicBool::new(false));
+        let (mut world, mut sides) = mrsim_transport::inproc::channels(1, stop);
+        let setup = serde_json::json!({"run_id": "late", "out_dir": null, "scenario": scenario});
+        world
+            .publish_setup(setup.to_string().as_bytes())
+            .expect("setup");
+        let mut side = sides.pop().expect("one side");
+        let agent = std::thread::spawn(move || {
+            mrsim_agents::join(&mut side, &mrsim_agents::AgentOptions::new("a"))
+        });
+        let mut asked = None;
+        while asked.is_none() {
+            world.wait(Duration::from_millis(10)).expect("wait");
+            world.drain_joins(&mut |r| asked = Some(r)).expect("joins");
+        }
+        let asked = asked.expect("a join request");
+        world
+            .reply_join(&mrsim_proto::JoinReply {
+                nonce: asked.nonce,
+                accepted: 1,
+                robot_id: 0,
+                token: 7,
+                protocol_version: mrsim_proto::PROTOCOL_VERSION,
+                world_pid: std::process::id(),
+                reason: Default::default(),
+            })
+            .expect("reply");
+        match agent.join() {
+            Ok(Ok(Some(d))) => d,
+            _ => panic!("the agent did not join"),
+        }
+    }
+
+    #[test]
+    fn a_robot_joining_during_a_tick_answers_it_and_only_once() {
+        let pool = Pool::new(1, None, 1);
+        // Before any snapshot: nothing to answer yet.
+        assert!(pool.adopt(0, joined_driver()).is_empty());
+        let pool = Pool::new(1, None, 1);
+        let header = mrsim_proto::SnapshotHeader {
+            tick: 5,
+            ..Default::default()
+        };
+        let bodies: Arc<[BodyState]> = Arc::from(vec![BodyState {
+            position: [1.0, 5.0],
+            radius: 0.25,
+            ..Default::default()
+        }]);
+        // A thread has started on tick 5 (and done the robot's chunk
+        // before the robot was in it): the robot answers tick 5 itself.
+        let mut hand = Hand::default();
+        hand.answer(&pool, &header, &bodies);
+        assert!(hand.batch.is_empty(), "no robot in the pool yet");
+        let answer = pool.adopt(0, joined_driver());
+        assert_eq!(answer.len(), 1);
+        assert_eq!((answer[0].tick, answer[0].token), (5, 7));
+        // A thread that reaches the robot's chunk after it joined finds
+        // tick 5 answered, and answers the next tick.
+        let pool = Pool::new(1, None, 1);
+        pool.saw(&header, &bodies);
+        assert_eq!(pool.adopt(0, joined_driver()).len(), 1);
+        let mut late = Hand::default();
+        late.answer(&pool, &header, &bodies);
+        assert!(late.batch.is_empty(), "tick 5 answered twice");
+        let next = mrsim_proto::SnapshotHeader { tick: 6, ..header };
+        late.answer(&pool, &next, &bodies);
+        assert_eq!(late.batch.len(), 1);
+        assert_eq!(late.batch[0].tick, 6);
+    }
+
     #[test]
     fn grid_candidates_hold_every_body_within_reach_in_index_order() {
         let mut x = 7u64;
