@@ -92,8 +92,7 @@ pub fn run_scenario(
     let reach = scenario
         .robots
         .iter()
-        .map(|r| r.sensing_range + r.radius)
-        .filter(|r| r.is_finite())
+        .filter_map(mrsim_agents::reach)
         .reduce(f64::max);
     let pool = Arc::new(Pool::new(n, reach, workers + usize::from(lockstep)));
     if lockstep {

@@ -128,6 +128,14 @@ pub fn build_planner(spec: &RobotSpec) -> Result<Box<dyn Planner>, mrsim_planner
     mrsim_planners::build(&spec.planner, &planner_params(spec))
 }
 
+/// How far from its centre robot `spec` senses other bodies' centres, less
+/// their radius (its sensing range plus its own radius); `None` when
+/// unlimited.
+pub fn reach(spec: &RobotSpec) -> Option<f64> {
+    let r = spec.sensing_range + spec.radius;
+    r.is_finite().then_some(r)
+}
+
 /// How often (at most) [`run`] asks its transport whether the process is
 /// to stop: 50 ms, so a stop is heard within that and one wait (100 ms).
 const STOP_CHECK_EVERY_NS: u64 = 50_000_000;
@@ -428,12 +436,9 @@ impl Driver {
             .map(|_| ())
     }
 
-    /// How far from its centre this robot senses other bodies' centres,
-    /// less their radius (its sensing range plus its own radius); `None`
-    /// when unlimited.
+    /// This robot's [`reach`].
     pub fn reach(&self) -> Option<f64> {
-        let r = self.spec.sensing_range + self.spec.radius;
-        r.is_finite().then_some(r)
+        reach(&self.spec)
     }
 
     /// The robot's position in `bodies`.

@@ -250,17 +250,13 @@ fn push_u64(out: &mut Vec<u8>, mut n: u64) {
 /// magnitudes and non-finite values take `format!`'s own path.
 fn push_fixed6(out: &mut Vec<u8>, x: f64) {
     let s = (x * 1e6).abs();
-    if s.is_nan() || s >= 1e15 {
-        // Not a number, or too large (infinite) to round here.
-        let _ = write!(out, "{x:.6}");
-        return;
-    }
-    // `s` is below 2^50: the cast is its floor, and `s - floor` is exact
-    // (no call into libm for `floor` and `round`).
+    // Below 1e15 (< 2^50) the cast is the floor of `s`, and `s - floor` is
+    // exact: no call into libm for `floor` and `round`.
     let whole = s as u64;
     let frac = s - whole as f64;
-    if (frac - 0.5).abs() <= s * 4e-16 {
-        // Too near a half to round here.
+    if s.is_nan() || s >= 1e15 || (frac - 0.5).abs() <= s * 4e-16 {
+        // Not a number, too large (or infinite), or too near a half to
+        // round here.
         let _ = write!(out, "{x:.6}");
         return;
     }
