@@ -491,16 +491,21 @@ fn a_killed_hand_started_world_leaves_nothing_that_blocks_the_next_world_of_that
         !shm_leftovers(&id).is_empty(),
         "the killed world left no shared memory: nothing to prove"
     );
-    // The next world of the same run id starts, runs and cleans up.
+    // The next world of the same run id starts, runs and cleans up, with
+    // one agent started before it (among the dead world's leftovers, which
+    // it must not take for a world) and one after it.
     let short = two(3.0, "dt = 0.1\nduration = 30.0");
     let (file, out) = scenario("stale2", &short);
-    let mut w = world(&file, &out, &id);
     let mut a = agent(&id, "a", None);
+    std::thread::sleep(Duration::from_millis(300));
+    let mut w = world(&file, &out, &id);
     let mut b = agent(&id, "b", None);
     let ws = wait_timeout(&mut w, 60).expect("world ended");
     assert!(ws.success(), "{}", stderr_of(&mut w));
-    assert!(wait_timeout(&mut a, 10).is_some_and(|s| s.success()));
-    assert!(wait_timeout(&mut b, 10).is_some_and(|s| s.success()));
+    for ag in [&mut a, &mut b] {
+        let s = wait_timeout(ag, 10);
+        assert!(s.is_some_and(|s| s.success()), "{s:?}: {}", stderr_of(ag));
+    }
     assert_eq!(metrics(&out)["success_rate"], 1.0);
     assert_clean(&id);
 }

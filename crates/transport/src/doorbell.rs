@@ -37,13 +37,23 @@
 //! [`crate::Namespace::make_private`] keeps it private). The world creates
 //! it before any iceoryx2 service of the run, so an agent that found the
 //! services finds the doorbell; the world removes it when it ends.
+//!
+//! The doorbell also names its world (process id and start time). A world
+//! that was killed leaves its doorbell, services and nodes behind until the
+//! next world of the run id clears them. An agent started before that next
+//! world would find the dead world's services, join nothing, and later
+//! have its files removed under it. So an agent opens the doorbell first,
+//! and goes on only when the world named there is running
+//! ([`Doorbell::open`]). A world clears the run's leftovers before it
+//! creates its doorbell, so everything of the run found after a live
+//! world's doorbell is that world's.
 
 use crate::{Namespace, TransportError};
 use std::fs::OpenOptions;
 use std::os::fd::AsRawFd;
 use std::os::unix::fs::OpenOptionsExt;
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::time::Duration;
 
 /// Size of the mapping: one page.
@@ -56,7 +66,13 @@ const MAGIC: u32 = 0x6d72_6462; // "mrdb"
 #[repr(C, align(64))]
 struct Words {
     magic: AtomicU32,
-    _pad: [u8; 60],
+    /// The world's process id, written before `magic`.
+    world_pid: AtomicU32,
+    /// The world's start time (/proc/PID/stat's `starttime`, clock ticks
+    /// since boot; 0 if unknown): a process id reused after the world died
+    /// is not taken for it.
+    world_start: AtomicU64,
+    _pad: [u8; 48],
     ring: AtomicU32,
     _pad2: [u8; 60],
     /// Tick tag (high 16 bits) and answers counted (low 16 bits).
@@ -132,6 +148,15 @@ fn futex_wake(word: &AtomicU32, waiters: i32, what: &'static str) -> Result<(), 
     Ok(())
 }
 
+/// When process `pid` started: field 22 of /proc/PID/stat (clock ticks
+/// since boot). `None` if it cannot be read.
+fn process_start(pid: u32) -> Option<u64> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    // Fields after the command name (which may hold spaces), from field 3.
+    let (_, rest) = stat.rsplit_once(") ")?;
+    rest.split_whitespace().nth(22 - 3)?.parse().ok()
+}
+
 /// One side's mapping of a run's doorbell.
 pub struct Doorbell {
     words: *const Words,
@@ -201,11 +226,18 @@ impl Doorbell {
             seen: 0,
             answers_seen: 0,
         };
-        bell.words().magic.store(MAGIC, Ordering::Release);
+        let w = bell.words();
+        let pid = std::process::id();
+        w.world_pid.store(pid, Ordering::Relaxed);
+        w.world_start
+            .store(process_start(pid).unwrap_or(0), Ordering::Relaxed);
+        w.magic.store(MAGIC, Ordering::Release);
         Ok(bell)
     }
 
-    /// An agent's side: opens the doorbell the run's world created.
+    /// An agent's side: opens the doorbell the run's world created. Fails
+    /// if there is none, or if the world that created it is no longer
+    /// running (it was killed and left it behind).
     pub fn open(ns: &Namespace) -> Result<Self, TransportError> {
         let path = path(ns);
         let file = OpenOptions::new()
@@ -236,8 +268,29 @@ impl Doorbell {
                 "no doorbell mark (not created yet, or not a doorbell)",
             ));
         }
+        let (pid, start) = bell.world();
+        let started = process_start(pid);
+        if !crate::pid_alive(pid) || (start != 0 && started.is_some_and(|s| s != start)) {
+            return Err(err(
+                &path.display().to_string(),
+                format!(
+                    "left by a world (pid {pid}) that is no longer running; \
+                     no world of this run id is up"
+                ),
+            ));
+        }
         bell.seen = bell.words().ring.load(Ordering::Acquire);
         Ok(bell)
+    }
+
+    /// The process id and start time of the world that created the
+    /// doorbell.
+    pub fn world(&self) -> (u32, u64) {
+        let w = self.words();
+        (
+            w.world_pid.load(Ordering::Relaxed),
+            w.world_start.load(Ordering::Relaxed),
+        )
     }
 
     fn words(&self) -> &Words {
@@ -395,6 +448,39 @@ mod tests {
         assert!(!path(&ns).exists());
         let e = Doorbell::open(&ns).err().expect("no doorbell");
         assert!(e.to_string().contains("doorbell"), "{e}");
+    }
+
+    #[test]
+    fn a_doorbell_names_the_world_that_made_it() {
+        let (world, agent) = pair("names");
+        let me = std::process::id();
+        assert_eq!(agent.world(), (me, process_start(me).expect("start")));
+        assert_eq!(world.world(), agent.world());
+    }
+
+    #[test]
+    fn a_doorbell_left_by_a_world_that_ended_is_refused() {
+        let ns = ns("dead");
+        let world = Doorbell::create(&ns).expect("create");
+        // A process that has ended (and was reaped) stands for a killed
+        // world.
+        let mut child = std::process::Command::new("true")
+            .spawn()
+            .expect("spawn true");
+        let dead = child.id();
+        child.wait().expect("wait true");
+        world.words().world_pid.store(dead, Ordering::Relaxed);
+        let e = Doorbell::open(&ns).err().expect("refused");
+        assert!(e.to_string().contains("no longer running"), "{e}");
+        // Its process id taken by another process (one that started at
+        // another time) is no world either.
+        world
+            .words()
+            .world_pid
+            .store(std::process::id(), Ordering::Relaxed);
+        world.words().world_start.fetch_add(1, Ordering::Relaxed);
+        let e = Doorbell::open(&ns).err().expect("refused");
+        assert!(e.to_string().contains("no longer running"), "{e}");
     }
 
     #[test]

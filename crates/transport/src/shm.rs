@@ -578,11 +578,14 @@ impl ShmAgent {
     }
 
     fn try_connect(ns: &Namespace, node_name: &str) -> Result<Self, TransportError> {
+        // The doorbell first, and only if its world is running: the node
+        // and ports are then made after that world cleared what a killed
+        // earlier world of the run left (see the `doorbell` module).
+        let bell = Doorbell::open(ns)?;
         let cfg = config(ns)?;
         let node = node(&cfg, node_name)?;
         ns.make_private();
         let ports = Self::open(&node)?;
-        let bell = Doorbell::open(ns)?;
         Ok(Self {
             ports,
             bell,
@@ -1052,6 +1055,8 @@ impl ShmObserver {
         node_name: &str,
         snapshots: bool,
     ) -> Result<Self, TransportError> {
+        // As an agent: nothing of a killed world (see the `doorbell` module).
+        drop(Doorbell::open(ns)?);
         let cfg = config(ns)?;
         let node = node(&cfg, node_name)?;
         let setup_sub = setup_subscriber(&node)?;
