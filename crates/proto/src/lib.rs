@@ -17,7 +17,9 @@ use iceoryx2::prelude::ZeroCopySend;
 /// a snapshot before its first), and the world starts the clock when all
 /// have. Version 5: an agent counts its answer to a tick on the doorbell
 /// page instead of notifying the world, and the last answer wakes it.
-pub const PROTOCOL_VERSION: u32 = 5;
+/// Version 6: the doorbell names the world that made it (process id and
+/// start time), and an agent goes on only if that world is running.
+pub const PROTOCOL_VERSION: u32 = 6;
 
 /// Longest robot name, in bytes, that fits a [`JoinRequest`].
 pub const MAX_NAME_LEN: usize = 64;

@@ -269,6 +269,12 @@ impl Doorbell {
             ));
         }
         let (pid, start) = bell.world();
+        if pid == 0 {
+            return Err(err(
+                &path.display().to_string(),
+                "it names no world (made by a world of an older mrsim, protocol < 6)",
+            ));
+        }
         let started = process_start(pid);
         if !crate::pid_alive(pid) || (start != 0 && started.is_some_and(|s| s != start)) {
             return Err(err(
