@@ -194,6 +194,9 @@ fn world_inner(args: &WorldArgs, ns: &Namespace) -> Result<i32> {
     let mut roundtrip = DurationHistogram::default();
     let mut misses = 0u64;
     let mut got = vec![u64::MAX; n];
+    // As mrsim's world: under --rt, one level below its agents while it
+    // ticks.
+    let below = mrsim_world::metrics::BelowAgents::enter();
     let t0 = Instant::now() + Duration::from_millis(50);
     for tick in 0..ticks {
         let at = t0 + period.mul_f64(tick as f64);
@@ -232,6 +235,7 @@ fn world_inner(args: &WorldArgs, ns: &Namespace) -> Result<i32> {
             bell.wait_answers(left).map_err(|e| anyhow!("{e}"))?;
         }
     }
+    drop(below);
     for _ in 0..2 {
         let _ = tick_pub.send_copy(STOP);
         let _ = bell.ring();

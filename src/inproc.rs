@@ -701,4 +701,132 @@ mod tests {
         bad[3].position[0] = f64::NAN;
         assert!(!grid.build(&bad, Some(reach)));
     }
+
+    /// An agent's side whose commands say they were sent just after their
+    /// tick's deadline, as from an agent that answered late while the
+    /// world, itself late, had not yet stopped waiting.
+    use mrsim_proto::{CommandMsg, JoinReply, JoinRequest, SnapshotHeader, command_kind};
+    use mrsim_transport::{AgentTransport, TransportError};
+
+    struct SentLate<'a> {
+        inner: &'a mut dyn AgentTransport,
+        deadline_ns: u64,
+    }
+
+    impl AgentTransport for SentLate<'_> {
+        fn request_join(&mut self, req: &JoinRequest) -> Result<(), TransportError> {
+            self.inner.request_join(req)
+        }
+        fn poll_join_reply(&mut self, nonce: u64) -> Result<Option<JoinReply>, TransportError> {
+            self.inner.poll_join_reply(nonce)
+        }
+        fn setup(&mut self) -> Result<Option<Vec<u8>>, TransportError> {
+            self.inner.setup()
+        }
+        fn wait(&mut self, timeout: Duration) -> Result<(), TransportError> {
+            self.inner.wait(timeout)
+        }
+        fn latest_snapshot(
+            &mut self,
+            header: &mut SnapshotHeader,
+            bodies: &mut Vec<BodyState>,
+        ) -> Result<bool, TransportError> {
+            let got = self.inner.latest_snapshot(header, bodies)?;
+            self.deadline_ns = header.deadline_ns;
+            Ok(got)
+        }
+        fn send_command(&mut self, cmd: &CommandMsg) -> Result<(), TransportError> {
+            let mut cmd = *cmd;
+            if cmd.kind == command_kind::FORCE || cmd.kind == command_kind::VELOCITY {
+                cmd.sent_ns = self.deadline_ns + 1;
+            }
+            self.inner.send_command(&cmd)
+        }
+        fn world_alive(&mut self) -> bool {
+            self.inner.world_alive()
+        }
+        fn termination_requested(&self) -> bool {
+            self.inner.termination_requested()
+        }
+        fn joined(&mut self) {
+            self.inner.joined()
+        }
+    }
+
+    #[test]
+    fn a_command_sent_after_its_deadline_is_a_miss_even_if_the_world_takes_it_in_in_time() {
+        let scenario = mrsim_scenario::parse(
+            r#"
+            name = "sent-late"
+            [world]
+            mode = "realtime"
+            dt = 0.2
+            duration = 1.0
+            arena = { min = [0.0, 0.0], max = [20.0, 20.0] }
+            [[robot]]
+            name = "late"
+            start = [1.0, 5.0]
+            goal = [19.0, 5.0]
+            planner = "homing"
+            [[robot]]
+            name = "prompt"
+            start = [1.0, 15.0]
+            goal = [19.0, 15.0]
+            planner = "homing"
+            "#,
+            "sent-late.toml",
+        )
+        .expect("scenario")
+        .scenario;
+        let out = std::env::temp_dir().join(format!("mrsim-sent-late-{}", std::process::id()));
+        std::fs::create_dir_all(&out).expect("out dir");
+        let world = mrsim_world::World::new(&scenario).expect("world");
+        let stop = Arc::new(AtomicBool::new(false));
+        let (mut link, sides) = mrsim_transport::inproc::channels(2, stop);
+        let agents: Vec<_> = sides
+            .into_iter()
+            .zip(["late", "prompt"])
+            .map(|(mut side, name)| {
+                std::thread::spawn(move || {
+                    let opts = mrsim_agents::AgentOptions::new(name);
+                    if name == "late" {
+                        let mut late = SentLate {
+                            inner: &mut side,
+                            deadline_ns: 0,
+                        };
+                        mrsim_agents::run(&mut late, &opts).map(|_| ())
+                    } else {
+                        mrsim_agents::run(&mut side, &opts).map(|_| ())
+                    }
+                })
+            })
+            .collect();
+        let outcome = mrsim_world::run(
+            world,
+            &mut link,
+            mrsim_world::RunOptions {
+                out_dir: out.clone(),
+                run_id: "sent-late".to_string(),
+                transport: "inproc".to_string(),
+                start_timeout: Some(Duration::from_secs(30)),
+                verbose: false,
+            },
+        );
+        drop(link);
+        for a in agents {
+            assert!(matches!(a.join(), Ok(Ok(()))));
+        }
+        let _ = std::fs::remove_dir_all(&out);
+        let m = outcome.expect("the run").metrics;
+        // The late robot's every answer reached the world within its tick
+        // (the in-process channel delivers at once) but says it was sent
+        // after the deadline: every tick is a miss, none is taken. (The
+        // other robot's answers are taken: the world was listening.)
+        let (late, prompt) = (&m.robots["late"], &m.robots["prompt"]);
+        assert_eq!(m.ticks, 5);
+        assert_eq!(late.deadline_misses, 5, "{late:?}");
+        assert_eq!(late.commands_late, 5);
+        assert_eq!(late.path_length, 0.0, "a late command moved the robot");
+        assert!(prompt.deadline_misses < 5, "{prompt:?}");
+    }
 }

@@ -360,6 +360,74 @@ pub fn process_usage() -> (f64, u64) {
     rusage(libc::RUSAGE_SELF)
 }
 
+/// CPU time of the calling thread so far, ns.
+pub fn thread_cpu_ns() -> u64 {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: clock_gettime only writes into the timespec we own.
+    unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+    ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64
+}
+
+/// The world's place under SCHED_FIFO (`--rt`) while it ticks: one level
+/// below its agents. An agent woken by the tick's doorbell then runs at
+/// once, instead of waiting, on the world's CPU, until the world has woken
+/// every other agent: a `FUTEX_WAKE` of 256 agents takes the world about
+/// 0.3 ms (BENCHMARKS.md, "Eighth round"). Only while it ticks: before,
+/// hundreds of agents retrying to connect at the higher level would keep
+/// the world from ever creating what they wait for.
+#[derive(Debug)]
+pub struct BelowAgents {
+    /// The level to go back to when dropped.
+    restore: Option<i32>,
+}
+
+impl BelowAgents {
+    /// Under SCHED_FIFO at priority p > 1, moves the calling thread to
+    /// p - 1 until the guard is dropped; otherwise does nothing.
+    pub fn enter() -> Self {
+        let restore = fifo_priority()
+            .filter(|&p| p > 1)
+            .filter(|&p| set_fifo(p - 1));
+        Self { restore }
+    }
+
+    /// True if the thread was moved (it runs under SCHED_FIFO below its
+    /// agents).
+    pub fn active(&self) -> bool {
+        self.restore.is_some()
+    }
+}
+
+impl Drop for BelowAgents {
+    fn drop(&mut self) {
+        if let Some(p) = self.restore {
+            set_fifo(p);
+        }
+    }
+}
+
+/// The calling thread's SCHED_FIFO priority, if it runs under SCHED_FIFO.
+fn fifo_priority() -> Option<i32> {
+    let mut param = libc::sched_param { sched_priority: 0 };
+    // SAFETY: both only read the calling thread's policy, the second into
+    // the struct we own.
+    let fifo = unsafe { libc::sched_getscheduler(0) } == libc::SCHED_FIFO
+        && unsafe { libc::sched_getparam(0, &mut param) } == 0;
+    fifo.then_some(param.sched_priority)
+}
+
+/// Puts the calling thread under SCHED_FIFO at `priority`; false if refused.
+fn set_fifo(priority: i32) -> bool {
+    let param = libc::sched_param {
+        sched_priority: priority,
+    };
+    // SAFETY: the param struct lives for the call.
+    unsafe { libc::sched_setscheduler(0, libc::SCHED_FIFO, &param) == 0 }
+}
+
 /// CPU seconds of the calling thread so far, and the process's peak
 /// resident set size (KiB).
 pub fn thread_usage() -> (f64, u64) {
@@ -802,6 +870,29 @@ fn brute(states: &[mrsim_proto::BodyState], i: usize) -> f64 {
 mod tests {
     use super::*;
     use mrsim_proto::BodyState;
+
+    #[test]
+    fn the_world_ticks_one_fifo_level_below_its_agents_and_goes_back_after() {
+        // Not under SCHED_FIFO: nothing moves.
+        assert_eq!(fifo_priority(), None);
+        assert!(!BelowAgents::enter().active());
+        if !set_fifo(10) {
+            // SCHED_FIFO not permitted here (no root, CAP_SYS_NICE or
+            // RLIMIT_RTPRIO): `--rt` runs with normal scheduling.
+            return;
+        }
+        let below = BelowAgents::enter();
+        let during = fifo_priority();
+        drop(below);
+        let after = fifo_priority();
+        // Back to normal scheduling before asserting.
+        let normal = libc::sched_param { sched_priority: 0 };
+        // SAFETY: the param struct lives for the call.
+        unsafe { libc::sched_setscheduler(0, libc::SCHED_OTHER, &normal) };
+        assert_eq!(during, Some(9));
+        assert_eq!(after, Some(10));
+        assert_eq!(fifo_priority(), None);
+    }
 
     #[test]
     fn histograms_grow_to_hold_durations_far_beyond_their_first_range() {

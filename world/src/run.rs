@@ -10,8 +10,8 @@
 
 use crate::live::LiveStats;
 use crate::metrics::{
-    CpusTime, DurationHistogram, RobotAccumulator, RobotMetrics, RunMetrics, TimingMetrics,
-    process_usage,
+    BelowAgents, CpusTime, DurationHistogram, RobotAccumulator, RobotMetrics, RunMetrics,
+    TimingMetrics, process_usage, thread_cpu_ns,
 };
 use crate::physics::{Applied, Contact, Owner, World};
 use crate::record::Recorder;
@@ -108,6 +108,11 @@ struct Loop<'a> {
     late: u64,
     tick: u64,
     published_ns: u64,
+    /// The current tick's deadline (realtime; `u64::MAX` in lockstep). A
+    /// command sent after it is late even if the world, itself late (a
+    /// stall of the host, or agents of higher priority running), takes it
+    /// in before it stops waiting for the tick.
+    deadline_ns: u64,
     /// Latest receive time of a command accepted this tick.
     last_in_ns: u64,
     /// Every command's round trip, wake-up and compute, on their way to
@@ -289,6 +294,13 @@ impl Loop<'_> {
                 &cmd,
                 "command for a future tick (sent before it was published)",
             );
+        }
+        if cmd.sent_ns > self.deadline_ns {
+            // Sent after this tick's deadline: a miss, however soon the
+            // world looked.
+            self.late += 1;
+            self.acc[i].late += 1;
+            return;
         }
         if self.got[i].is_some() {
             return self.reject(&cmd, "second command in one tick");
@@ -609,6 +621,7 @@ pub fn run(
         late: 0,
         tick: 0,
         published_ns: 0,
+        deadline_ns: u64::MAX,
         last_in_ns: 0,
         timings: TimingRecorder::start(n).map_err(out_err("metrics.json"))?,
         inbox: Vec::with_capacity(n),
@@ -696,6 +709,12 @@ pub fn run(
     };
     let wall_start = Instant::now() + settle;
     lp.clock_start = Some(wall_start);
+    // Under SCHED_FIFO (`--rt`) the world ticks one level below its
+    // agents, and the agents its doorbell wakes preempt it while it
+    // publishes: the publish's cost is then the thread's CPU time, not the
+    // wall time.
+    let below = BelowAgents::enter();
+    let fifo = below.active();
     lp.publish_stats(run_phase::RUNNING, true);
     let (cpu_start, _) = process_usage();
     let cpus_start = CpusTime::now();
@@ -718,20 +737,20 @@ pub fn run(
         lp.garbage.iter_mut().for_each(|g| *g = false);
         lp.last_in_ns = 0;
         let pub_instant = Instant::now();
+        let pub_cpu = if fifo { thread_cpu_ns() } else { 0 };
         if let Some(at) = scheduled {
             // Tick jitter: actual start of the tick minus its scheduled time.
             jitter.record_ns(pub_instant.saturating_duration_since(at).as_nanos() as u64);
         }
         lp.published_ns = now_ns();
+        if realtime {
+            lp.deadline_ns = lp.published_ns + deadline_after.as_nanos() as u64;
+        }
         let header = SnapshotHeader {
             tick: lp.tick,
             sim_time: lp.time(),
             published_ns: lp.published_ns,
-            deadline_ns: if realtime {
-                lp.published_ns + deadline_after.as_nanos() as u64
-            } else {
-                0
-            },
+            deadline_ns: if realtime { lp.deadline_ns } else { 0 },
             finished: 0,
             body_count: lp.world.states().len() as u32,
         };
@@ -743,7 +762,11 @@ pub fn run(
         lp.link.expect_answers(lp.tick, live);
         lp.link.publish_snapshot(&header, lp.world.states())?;
         lp.rec.tick(lp.tick, lp.time(), lp.world.states());
-        let mut own = pub_instant.elapsed();
+        let mut own = if fifo {
+            Duration::from_nanos(thread_cpu_ns().saturating_sub(pub_cpu))
+        } else {
+            pub_instant.elapsed()
+        };
 
         // Collect this tick's commands (taking them in is the world's own
         // work; waiting for them is not).
@@ -830,6 +853,7 @@ pub fn run(
             break;
         }
     }
+    drop(below);
     // Commands already on their way for the last tick (an agent that sent
     // two, a late one) are still counted and logged, not left unread.
     let _ = lp.drain_commands(realtime);
