@@ -360,17 +360,6 @@ pub fn process_usage() -> (f64, u64) {
     rusage(libc::RUSAGE_SELF)
 }
 
-/// CPU time of the calling thread so far, ns.
-pub fn thread_cpu_ns() -> u64 {
-    let mut ts = libc::timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    // SAFETY: clock_gettime only writes into the timespec we own.
-    unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
-    ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64
-}
-
 /// The world's place under SCHED_FIFO (`--rt`) while it ticks: one level
 /// below its agents. An agent woken by the tick's doorbell then runs at
 /// once, instead of waiting, on the world's CPU, until the world has woken

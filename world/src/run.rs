@@ -11,7 +11,7 @@
 use crate::live::LiveStats;
 use crate::metrics::{
     BelowAgents, CpusTime, DurationHistogram, RobotAccumulator, RobotMetrics, RunMetrics,
-    TimingMetrics, process_usage, thread_cpu_ns,
+    TimingMetrics, process_usage, thread_usage,
 };
 use crate::physics::{Applied, Contact, Owner, World};
 use crate::record::Recorder;
@@ -737,7 +737,7 @@ pub fn run(
         lp.garbage.iter_mut().for_each(|g| *g = false);
         lp.last_in_ns = 0;
         let pub_instant = Instant::now();
-        let pub_cpu = if fifo { thread_cpu_ns() } else { 0 };
+        let pub_cpu = if fifo { thread_usage().0 } else { 0.0 };
         if let Some(at) = scheduled {
             // Tick jitter: actual start of the tick minus its scheduled time.
             jitter.record_ns(pub_instant.saturating_duration_since(at).as_nanos() as u64);
@@ -763,7 +763,7 @@ pub fn run(
         lp.link.publish_snapshot(&header, lp.world.states())?;
         lp.rec.tick(lp.tick, lp.time(), lp.world.states());
         let mut own = if fifo {
-            Duration::from_nanos(thread_cpu_ns().saturating_sub(pub_cpu))
+            Duration::from_secs_f64((thread_usage().0 - pub_cpu).max(0.0))
         } else {
             pub_instant.elapsed()
         };
