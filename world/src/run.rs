@@ -295,15 +295,15 @@ impl Loop<'_> {
                 "command for a future tick (sent before it was published)",
             );
         }
+        if self.got[i].is_some() {
+            return self.reject(&cmd, "second command in one tick");
+        }
         if cmd.sent_ns > self.deadline_ns {
             // Sent after this tick's deadline: a miss, however soon the
             // world looked.
             self.late += 1;
             self.acc[i].late += 1;
             return;
-        }
-        if self.got[i].is_some() {
-            return self.reject(&cmd, "second command in one tick");
         }
         if cmd.kind != command_kind::FORCE && cmd.kind != command_kind::VELOCITY {
             self.garbage[i] = true;
