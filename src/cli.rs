@@ -113,7 +113,7 @@ pub enum Command {
         #[arg(long, hide = true)]
         impersonate: Option<u32>,
         /// Fault injection for tests: nan, inf, huge, other-robot, past-tick,
-        /// future-tick, double, join-twice, hang-at-tick=N, die-at-tick=N, stop-at-tick=N,
+        /// future-tick, double, sent-late, join-twice, hang-at-tick=N, die-at-tick=N, stop-at-tick=N,
         /// slow-ms=N.
         #[arg(long, hide = true)]
         fault: Option<mrsim_agents::fault::Fault>,

@@ -705,54 +705,6 @@ mod tests {
     /// An agent's side whose commands say they were sent just after their
     /// tick's deadline, as from an agent that answered late while the
     /// world, itself late, had not yet stopped waiting.
-    use mrsim_proto::{CommandMsg, JoinReply, JoinRequest, SnapshotHeader, command_kind};
-    use mrsim_transport::{AgentTransport, TransportError};
-
-    struct SentLate<'a> {
-        inner: &'a mut dyn AgentTransport,
-        deadline_ns: u64,
-    }
-
-    impl AgentTransport for SentLate<'_> {
-        fn request_join(&mut self, req: &JoinRequest) -> Result<(), TransportError> {
-            self.inner.request_join(req)
-        }
-        fn poll_join_reply(&mut self, nonce: u64) -> Result<Option<JoinReply>, TransportError> {
-            self.inner.poll_join_reply(nonce)
-        }
-        fn setup(&mut self) -> Result<Option<Vec<u8>>, TransportError> {
-            self.inner.setup()
-        }
-        fn wait(&mut self, timeout: Duration) -> Result<(), TransportError> {
-            self.inner.wait(timeout)
-        }
-        fn latest_snapshot(
-            &mut self,
-            header: &mut SnapshotHeader,
-            bodies: &mut Vec<BodyState>,
-        ) -> Result<bool, TransportError> {
-            let got = self.inner.latest_snapshot(header, bodies)?;
-            self.deadline_ns = header.deadline_ns;
-            Ok(got)
-        }
-        fn send_command(&mut self, cmd: &CommandMsg) -> Result<(), TransportError> {
-            let mut cmd = *cmd;
-            if cmd.kind == command_kind::FORCE || cmd.kind == command_kind::VELOCITY {
-                cmd.sent_ns = self.deadline_ns + 1;
-            }
-            self.inner.send_command(&cmd)
-        }
-        fn world_alive(&mut self) -> bool {
-            self.inner.world_alive()
-        }
-        fn termination_requested(&self) -> bool {
-            self.inner.termination_requested()
-        }
-        fn joined(&mut self) {
-            self.inner.joined()
-        }
-    }
-
     #[test]
     fn a_command_sent_after_its_deadline_is_a_miss_even_if_the_world_takes_it_in_in_time() {
         let scenario = mrsim_scenario::parse(
@@ -788,16 +740,11 @@ mod tests {
             .zip(["late", "prompt"])
             .map(|(mut side, name)| {
                 std::thread::spawn(move || {
-                    let opts = mrsim_agents::AgentOptions::new(name);
+                    let mut opts = mrsim_agents::AgentOptions::new(name);
                     if name == "late" {
-                        let mut late = SentLate {
-                            inner: &mut side,
-                            deadline_ns: 0,
-                        };
-                        mrsim_agents::run(&mut late, &opts).map(|_| ())
-                    } else {
-                        mrsim_agents::run(&mut side, &opts).map(|_| ())
+                        opts.fault = Some(mrsim_agents::fault::Fault::SentLate);
                     }
+                    mrsim_agents::run(&mut side, &opts).map(|_| ())
                 })
             })
             .collect();

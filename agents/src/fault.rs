@@ -30,6 +30,11 @@ pub enum Fault {
     FutureTick,
     /// Every command is sent twice.
     Double,
+    /// Every command says it was sent just after its tick's deadline
+    /// (realtime; in lockstep there is no deadline and nothing changes), as
+    /// from an agent that answered late while the world had not yet
+    /// stopped waiting.
+    SentLate,
     /// The join request is sent twice at once (as an agent whose first
     /// reply was slow re-asks).
     JoinTwice,
@@ -49,7 +54,7 @@ pub enum Fault {
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error(
     "unknown fault `{0}` (nan, inf, huge, other-robot, past-tick, future-tick, double, \
-     join-twice, hang-at-tick=N, die-at-tick=N, stop-at-tick=N, slow-ms=N)"
+     sent-late, join-twice, hang-at-tick=N, die-at-tick=N, stop-at-tick=N, slow-ms=N)"
 )]
 pub struct UnknownFault(pub String);
 
@@ -70,6 +75,7 @@ impl FromStr for Fault {
             ("past-tick", None) => Fault::PastTick,
             ("future-tick", None) => Fault::FutureTick,
             ("double", None) => Fault::Double,
+            ("sent-late", None) => Fault::SentLate,
             ("join-twice", None) => Fault::JoinTwice,
             ("hang-at-tick", Some(n)) => Fault::HangAt(n),
             ("die-at-tick", Some(n)) => Fault::DieAt(n),
@@ -130,8 +136,9 @@ impl Injector {
     }
 
     /// Turns the honest command `msg` into what this faulty agent sends
-    /// (`robots` is the number of robots in the run).
-    pub fn corrupt(&self, msg: CommandMsg, robots: usize) -> Vec<CommandMsg> {
+    /// (`robots` is the number of robots in the run, `deadline_ns` the
+    /// tick's deadline, 0 in lockstep).
+    pub fn corrupt(&self, msg: CommandMsg, robots: usize, deadline_ns: u64) -> Vec<CommandMsg> {
         let mut m = msg;
         match self.fault {
             Fault::Nan => m.value = [f64::NAN, f64::NAN],
@@ -151,7 +158,9 @@ impl Injector {
             },
             Fault::FutureTick => m.tick += 1,
             Fault::Double => return vec![m, m],
-            Fault::JoinTwice
+            Fault::SentLate if deadline_ns > 0 => m.sent_ns = deadline_ns + 1,
+            Fault::SentLate
+            | Fault::JoinTwice
             | Fault::HangAt(_)
             | Fault::DieAt(_)
             | Fault::StopAt(_)
@@ -175,6 +184,7 @@ mod tests {
             ("past-tick", Fault::PastTick),
             ("future-tick", Fault::FutureTick),
             ("double", Fault::Double),
+            ("sent-late", Fault::SentLate),
             ("join-twice", Fault::JoinTwice),
             ("hang-at-tick=7", Fault::HangAt(7)),
             ("die-at-tick=3", Fault::DieAt(3)),
@@ -196,7 +206,7 @@ mod tests {
             value: [3.0, 4.0],
             ..Default::default()
         };
-        let one = |f| Injector::new(f).corrupt(msg, 2);
+        let one = |f| Injector::new(f).corrupt(msg, 2, 0);
         assert!(one(Fault::Nan)[0].value[0].is_nan());
         assert_eq!(one(Fault::Inf)[0].value[1], f64::INFINITY);
         let h = one(Fault::Huge)[0].value;
@@ -206,7 +216,15 @@ mod tests {
         assert_eq!(one(Fault::FutureTick)[0].tick, 6);
         assert_eq!(one(Fault::Double).len(), 2);
         let first = CommandMsg { tick: 0, ..msg };
-        assert!(Injector::new(Fault::PastTick).corrupt(first, 2).is_empty());
+        assert!(
+            Injector::new(Fault::PastTick)
+                .corrupt(first, 2, 0)
+                .is_empty()
+        );
         assert_eq!(one(Fault::SlowMs(1)), vec![msg]);
+        // Late only where there is a deadline (realtime).
+        assert_eq!(one(Fault::SentLate), vec![msg]);
+        let late = Injector::new(Fault::SentLate).corrupt(msg, 2, 900);
+        assert_eq!(late[0].sent_ns, 901);
     }
 }

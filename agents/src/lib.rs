@@ -500,7 +500,7 @@ impl Driver {
         };
         match &self.injector {
             Some(inj) => {
-                for m in inj.corrupt(msg, self.robot_count) {
+                for m in inj.corrupt(msg, self.robot_count, header.deadline_ns) {
                     send(&m)?;
                 }
             }
