@@ -196,7 +196,7 @@ fn world_inner(args: &WorldArgs, ns: &Namespace) -> Result<i32> {
     let mut got = vec![u64::MAX; n];
     // As mrsim's world: under --rt, one level below its agents while it
     // ticks.
-    let below = mrsim_world::metrics::BelowAgents::enter();
+    let below = mrsim_sys::sched::BelowAgents::enter();
     let t0 = Instant::now() + Duration::from_millis(50);
     for tick in 0..ticks {
         let at = t0 + period.mul_f64(tick as f64);

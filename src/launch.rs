@@ -7,7 +7,7 @@ use mrsim_transport::shm::{ShmAgent, ShmWorld};
 use mrsim_transport::{Capacity, Namespace};
 use std::path::PathBuf;
 use std::process::{Child, Command, ExitStatus, Stdio};
-use std::sync::atomic::{AtomicI32, Ordering};
+use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 
 /// A scenario or command line refused before anything started (exit 2).
@@ -147,50 +147,16 @@ pub(crate) fn prepare_out(out: &Option<PathBuf>, name: &str) -> Result<PathBuf> 
     Ok(dir)
 }
 
-static SIGNALLED: AtomicI32 = AtomicI32::new(0);
-
-extern "C" fn on_signal(sig: libc::c_int) {
-    SIGNALLED.store(sig, Ordering::SeqCst);
-}
-
-fn install_signal_handlers() {
-    // SAFETY: the handler only stores into an atomic, which is
-    // async-signal-safe.
-    unsafe {
-        libc::signal(libc::SIGINT, on_signal as *const () as libc::sighandler_t);
-        libc::signal(libc::SIGTERM, on_signal as *const () as libc::sighandler_t);
-    }
-}
-
-fn signal(child: &Child, sig: libc::c_int) {
-    // SAFETY: sending a signal to a child we started.
-    unsafe {
-        libc::kill(child.id() as libc::pid_t, sig);
-    }
+fn signal(child: &Child, sig: i32) {
+    mrsim_sys::process::kill(child.id(), sig);
 }
 
 fn describe(status: ExitStatus) -> String {
     use std::os::unix::process::ExitStatusExt;
     match (status.code(), status.signal()) {
         (Some(c), _) => format!("exited with status {c}"),
-        (None, Some(s)) => format!("was killed by signal {s} ({})", signal_name(s)),
+        (None, Some(s)) => format!("was killed by signal {s} ({})", mrsim_sys::signal::name(s)),
         _ => "ended".to_string(),
-    }
-}
-
-fn signal_name(sig: i32) -> &'static str {
-    match sig {
-        libc::SIGKILL => "SIGKILL",
-        libc::SIGTERM => "SIGTERM",
-        libc::SIGINT => "SIGINT",
-        libc::SIGSEGV => "SIGSEGV",
-        libc::SIGABRT => "SIGABRT",
-        libc::SIGBUS => "SIGBUS",
-        libc::SIGFPE => "SIGFPE",
-        libc::SIGILL => "SIGILL",
-        libc::SIGHUP => "SIGHUP",
-        libc::SIGPIPE => "SIGPIPE",
-        _ => "see `kill -l`",
     }
 }
 
@@ -270,7 +236,7 @@ pub fn run(args: &ScenarioArgs, run_id: Option<String>, quiet: bool, how: &RunHo
     let ns = Namespace::new(&run_id).map_err(|e| invalid(e.to_string()))?;
     claim_namespace(&ns)?;
     crate::sched::apply(&how.sched).map_err(invalid)?;
-    install_signal_handlers();
+    mrsim_sys::signal::catch_termination();
     if how.transport == Transport::Inproc {
         return run_inproc(scenario, &dir, &run_id, quiet, how);
     }
@@ -335,13 +301,12 @@ pub fn run(args: &ScenarioArgs, run_id: Option<String>, quiet: bool, how: &RunHo
         // Stop the world first: it writes what it has and tells the agents
         // the run is over, so they end by themselves (the ones that do not
         // are stopped below); a world that does not end in 5 s is killed.
-        let sig = SIGNALLED.load(Ordering::SeqCst);
-        if sig != 0 && forwarded.is_none() {
-            signal(&world, libc::SIGTERM);
+        if mrsim_sys::signal::received().is_some() && forwarded.is_none() {
+            signal(&world, mrsim_sys::signal::SIGTERM);
             forwarded = Some(Instant::now());
         }
         if forwarded.is_some_and(|t| t.elapsed() > Duration::from_secs(5)) {
-            signal(&world, libc::SIGKILL);
+            signal(&world, mrsim_sys::signal::SIGKILL);
         }
         for ((name, a), n) in agents.iter_mut().zip(restarts.iter_mut()) {
             let Ok(Some(status)) = a.try_wait() else {
@@ -373,7 +338,7 @@ pub fn run(args: &ScenarioArgs, run_id: Option<String>, quiet: bool, how: &RunHo
                 break s;
             }
             if grace.elapsed() > Duration::from_secs(3) {
-                signal(a, libc::SIGTERM);
+                signal(a, mrsim_sys::signal::SIGTERM);
                 std::thread::sleep(Duration::from_millis(100));
                 if let Ok(Some(s)) = a.try_wait() {
                     break s;
@@ -459,7 +424,7 @@ fn run_inproc(
     // world process.
     let watcher = std::thread::spawn(move || {
         while !done_w.load(Ordering::SeqCst) {
-            if SIGNALLED.load(Ordering::SeqCst) != 0 {
+            if mrsim_sys::signal::received().is_some() {
                 watch.store(true, Ordering::SeqCst);
             }
             std::thread::sleep(Duration::from_millis(20));

@@ -25,7 +25,6 @@ use ratatui::text::{Line, Span};
 use ratatui::widgets::canvas::{Canvas, Circle, Line as Segment, Points};
 use ratatui::widgets::{Block, Borders, Cell, Paragraph, Row, Table};
 use std::io::IsTerminal;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 /// Time between two screen updates.
@@ -457,12 +456,6 @@ pub fn draw(f: &mut Frame, m: &TopModel) {
     );
 }
 
-static TERMINATE: AtomicBool = AtomicBool::new(false);
-
-extern "C" fn on_terminate(_: libc::c_int) {
-    TERMINATE.store(true, Ordering::SeqCst);
-}
-
 /// Restores the terminal however `top` ends.
 struct TerminalGuard;
 
@@ -509,17 +502,7 @@ pub fn run(run_id: &str, timeout: f64) -> Result<i32> {
     })?;
     let mut model = wait_for_setup(&mut obs, timeout).with_context(|| format!("run `{run_id}`"))?;
 
-    // SAFETY: the handler only stores into an atomic (async-signal-safe).
-    unsafe {
-        libc::signal(
-            libc::SIGINT,
-            on_terminate as *const () as libc::sighandler_t,
-        );
-        libc::signal(
-            libc::SIGTERM,
-            on_terminate as *const () as libc::sighandler_t,
-        );
-    }
+    mrsim_sys::signal::catch_termination();
     let mut terminal = ratatui::try_init().context("cannot take over the terminal")?;
     let guard = TerminalGuard;
     use ratatui::crossterm::event::{self, Event, KeyCode, KeyEventKind, KeyModifiers};
@@ -537,7 +520,7 @@ pub fn run(run_id: &str, timeout: f64) -> Result<i32> {
                 model.tick()
             ));
         }
-        if TERMINATE.load(Ordering::SeqCst) {
+        if mrsim_sys::signal::received().is_some() {
             break Ok(0);
         }
         if event::poll(REFRESH).context("cannot read the keyboard")?

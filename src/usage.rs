@@ -13,23 +13,7 @@ use serde_json::json;
 use std::path::Path;
 use std::time::Duration;
 
-/// Which counters: the whole process or the calling thread.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Scope {
-    /// The whole process (an agent process).
-    Process,
-    /// The calling thread (an in-process agent thread).
-    Thread,
-}
-
-/// CPU seconds (user + system) and peak resident set size (KiB; the
-/// process's, whatever the scope) now.
-pub fn rusage(scope: Scope) -> (f64, u64) {
-    match scope {
-        Scope::Process => mrsim_world::metrics::process_usage(),
-        Scope::Thread => mrsim_world::metrics::thread_usage(),
-    }
-}
+pub use mrsim_sys::usage::{Scope, rusage};
 
 /// What an agent used while the run ticked.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]

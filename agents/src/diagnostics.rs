@@ -84,7 +84,7 @@ impl DiagnosticsWriter {
         let thread = std::thread::Builder::new()
             .name("diagnostics".into())
             .spawn(move || {
-                mrsim_transport::background_thread();
+                mrsim_sys::sched::background_thread();
                 write_rows(&path, &robot, rx)
             })?;
         Ok(Self {

@@ -117,17 +117,12 @@ impl Injector {
             Fault::HangAt(n) if tick >= n => return Before::Hang,
             Fault::DieAt(n) if tick >= n && !self.fired => {
                 self.fired = true;
-                // SAFETY: sending a signal to this very process.
-                unsafe {
-                    libc::kill(libc::getpid(), libc::SIGKILL);
-                }
+                mrsim_sys::process::kill(std::process::id(), mrsim_sys::signal::SIGKILL);
             }
             Fault::StopAt(n) if tick >= n && !self.fired => {
                 self.fired = true;
-                // SAFETY: as above; execution resumes here on SIGCONT.
-                unsafe {
-                    libc::kill(libc::getpid(), libc::SIGSTOP);
-                }
+                // Execution resumes here on SIGCONT.
+                mrsim_sys::process::kill(std::process::id(), mrsim_sys::signal::SIGSTOP);
             }
             Fault::SlowMs(ms) => std::thread::sleep(std::time::Duration::from_millis(ms)),
             _ => {}

@@ -293,149 +293,6 @@ pub struct TimingMetrics {
     pub cpus_steal_s: Option<f64>,
 }
 
-/// Stolen time of a set of CPUs so far, from /proc/stat. (Its busy
-/// columns are not here: they are sampled at the timer tick, and counted
-/// a third less than getrusage for agents that run in short bursts at
-/// 100 Hz, too coarse to tell what else ran.)
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct CpusTime {
-    /// steal, s.
-    pub steal_s: f64,
-}
-
-impl CpusTime {
-    /// The CPUs this thread may run on (its affinity), now; `None` if
-    /// /proc/stat or the affinity cannot be read.
-    pub fn now() -> Option<Self> {
-        // SAFETY: a zeroed cpu_set_t is a valid empty set; the call fills it.
-        let mut set: libc::cpu_set_t = unsafe { std::mem::zeroed() };
-        let r = unsafe { libc::sched_getaffinity(0, std::mem::size_of_val(&set), &mut set) };
-        if r != 0 {
-            return None;
-        }
-        // SAFETY: sysconf has no preconditions.
-        let hz = unsafe { libc::sysconf(libc::_SC_CLK_TCK) };
-        let stat = std::fs::read_to_string("/proc/stat").ok()?;
-        // SAFETY: CPU_ISSET reads the set we own, for indices it can hold.
-        let allowed =
-            |cpu: usize| cpu < libc::CPU_SETSIZE as usize && unsafe { libc::CPU_ISSET(cpu, &set) };
-        Self::parse(&stat, allowed, if hz > 0 { hz as f64 } else { 100.0 })
-    }
-
-    /// Sums the `cpuN` lines of a /proc/stat text for which `allowed(N)`.
-    pub fn parse(stat: &str, allowed: impl Fn(usize) -> bool, hz: f64) -> Option<Self> {
-        let mut t = Self::default();
-        let mut any = false;
-        for line in stat.lines() {
-            let mut f = line.split_ascii_whitespace();
-            let Some(cpu) = f.next().and_then(|n| n.strip_prefix("cpu")) else {
-                continue;
-            };
-            let Ok(cpu) = cpu.parse::<usize>() else {
-                continue; // the "cpu" total line
-            };
-            if !allowed(cpu) {
-                continue;
-            }
-            // user nice system idle iowait irq softirq steal ...
-            let steal: u64 = f.nth(7).and_then(|x| x.parse().ok()).unwrap_or(0);
-            t.steal_s += steal as f64 / hz;
-            any = true;
-        }
-        any.then_some(t)
-    }
-
-    /// What was spent since `earlier`.
-    pub fn since(self, earlier: Self) -> Self {
-        Self {
-            steal_s: (self.steal_s - earlier.steal_s).max(0.0),
-        }
-    }
-}
-
-/// CPU seconds (user + system) and peak resident set size (KiB) of this
-/// process so far (getrusage: the same counters as /proc/self/stat's utime +
-/// stime and /proc/self/status's VmHWM).
-pub fn process_usage() -> (f64, u64) {
-    rusage(libc::RUSAGE_SELF)
-}
-
-/// The world's place under SCHED_FIFO (`--rt`) while it ticks: one level
-/// below its agents. An agent woken by the tick's doorbell then runs at
-/// once, instead of waiting, on the world's CPU, until the world has woken
-/// every other agent: a `FUTEX_WAKE` of 256 agents takes the world about
-/// 0.3 ms (BENCHMARKS.md, "Eighth round"). Only while it ticks: before,
-/// hundreds of agents retrying to connect at the higher level would keep
-/// the world from ever creating what they wait for.
-#[derive(Debug)]
-pub struct BelowAgents {
-    /// The level to go back to when dropped.
-    restore: Option<i32>,
-}
-
-impl BelowAgents {
-    /// Under SCHED_FIFO at priority p > 1, moves the calling thread to
-    /// p - 1 until the guard is dropped; otherwise does nothing.
-    pub fn enter() -> Self {
-        let restore = fifo_priority()
-            .filter(|&p| p > 1)
-            .filter(|&p| set_fifo(p - 1));
-        Self { restore }
-    }
-
-    /// True if the thread was moved (it runs under SCHED_FIFO below its
-    /// agents).
-    pub fn active(&self) -> bool {
-        self.restore.is_some()
-    }
-}
-
-impl Drop for BelowAgents {
-    fn drop(&mut self) {
-        if let Some(p) = self.restore {
-            set_fifo(p);
-        }
-    }
-}
-
-/// The calling thread's SCHED_FIFO priority, if it runs under SCHED_FIFO.
-fn fifo_priority() -> Option<i32> {
-    let mut param = libc::sched_param { sched_priority: 0 };
-    // SAFETY: both only read the calling thread's policy, the second into
-    // the struct we own.
-    let fifo = unsafe { libc::sched_getscheduler(0) } == libc::SCHED_FIFO
-        && unsafe { libc::sched_getparam(0, &mut param) } == 0;
-    fifo.then_some(param.sched_priority)
-}
-
-/// Puts the calling thread under SCHED_FIFO at `priority`; false if refused.
-fn set_fifo(priority: i32) -> bool {
-    let param = libc::sched_param {
-        sched_priority: priority,
-    };
-    // SAFETY: the param struct lives for the call.
-    unsafe { libc::sched_setscheduler(0, libc::SCHED_FIFO, &param) == 0 }
-}
-
-/// CPU seconds of the calling thread so far, and the process's peak
-/// resident set size (KiB).
-pub fn thread_usage() -> (f64, u64) {
-    rusage(libc::RUSAGE_THREAD)
-}
-
-fn rusage(who: libc::c_int) -> (f64, u64) {
-    // SAFETY: getrusage writes into the struct we own.
-    let mut ru: libc::rusage = unsafe { std::mem::zeroed() };
-    if unsafe { libc::getrusage(who, &mut ru) } != 0 {
-        return (0.0, 0);
-    }
-    let secs = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
-    (
-        secs(ru.ru_utime) + secs(ru.ru_stime),
-        ru.ru_maxrss.max(0) as u64,
-    )
-}
-
 /// `p` minus the point of segment `w` nearest to it.
 fn segment_offset(w: [[f64; 2]; 2], p: [f64; 2]) -> [f64; 2] {
     let (a, b) = (w[0], w[1]);
@@ -861,29 +718,6 @@ mod tests {
     use mrsim_proto::BodyState;
 
     #[test]
-    fn the_world_ticks_one_fifo_level_below_its_agents_and_goes_back_after() {
-        // Not under SCHED_FIFO: nothing moves.
-        assert_eq!(fifo_priority(), None);
-        assert!(!BelowAgents::enter().active());
-        if !set_fifo(10) {
-            // SCHED_FIFO not permitted here (no root, CAP_SYS_NICE or
-            // RLIMIT_RTPRIO): `--rt` runs with normal scheduling.
-            return;
-        }
-        let below = BelowAgents::enter();
-        let during = fifo_priority();
-        drop(below);
-        let after = fifo_priority();
-        // Back to normal scheduling before asserting.
-        let normal = libc::sched_param { sched_priority: 0 };
-        // SAFETY: the param struct lives for the call.
-        unsafe { libc::sched_setscheduler(0, libc::SCHED_OTHER, &normal) };
-        assert_eq!(during, Some(9));
-        assert_eq!(after, Some(10));
-        assert_eq!(fifo_priority(), None);
-    }
-
-    #[test]
     fn histograms_grow_to_hold_durations_far_beyond_their_first_range() {
         for mut h in [DurationHistogram::default(), DurationHistogram::per_robot()] {
             for us in [3, 150, 2_500, 40_000] {
@@ -1050,22 +884,6 @@ mod tests {
         }
         // The fine grid was used (nine in ten robots bounded).
         assert!(!grid.fine.order.is_empty());
-    }
-
-    #[test]
-    fn stolen_time_sums_only_the_allowed_cpus() {
-        let stat = "cpu  900 9 900 9000 90 9 9 90 0 0\n\
-                    cpu0 100 2 30 5000 40 4 6 7 0 0\n\
-                    cpu1 200 0 50 4000 50 5 3 83 0 0\n\
-                    cpu2 600 7 820 0 0 0 0 0 0 0\n\
-                    intr 12345\n";
-        // cpu0 7 + cpu1 83 jiffies; not cpu2, not the total line.
-        let t = CpusTime::parse(stat, |c| c < 2, 100.0).expect("two cpus");
-        assert!((t.steal_s - 0.90).abs() < 1e-9, "{t:?}");
-        assert_eq!(CpusTime::parse(stat, |c| c == 9, 100.0), None);
-        let later = CpusTime { steal_s: 1.0 };
-        assert!((later.since(t).steal_s - 0.1).abs() < 1e-9);
-        assert_eq!(t.since(later).steal_s, 0.0);
     }
 
     #[test]

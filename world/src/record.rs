@@ -72,7 +72,7 @@ impl Recorder {
         let thread = std::thread::Builder::new()
             .name("recorder".into())
             .spawn(move || {
-                mrsim_transport::background_thread();
+                mrsim_sys::sched::background_thread();
                 let period = Duration::from_secs(1);
                 let mut last_flush = Instant::now();
                 let mut block = Vec::with_capacity(1 << 12);

@@ -10,8 +10,7 @@
 
 use crate::live::LiveStats;
 use crate::metrics::{
-    BelowAgents, CpusTime, DurationHistogram, RobotAccumulator, RobotMetrics, RunMetrics,
-    TimingMetrics, process_usage, thread_usage,
+    DurationHistogram, RobotAccumulator, RobotMetrics, RunMetrics, TimingMetrics,
 };
 use crate::physics::{Applied, Contact, Owner, World};
 use crate::record::Recorder;
@@ -22,6 +21,8 @@ use mrsim_proto::{
     agent_state, command_kind, flags, now_ns, run_phase,
 };
 use mrsim_scenario::{MissPolicy, Mode};
+use mrsim_sys::sched::BelowAgents;
+use mrsim_sys::usage::{CpusTime, process_usage, thread_usage};
 use mrsim_transport::{TransportError, WorldTransport};
 use serde_json::json;
 use std::path::PathBuf;
@@ -82,7 +83,7 @@ enum Agent {
     Lost { pid: u32, token: u64 },
 }
 
-pub use mrsim_transport::pid_alive;
+pub use mrsim_sys::process::pid_alive;
 
 fn splitmix(mut x: u64) -> u64 {
     x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
@@ -361,7 +362,7 @@ impl Loop<'_> {
         let alive = if self.pid_checks.is_multiple_of(10) {
             pid_alive
         } else {
-            mrsim_transport::pid_exists
+            mrsim_sys::process::pid_exists
         };
         // An agent in the world's own process (the in-process transport)
         // cannot die on its own: its thread's failure comes through the

@@ -12,7 +12,7 @@
 //! The loop now appends each command's timings to one flat buffer and
 //! hands the buffer over in batches (of [`BATCH`] samples, or whatever is
 //! pending after [`BATCH_AGE`]) to a thread that owns the histograms and
-//! runs at low priority ([`mrsim_transport::background_thread`]). The live
+//! runs at low priority ([`mrsim_sys::sched::background_thread`]). The live
 //! view reads each robot's latency median and 99th percentile from a
 //! summary that thread refreshes every [`LIVE_PERIOD`]; the run's end
 //! takes the histograms back ([`TimingRecorder::finish`]), every sample in
@@ -118,7 +118,7 @@ impl TimingRecorder {
         let thread = std::thread::Builder::new()
             .name("timings".into())
             .spawn(move || {
-                mrsim_transport::background_thread();
+                mrsim_sys::sched::background_thread();
                 let mut t = Timings::new(robots);
                 let mut summary = Vec::with_capacity(robots);
                 let mut refresh = |t: &mut Timings| {

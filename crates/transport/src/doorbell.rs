@@ -148,15 +148,6 @@ fn futex_wake(word: &AtomicU32, waiters: i32, what: &'static str) -> Result<(), 
     Ok(())
 }
 
-/// When process `pid` started: field 22 of /proc/PID/stat (clock ticks
-/// since boot). `None` if it cannot be read.
-fn process_start(pid: u32) -> Option<u64> {
-    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
-    // Fields after the command name (which may hold spaces), from field 3.
-    let (_, rest) = stat.rsplit_once(") ")?;
-    rest.split_whitespace().nth(22 - 3)?.parse().ok()
-}
-
 /// One side's mapping of a run's doorbell.
 pub struct Doorbell {
     words: *const Words,
@@ -229,8 +220,10 @@ impl Doorbell {
         let w = bell.words();
         let pid = std::process::id();
         w.world_pid.store(pid, Ordering::Relaxed);
-        w.world_start
-            .store(process_start(pid).unwrap_or(0), Ordering::Relaxed);
+        w.world_start.store(
+            mrsim_sys::process::start_time(pid).unwrap_or(0),
+            Ordering::Relaxed,
+        );
         w.magic.store(MAGIC, Ordering::Release);
         Ok(bell)
     }
@@ -275,8 +268,10 @@ impl Doorbell {
                 "it names no world (made by a world of an older mrsim, protocol < 6)",
             ));
         }
-        let started = process_start(pid);
-        if !crate::pid_alive(pid) || (start != 0 && started.is_some_and(|s| s != start)) {
+        let started = mrsim_sys::process::start_time(pid);
+        if !mrsim_sys::process::pid_alive(pid)
+            || (start != 0 && started.is_some_and(|s| s != start))
+        {
             return Err(err(
                 &path.display().to_string(),
                 format!(
@@ -460,7 +455,10 @@ mod tests {
     fn a_doorbell_names_the_world_that_made_it() {
         let (world, agent) = pair("names");
         let me = std::process::id();
-        assert_eq!(agent.world(), (me, process_start(me).expect("start")));
+        assert_eq!(
+            agent.world(),
+            (me, mrsim_sys::process::start_time(me).expect("start"))
+        );
         assert_eq!(world.world(), agent.world());
     }
 

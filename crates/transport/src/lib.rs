@@ -211,48 +211,6 @@ pub trait ObserverTransport {
     fn world_alive(&mut self) -> bool;
 }
 
-/// Moves the calling thread into the background: normal (not real-time)
-/// scheduling at nice 10, so that it runs on time the tick loop and the
-/// planners leave idle rather than delaying them. For the threads that only
-/// write files (trajectory, diagnostics): in a lockstep run a writer that
-/// preempts one planner thread delays the whole tick. Best effort: lowering
-/// a thread's own priority is always allowed, and a refusal changes
-/// nothing but timing.
-pub fn background_thread() {
-    let param = libc::sched_param { sched_priority: 0 };
-    // SAFETY: the param struct lives for the call; 0 = the calling thread.
-    unsafe {
-        libc::sched_setscheduler(0, libc::SCHED_OTHER, &param);
-        // With PRIO_PROCESS a thread id names just that thread on Linux.
-        libc::setpriority(libc::PRIO_PROCESS, libc::gettid() as libc::id_t, 10);
-    }
-}
-
-/// True if process `pid` exists (same machine), zombie or not: one
-/// syscall.
-pub fn pid_exists(pid: u32) -> bool {
-    if pid == 0 {
-        return false;
-    }
-    // SAFETY: kill with signal 0 only checks for existence and permission.
-    let r = unsafe { libc::kill(pid as libc::pid_t, 0) };
-    r == 0 || std::io::Error::last_os_error().raw_os_error() == Some(libc::EPERM)
-}
-
-/// True if process `pid` exists and is not a zombie (same machine).
-pub fn pid_alive(pid: u32) -> bool {
-    if !pid_exists(pid) {
-        return false;
-    }
-    match std::fs::read_to_string(format!("/proc/{pid}/stat")) {
-        Ok(stat) => stat
-            .rsplit_once(") ")
-            .and_then(|(_, rest)| rest.chars().next())
-            .is_none_or(|state| state != 'Z' && state != 'X'),
-        Err(_) => false,
-    }
-}
-
 /// How many participants the channels must hold.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Capacity {

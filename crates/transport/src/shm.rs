@@ -758,7 +758,7 @@ impl WorldWatch {
         }
         self.last_check = Instant::now();
         let seen = match self.pid {
-            Some(pid) if crate::pid_alive(pid) => WorldSeen::Alive(pid),
+            Some(pid) if mrsim_sys::process::pid_alive(pid) => WorldSeen::Alive(pid),
             Some(_) => WorldSeen::Gone,
             None => find_world(cfg).unwrap_or(WorldSeen::Unsure),
         };
