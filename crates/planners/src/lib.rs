@@ -8,7 +8,7 @@
 //!
 //! Why the crate is shaped as it is:
 //!
-//! - **Pure planners.** This crate depends on nothing but nalgebra: the
+//! - **Pure planners.** This crate depends on nalgebra and thiserror only: the
 //!   agents bring the transport, the world brings rapier. What a planner
 //!   does is decided by its observation and its own state alone, which is
 //!   what makes the lockstep runs reproducible to the byte.
