@@ -6,13 +6,31 @@
 //! physics engine, so each one can be unit-tested, benchmarked and compared
 //! on its own, and the same code runs in an agent process or in a thread.
 //!
-//! The crate is shaped as one file per method, named after it, whose `//!`
-//! cites the paper and equations it implements. [`build`] turns a planner's
-//! scenario name and parameters into a boxed [`Planner`]; [`PLANNERS`] lists
-//! what is available.
+//! Why the crate is shaped as it is:
+//!
+//! - **Pure planners.** This crate depends on nalgebra and thiserror only: the
+//!   agents bring the transport, the world brings rapier. What a planner
+//!   does is decided by its observation and its own state alone, which is
+//!   what makes the lockstep runs reproducible to the byte.
+//! - **One module per method**, named after it, whose `//!` cites the paper
+//!   and the equations it implements, so that the code can be read against
+//!   the paper (`homing` is the smallest example). A method too long for one
+//!   file becomes a folder split the way its reference implementation is:
+//!   [`orca`] is the method in `mod.rs`, its linear programs and its static
+//!   obstacles beside it, its tests in their own file.
+//! - **One table.** [`PLANNERS`] is the only list of planners: each entry
+//!   has the scenario name, a one-line summary and the constructor, and
+//!   both the listing (`mrsim --help`, error messages) and [`build`] read
+//!   it, so a planner is added in one place.
+//! - **The testkit is for tests.** `testkit` is a reference simulation with
+//!   the world's actuator model (m r'' + b r' = f, the same limits and
+//!   integration), in which the unit tests check each planner's behaviour
+//!   in microseconds. It is compiled for this crate's tests and, with the
+//!   `testkit` feature, for examples and other crates' tests; the product
+//!   never builds it.
 #![warn(missing_docs)]
 
-pub mod params;
+mod params;
 mod registry;
 
 pub mod chung;
@@ -26,12 +44,13 @@ pub mod khatib;
 pub mod orca;
 pub mod prediction;
 pub mod social_force;
+#[cfg(any(test, feature = "testkit"))]
 pub mod testkit;
 pub mod trajectory_guided;
 pub mod vdf;
 
 pub use params::{ParamError, ParamReader, ParamValue, Params};
-pub use registry::{BuildError, PLANNERS, PlannerInfo, build};
+pub use registry::{BuildError, FromParams, PLANNERS, PlannerInfo, build};
 
 /// 2-D vector, f64, in the scenario's units.
 pub type Vec2 = nalgebra::Vector2<f64>;

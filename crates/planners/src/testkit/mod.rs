@@ -7,6 +7,12 @@
 //! It exists so that each planner's unit tests can check behaviour (a
 //! crossing avoided, a goal reached) in microseconds. The end-to-end tests
 //! run the same cases through the real world and agent processes.
+//!
+//! Compiled for the crate's own tests, and with the `testkit` feature for
+//! examples and other crates' tests; the agents and the world never build
+//! it. [`rvo2`] holds RVO2's own example scenes.
+
+pub mod rvo2;
 
 use crate::{
     BodyKind, Command, DesignatedPath, Observation, Planner, Segment, SelfState, Sensed, Vec2,
