@@ -20,12 +20,12 @@ use mrsim_proto::{
 };
 use std::time::Duration;
 
-pub mod doorbell;
 pub mod inproc;
 pub mod namespace;
 pub mod shm;
 
 pub use namespace::{Namespace, NamespaceError};
+pub use shm::doorbell;
 
 /// What went wrong in a transport operation.
 #[derive(Debug, thiserror::Error)]

@@ -32,7 +32,9 @@
 //! woken once, by the last answer it waits for, instead of by every
 //! command.
 
-use crate::doorbell::Doorbell;
+pub mod doorbell;
+
+use doorbell::Doorbell;
 use crate::{
     AgentTransport, Capacity, Namespace, ObserverTransport, TransportError, WorldTransport,
 };
