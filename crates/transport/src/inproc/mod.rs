@@ -7,6 +7,41 @@
 //! few [`InprocWorker`]s that receive each snapshot once and answer for
 //! many agents in one batch, so a tick costs a few thread wake-ups instead
 //! of two per agent (the agents' sides then serve only to join).
+//!
+//! # The pool: the one way around [`AgentTransport`]
+//!
+//! With [`pooled_channels`] an agent joins through its [`InprocAgent`] (an
+//! [`AgentTransport`] like any other), and from then on its ticks do not go
+//! through it. The runtime (`mrsim run --transport inproc`) hands the
+//! joined agents to a pool shared by the workers; each worker receives a
+//! snapshot once ([`InprocWorker::next`]), its bodies an `Arc` shared with
+//! every other receiver rather than a copy, plans for a share of the
+//! pool's robots, and sends all their commands as one message
+//! ([`InprocWorker::send_commands`]). In lockstep the world's own thread
+//! plans for a share too, inside [`WorldTransport::wait`]
+//! ([`InprocWorld::help_with`]), since it has nothing else to do until the
+//! commands are in.
+//!
+//! Bypassed per agent and tick: [`AgentTransport::wait`],
+//! [`AgentTransport::with_latest_snapshot`] and
+//! [`AgentTransport::send_command`], and with them two thread wake-ups
+//! (the agent's, and the world's on its command). Kept: the join, the
+//! agent code that plans (the runtime calls the same driver the agent loop
+//! does), and the world's side: [`InprocWorld`] is a [`WorldTransport`],
+//! and the world loop sees one command per robot per tick, stamped with
+//! the time its batch was sent. Nothing else bypasses the traits.
+//!
+//! One module per role: `world` ([`InprocWorld`]), `agent`
+//! ([`InprocAgent`]), `worker` ([`InprocWorker`]), `poll` (how the world
+//! and the workers wait) and `message` (what goes over the channels); this
+//! module wires them together.
+//!
+//! [`AgentTransport`]: crate::AgentTransport
+//! [`AgentTransport::wait`]: crate::AgentTransport::wait
+//! [`AgentTransport::with_latest_snapshot`]: crate::AgentTransport::with_latest_snapshot
+//! [`AgentTransport::send_command`]: crate::AgentTransport::send_command
+//! [`WorldTransport`]: crate::WorldTransport
+//! [`WorldTransport::wait`]: crate::WorldTransport::wait
 
 mod agent;
 mod message;

@@ -4,7 +4,9 @@ use super::message::{ToAgent, ToWorld};
 use super::poll::Poll;
 use crate::{TransportError, WorldTransport};
 use crossbeam::channel::{Receiver, Sender};
-use mrsim_proto::{BodyState, CommandMsg, JoinReply, JoinRequest, SnapshotHeader, now_ns};
+use mrsim_proto::{
+    BodyState, CommandMsg, JoinReply, JoinRequest, RobotStats, SnapshotHeader, StatsHeader, now_ns,
+};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
@@ -159,5 +161,32 @@ impl WorldTransport for InprocWorld {
 
     fn termination_requested(&self) -> bool {
         self.stop.load(Ordering::Relaxed)
+    }
+
+    /// Nothing to count: every command (or worker batch) is a message of
+    /// its own, and [`WorldTransport::wait`] returns on the first.
+    fn expect_answers(&mut self, _tick: u64, _count: usize) {}
+
+    /// Nothing to do: each reply went to its agent's channel in
+    /// [`WorldTransport::reply_join`], which wakes that agent.
+    fn joins_answered(&mut self) -> Result<(), TransportError> {
+        Ok(())
+    }
+
+    /// Nothing to free: an agent thread's channel is dropped with it.
+    fn cleanup_dead(&mut self) {}
+
+    /// Nothing to connect: the channels exist from [`super::channels`] on.
+    fn prepare_ticks(&mut self) -> Result<bool, TransportError> {
+        Ok(false)
+    }
+
+    /// No observers: an in-process run has no one to read them.
+    fn publish_stats(
+        &mut self,
+        _header: &StatsHeader,
+        _robots: &[RobotStats],
+    ) -> Result<(), TransportError> {
+        Ok(())
     }
 }

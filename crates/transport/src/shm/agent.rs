@@ -31,7 +31,7 @@ pub struct ShmAgent {
 /// An agent's ports on the run's services.
 struct AgentPorts {
     /// Needed only to join: dropped once joined (each port is a shared
-    /// memory connection the world maps too, 16 kB of its RSS per agent).
+    /// memory connection the world maps too).
     joining: Option<JoinPorts>,
     snap_sub: Subscriber<S, [BodyState], SnapshotHeader>,
     cmd_pub: Publisher<S, CommandMsg, ()>,

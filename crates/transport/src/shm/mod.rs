@@ -7,7 +7,7 @@
 //! | `mrsim/setup` | publish-subscribe `[u8]`, history 1 | world -> agents |
 //! | `mrsim/snapshot` | publish-subscribe `[BodyState]` + `SnapshotHeader` | world -> agents |
 //! | `mrsim/tick` | event (join replies) | world -> joining agents |
-//! | `/dev/shm/PREFIXdoorbell` | futex word ([`crate::doorbell`]): a new snapshot | world -> agents |
+//! | `/dev/shm/PREFIXdoorbell` | futex word ([`doorbell`]): a new snapshot | world -> agents |
 //! | `mrsim/join` | publish-subscribe `JoinRequest` | agents -> world |
 //! | `mrsim/join-reply` | publish-subscribe `JoinReply` | world -> agents |
 //! | `mrsim/command` | publish-subscribe `CommandMsg` | agents -> world |
@@ -26,11 +26,19 @@
 //!
 //! Each tick's wake-up of the agents is the doorbell, not an iceoryx2
 //! event: one futex wake for all agents instead of a datagram per agent
-//! (see [`crate::doorbell`] for the measurements). The snapshot itself, and
+//! (see [`doorbell`] for why and how). The snapshot itself, and
 //! everything else, goes through iceoryx2. Likewise an agent's answer to a
 //! tick is counted on the doorbell page rather than notified: the world is
 //! woken once, by the last answer it waits for, instead of by every
 //! command.
+//!
+//! One module per side: `world` ([`ShmWorld`]: creates every service,
+//! publishes, answers joins, takes in commands), `agent` ([`ShmAgent`]),
+//! `observer` ([`ShmObserver`]); what they share is in `service` (the
+//! run's iceoryx2 configuration, nodes, service names, waits and
+//! subscribers) and `watch` (whether the world process is alive, for
+//! agents and observers), and the futex page in [`doorbell`]. The sides
+//! import these; none imports another side.
 
 mod agent;
 pub mod doorbell;

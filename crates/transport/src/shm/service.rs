@@ -18,6 +18,7 @@ pub(super) type S = ipc::Service;
 /// Name of the world's iceoryx2 node.
 pub const WORLD_NODE: &str = "mrsim-world";
 
+/// A setup error: `what` could not be made, for reason `e`.
 pub(super) fn setup_err(what: impl Into<String>, e: impl std::fmt::Debug) -> TransportError {
     TransportError::Setup {
         what: what.into(),
@@ -25,6 +26,7 @@ pub(super) fn setup_err(what: impl Into<String>, e: impl std::fmt::Debug) -> Tra
     }
 }
 
+/// The iceoryx2 name of service `name` (`mrsim/...`).
 pub(super) fn service_name(name: &str) -> Result<ServiceName, TransportError> {
     ServiceName::new(name).map_err(|e| setup_err(format!("service name {name}"), e))
 }
@@ -35,8 +37,8 @@ pub(super) fn service_name(name: &str) -> Result<ServiceName, TransportError> {
 /// Nodes do not look for dead nodes when they are created or dropped or
 /// open a service (iceoryx2's defaults): each look reads the state of every
 /// node of the run (or of the service), so with hundreds of agents starting
-/// and ending together they cost O(agents²) file reads and TOML parses,
-/// seconds of both cores at 250 agents (profiled). The world cleans up
+/// and ending together they cost O(agents²) file reads and TOML parses.
+/// The world cleans up
 /// instead, once at its start and whenever an agent process dies; the
 /// launcher removes what is left at the end.
 pub fn config(ns: &Namespace) -> Result<Config, TransportError> {
@@ -61,6 +63,7 @@ pub fn config(ns: &Namespace) -> Result<Config, TransportError> {
     Ok(cfg)
 }
 
+/// Creates this process's iceoryx2 node `name` in the run of `cfg`.
 pub(super) fn node(cfg: &Config, name: &str) -> Result<Node<S>, TransportError> {
     let node_name = NodeName::new(name).map_err(|e| setup_err(format!("node name {name}"), e))?;
     NodeBuilder::new()
@@ -117,9 +120,9 @@ pub(super) fn wait_on(listener: &Listener<S>, timeout: Duration) -> Result<(), T
     // while the listener's shared state is not yet "notified", and a
     // notifier that runs between the listener's reset of that state and
     // its emptying of the socket leaves it "notified" with the datagram
-    // gone: no notifier sends again, and only a drain resets it. Seen at
-    // 256 agents under SCHED_FIFO, the world then woke only at each
-    // deadline, for the rest of the run (round trip p50 10.2 ms).
+    // gone: no notifier sends again, and only a drain resets it. Without
+    // this drain the world would then wake only at each deadline, for the
+    // rest of the run.
     drain()?;
     Ok(())
 }

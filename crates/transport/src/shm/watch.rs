@@ -59,8 +59,8 @@ fn find_world(cfg: &Config) -> Option<WorldSeen> {
 /// the world's process id from its join reply; an observer finds it with
 /// one scan of the run's node list. After that only the process id is
 /// checked (one `kill(pid, 0)`): with hundreds of agents checking a few
-/// times a second, a node-list scan each (O(agents²) file reads per second
-/// on 2 cores) starved the very world they were waiting for.
+/// times a second, a node-list scan each is O(agents²) file reads per
+/// second, taken from the very world they are waiting for.
 #[derive(Debug)]
 pub(super) struct WorldWatch {
     /// The world's process id, once known (an agent learns it from its

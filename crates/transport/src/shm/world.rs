@@ -60,9 +60,9 @@ impl ShmWorld {
     ) -> Result<Self, TransportError> {
         let mut cfg = config(ns)?;
         // Room for every agent's join port closing with a re-asked request
-        // still queued (the world's subscribers only): with the default 128,
-        // a 1000-agent join discarded the duplicates with ~200 warnings of
-        // 40 kB each on stderr.
+        // still queued (the world's subscribers only): iceoryx2's default
+        // (128) is smaller than a large run, and it then discards the
+        // duplicates with a long warning each on stderr.
         cfg.defaults
             .publish_subscribe
             .subscriber_expired_connection_buffer = cap.agents();
@@ -131,10 +131,9 @@ impl ShmWorld {
             .create()
             .map_err(|e| setup_err("service mrsim/join-reply", e))?;
         // iceoryx2 sizes every connection by the publisher's worst case:
-        // every subscriber's buffer full of distinct replies, here 1002 x
-        // 130 samples at 1000 agents, which made each agent's join-reply
-        // connection 132 kB (64 kB of it resident in the world, 45 MB of
-        // the world's peak RSS while a thousand agents joined). Replies go
+        // every subscriber's buffer full of distinct replies, which grows
+        // with the square of the agents and at a thousand of them is most
+        // of the world's peak RSS while they join. Replies go
         // to every subscriber alike, so a buffer holds only the newest
         // replies: in use at once are at most a buffer's worth, the ones
         // the agents hold while reading (two each at most), and the one
@@ -312,8 +311,8 @@ impl WorldTransport for ShmWorld {
     }
 
     fn prepare_ticks(&mut self) -> Result<bool, TransportError> {
-        // The join-time connections go first (1000 agents' connections of
-        // both kinds at once raised the world's peak RSS by ~15 MB), then
+        // The join-time connections go first (holding both kinds at once
+        // raises the world's peak RSS at a thousand agents), then
         // the snapshot publisher connects to every subscriber, and a ring
         // with no snapshot wakes the agents to map their side (they find
         // nothing to read, and wait again).
