@@ -96,20 +96,35 @@ mod tests {
     #[test]
     fn a_side_polls_only_while_its_waits_are_shorter_than_the_spin() {
         let (tx, rx) = unbounded();
-        let poll = Poll::new(Duration::from_millis(200));
+        let mut poll = Poll::new(Duration::from_millis(20));
         assert!(poll.polls());
-        // A wait of at least 300 ms: the next one blocks at once.
+        // A wait longer than the spin: the next one blocks at once. The
+        // message is sent only once this thread has polled through the
+        // whole spin and sleeps in its blocking receive (not after a pause
+        // that is usually long enough), so the wait is longer than the
+        // spin however fast or slow the threads run.
+        let me = crate::test_support::thread_id();
+        let (started_tx, started_rx) = std::sync::mpsc::channel::<()>();
         let sender = std::thread::spawn(move || {
-            std::thread::sleep(Duration::from_millis(300));
+            let _ = started_rx.recv();
+            crate::test_support::wait_until_asleep(me);
             let _ = tx.send(1u32);
             tx
         });
-        assert_eq!(poll.recv(&rx, Duration::from_secs(10)), Ok(1));
+        let _ = started_tx.send(());
+        assert_eq!(poll.recv(&rx, Duration::from_secs(60)), Ok(1));
         assert!(!poll.polls());
         // A message already waiting is a short wait: polling resumes.
+        // Measured against a spin no receive of a waiting message comes
+        // near (and a last wait as long), so that no pause of this thread
+        // can make it look long.
+        let hour = Duration::from_secs(3600);
+        poll.spin = hour;
+        poll.last.set(hour);
+        assert!(!poll.polls());
         let tx = sender.join().expect("sender");
         let _ = tx.send(2);
-        assert_eq!(poll.recv(&rx, Duration::from_secs(10)), Ok(2));
+        assert_eq!(poll.recv(&rx, Duration::from_secs(60)), Ok(2));
         assert!(poll.polls());
         // Zero spin never polls.
         assert!(!Poll::new(Duration::ZERO).polls());
