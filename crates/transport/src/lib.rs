@@ -46,10 +46,11 @@
 //! ([`inproc::InprocWorld::help_with`]). What this bypasses is
 //! [`AgentTransport::wait`], [`AgentTransport::with_latest_snapshot`] and
 //! [`AgentTransport::send_command`] per agent per tick; what it saves is
-//! two thread wake-ups per agent per tick, which at many robots cost more
-//! than the planning itself (BENCHMARKS.md has the numbers). The world
-//! side is unchanged: it still sees one [`WorldTransport`] and one command
-//! per robot. See [`inproc`] for the details.
+//! two thread wake-ups (context switches) per agent per tick, the cost
+//! that bounds a thread-per-agent run at many robots. The world side is
+//! unchanged: it still sees one [`WorldTransport`] and one command per
+//! robot. Nothing else goes around the traits. See [`inproc`] for the
+//! details.
 #![warn(missing_docs)]
 
 use mrsim_proto::{
