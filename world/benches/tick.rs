@@ -225,6 +225,26 @@ impl WorldTransport for InstantAgents {
     fn termination_requested(&self) -> bool {
         false
     }
+
+    fn expect_answers(&mut self, _tick: u64, _count: usize) {}
+
+    fn joins_answered(&mut self) -> Result<(), TransportError> {
+        Ok(())
+    }
+
+    fn cleanup_dead(&mut self) {}
+
+    fn prepare_ticks(&mut self) -> Result<bool, TransportError> {
+        Ok(false)
+    }
+
+    fn publish_stats(
+        &mut self,
+        _header: &mrsim_proto::StatsHeader,
+        _robots: &[mrsim_proto::RobotStats],
+    ) -> Result<(), TransportError> {
+        Ok(())
+    }
 }
 
 /// Runs `s` (lockstep) over [`InstantAgents`]; the tick loop's wall time

@@ -3,12 +3,10 @@
 //!
 //! Why not an iceoryx2 event: on Linux an iceoryx2 event is a Unix datagram
 //! socket per listener, so waking N agents is N `sendto` calls by the world
-//! and one `recvfrom` per agent to drain it. Profiled at 256 agents on two
-//! cores (`perf record -a -g`, BENCHMARKS.md, "Fourth round"), the world's
-//! 256 `sendto`s a tick were 58 % of its CPU time and 9 % of all CPU
-//! samples; the agents' `recvfrom` another 5 %. A futex wakes them all at
-//! once (`FUTEX_WAKE`, every waiter), and an agent's wait is one
-//! `FUTEX_WAIT`.
+//! and one `recvfrom` per agent to drain it: at hundreds of agents those
+//! system calls are most of the world's CPU time (BENCHMARKS.md has the
+//! profiles). A futex wakes them all at once (`FUTEX_WAKE`, every waiter),
+//! and an agent's wait is one `FUTEX_WAIT`.
 //!
 //! The word counts rings. The world publishes the snapshot (iceoryx2,
 //! zero-copy) and then rings: it bumps the count (release) and wakes every
@@ -20,8 +18,8 @@
 //!
 //! The same page counts the agents' answers, so that the world is woken
 //! once per tick, by the last answer it waits for, rather than by every
-//! command (an iceoryx2 notify per command was a `sendto` by each agent and
-//! up to one wake-up of the world per command). Before publishing tick t
+//! command (an iceoryx2 notify per command would cost a `sendto` by each
+//! agent and up to one wake-up of the world per command). Before publishing tick t
 //! the world sets the `answers` word to t's tag (its low 16 bits) with a
 //! count of zero, and the count it waits for. An agent that has published
 //! its command for tick t adds one to the count if the tag is still t's
@@ -393,7 +391,12 @@ impl Drop for Doorbell {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_support::{thread_id, wait_until_asleep};
     use std::time::Instant;
+
+    /// Far longer than any wait here takes when it works: a wait that
+    /// gets near it slept through what should have woken it.
+    const GUARD: Duration = Duration::from_secs(60);
 
     fn ns(tag: &str) -> Namespace {
         Namespace::new(&format!("doorbell-{tag}-{}", std::process::id())).expect("namespace")
@@ -410,16 +413,25 @@ mod tests {
     #[test]
     fn a_ring_wakes_a_waiting_agent_and_is_seen_once() {
         let (world, mut agent) = pair("wake");
+        let (tid_tx, tid_rx) = std::sync::mpsc::channel();
         let waiter = std::thread::spawn(move || {
-            let rang = agent.wait(Duration::from_secs(10)).expect("wait");
+            let _ = tid_tx.send(thread_id());
+            let t = Instant::now();
+            let rang = agent.wait(GUARD).expect("wait");
+            let slept = t.elapsed();
             // Seen once: the next wait times out.
             let again = agent.wait(Duration::from_millis(20)).expect("wait");
-            (rang, again)
+            (rang, slept, again)
         });
-        std::thread::sleep(Duration::from_millis(50));
+        // Rung only once the agent sleeps in its wait, not after a pause
+        // that is usually long enough: whatever the threads' speed, it is
+        // the ring that must wake it.
+        wait_until_asleep(tid_rx.recv().expect("waiter's id"));
         world.ring().expect("ring");
-        let (rang, again) = waiter.join().expect("waiter");
+        let (rang, slept, again) = waiter.join().expect("waiter");
         assert_eq!(rang, 1);
+        // Woken by the ring, not by the guard's timeout.
+        assert!(slept < GUARD / 2, "{slept:?}");
         assert_eq!(again, 0);
     }
 
@@ -429,9 +441,11 @@ mod tests {
         world.ring().expect("ring");
         world.ring().expect("ring");
         let t = Instant::now();
-        // Both rings are counted, and the wait did not sleep.
-        assert_eq!(agent.wait(Duration::from_secs(10)).expect("wait"), 2);
-        assert!(t.elapsed() < Duration::from_secs(5));
+        // Both rings are counted, and the wait did not sleep: it returns
+        // at once, so only a wait that slept through the rings (until the
+        // guard's timeout) gets near the bound.
+        assert_eq!(agent.wait(GUARD).expect("wait"), 2);
+        assert!(t.elapsed() < GUARD / 2);
     }
 
     #[test]
@@ -506,17 +520,22 @@ mod tests {
         assert!(world.wait_answers(Duration::from_secs(60)).expect("wait"));
         // Nothing new: a short wait times out.
         assert!(!world.wait_answers(Duration::from_millis(5)).expect("wait"));
+        let (tid_tx, tid_rx) = std::sync::mpsc::channel();
         let waiter = std::thread::spawn(move || {
+            let _ = tid_tx.send(thread_id());
             let t = Instant::now();
-            let counted = world.wait_answers(Duration::from_secs(60)).expect("wait");
+            let counted = world.wait_answers(GUARD).expect("wait");
             (counted, t.elapsed())
         });
-        std::thread::sleep(Duration::from_millis(50));
+        // The third answer comes only once the world sleeps on the count,
+        // not after a pause that is usually long enough: whatever the
+        // threads' speed, it is the answer that must wake it.
+        wait_until_asleep(tid_rx.recv().expect("waiter's id"));
         agent.answered(41).expect("answer");
         let (counted, slept) = waiter.join().expect("waiter");
         assert!(counted);
-        // Woken by the third answer, not by the 60 s timeout.
-        assert!(slept < Duration::from_secs(30), "{slept:?}");
+        // Woken by the third answer, not by the guard's timeout.
+        assert!(slept < GUARD / 2, "{slept:?}");
     }
 
     #[test]
