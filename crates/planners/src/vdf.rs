@@ -401,11 +401,22 @@ mod tests {
             let fd = -Vec2::new(gx, gy);
             let rel = (rep.force - fd).norm() / fd.norm().max(1e-12);
             assert!(rel < 1e-6, "at {p}: analytic {} vs fd {fd}", rep.force);
-            // And the outward-speed part matters: without it the gradient differs.
-            if v_o.norm() > 0.0 {
-                let mut d_only = fd;
-                d_only.x += 1.0;
-                assert!((rep.force - d_only).norm() > 1e-9);
+            // And the outward-speed part matters: the force with v_or's own
+            // dependence on P dropped (grad vd = alpha grad d / (beta - v_or),
+            // eq 3 with v_or held fixed) differs from the finite difference
+            // wherever the body moves across the line of sight.
+            let rel = p_o - p;
+            let u = rel / rel.norm();
+            let across = (v_o - u * v_o.dot(&u)).norm();
+            if across > 0.0 {
+                let denom = v.beta - v_o.dot(&u);
+                let coef = v.eta * (1.0 / rep.vd - 1.0 / v.eps_vd) / (rep.vd * rep.vd);
+                let d_only = -u * (v.alpha / denom) * coef;
+                let miss = (d_only - fd).norm() / fd.norm();
+                assert!(
+                    miss > 1e-3,
+                    "at {p}: v_or's gradient changes the force by {miss}"
+                );
             }
         }
     }
