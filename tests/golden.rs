@@ -74,7 +74,14 @@ fn trajectory_hash(scenario: &str) -> String {
         cmd.arg(root().join(scenario));
     }
     let o = cmd
-        .args(["--mode", "lockstep", "--transport", "inproc", "--quiet", "--no-report"])
+        .args([
+            "--mode",
+            "lockstep",
+            "--transport",
+            "inproc",
+            "--quiet",
+            "--no-report",
+        ])
         .arg("--out")
         .arg(&out)
         .output()
@@ -119,5 +126,9 @@ fn every_shipped_scenario_in_lockstep_writes_the_recorded_trajectory_byte_for_by
             wrong.push(format!("{name}: recorded, but the file is gone"));
         }
     }
-    assert!(wrong.is_empty(), "trajectories changed:\n{}", wrong.join("\n"));
+    assert!(
+        wrong.is_empty(),
+        "trajectories changed:\n{}",
+        wrong.join("\n")
+    );
 }
