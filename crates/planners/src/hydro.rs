@@ -557,6 +557,40 @@ mod tests {
     }
 
     #[test]
+    fn the_flow_has_the_hand_computed_values_at_a_point_beside_a_cylinder() {
+        // Goal at the origin, start at (-100, 0) (so eq 3's first factor is
+        // 1 - e^-208 = 1), z = (4, 2), m = 0.5, c2 = 2: r = |z| = sqrt 20,
+        //   h = r (1 - e^{-2r}) = 4.4721360 * 0.9998695 = 4.4715524.
+        // No body: conj v = -h m / z, v = -h m z / |z|^2
+        //   = (-0.4471552, -0.2235776), speed m (1 - e^{-2r}) = 0.4999348.
+        // A standing cylinder of radius 1 at (4, 0): eq (1) with the image
+        // point 4 + 1/conj(0 - 4) = 3.75, relative to the centre
+        //   G'/m = -1/(2i + 4) - 1/(2i + 0.25) + 1/(2i)
+        //        = (-0.2 + 0.1i) + (-0.0615385 + 0.4923077i) - 0.5i
+        //        = -0.2615385 + 0.0923077i,
+        //   v = conj(h G') = (-0.5847415, -0.2063793).
+        // The same cylinder moving at (0.5, 0): z is abeam, b = 1 (eq 4),
+        //   the doublet adds D' = a^2 u / (2i)^2 = -0.125 (eq 2),
+        //   v = (-0.7097415, -0.2063793).
+        let circle = Hydro {
+            shape: Shape::Circle,
+            ..Hydro::default()
+        };
+        let (z, start, goal) = (Vec2::new(4.0, 2.0), Vec2::new(-100.0, 0.0), Vec2::zeros());
+        assert!((circle.speed_correction(z, start, goal) - 4.4715524).abs() < 1e-7);
+        let cylinder = |u: f64| circle.body(Vec2::new(4.0, 0.0), Vec2::new(u, 0.0), 1.0, 0.0);
+        let cases = [
+            (vec![], (-0.4471552, -0.2235776)),
+            (vec![cylinder(0.0)], (-0.5847415, -0.2063793)),
+            (vec![cylinder(0.5)], (-0.7097415, -0.2063793)),
+        ];
+        for (bodies, (vx, vy)) in cases {
+            let v = circle.velocity_at(z, start, goal, &bodies);
+            assert!((v - Vec2::new(vx, vy)).norm() < 1e-7, "{v}");
+        }
+    }
+
+    #[test]
     fn far_from_everything_the_speed_is_the_sink_strength() {
         let p = Hydro::default();
         let start = Vec2::new(0.0, 0.0);

@@ -422,6 +422,42 @@ mod tests {
     }
 
     #[test]
+    fn eq_7_has_the_hand_computed_values() {
+        // Robot (a point) at the origin, a body of radius 5 at (20, 0), so
+        // d = 15 and u = (1, 0); alpha = beta = 5, eta = 1000, eps_vd = 40.
+        // Approaching at (-3, 0): v_or = -3, vd = 5 * 15 / 8 = 9.375,
+        //   U = 500 (1/9.375 - 1/40)^2 = 3.3347222,
+        //   grad vd = 5 (-1, 0)/8, F = 1000 (1/9.375 - 1/40)/9.375^2 grad vd
+        //     = (-0.5807407, 0).
+        // Crossing at (0, 4): v_or = 0, vd = 15, U = 500 (1/15 - 1/40)^2
+        //   = 0.8680556; grad v_or = -(0, 4)/20, grad vd = 5 [5 (-1, 0)
+        //   + 15 (0, -0.2)]/25 = (-1, -0.6), F = 1000 (1/15 - 1/40)/225
+        //   (-1, -0.6) = (-0.1851852, -0.1111111).
+        // Receding at (3, 0): vd = 37.5, U = 0.0013889; at (3.5, 0): vd = 50
+        //   is beyond eps_vd, U = 0 and no force.
+        let v = Vdf::new(5.0, 5.0, 1000.0, 2.0, 40.0);
+        let p_o = Vec2::new(20.0, 0.0);
+        let cases = [
+            ((-3.0, 0.0), 9.375, 3.3347222, (-0.5807407, 0.0)),
+            ((0.0, 4.0), 15.0, 0.8680556, (-0.1851852, -0.1111111)),
+            ((3.0, 0.0), 37.5, 0.0013889, (-0.0029630, 0.0)),
+            ((3.5, 0.0), 50.0, 0.0, (0.0, 0.0)),
+        ];
+        for ((vx, vy), vd, u, (fx, fy)) in cases {
+            let v_o = Vec2::new(vx, vy);
+            let rep = v.repulsion(Vec2::zeros(), 0.0, p_o, v_o, 5.0);
+            assert!((rep.vd - vd).abs() < 1e-12, "{v_o}: vd {}", rep.vd);
+            let pot = v.potential(Vec2::zeros(), 0.0, p_o, v_o, 5.0);
+            assert!((pot - u).abs() < 1e-7, "{v_o}: U {pot}");
+            assert!(
+                (rep.force - Vec2::new(fx, fy)).norm() < 1e-7,
+                "{v_o}: {}",
+                rep.force
+            );
+        }
+    }
+
+    #[test]
     fn gradient_includes_the_outward_speed_dependence_on_position() {
         // Robot beside a body moving across the line of sight: moving the
         // robot sideways changes v_or, so the force has a sideways part the
