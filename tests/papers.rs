@@ -266,8 +266,8 @@ fn chung_strategy_2_keeps_swinging_through_its_goal() {
 /// Strategy III settles (Chung et al. section 4, fig 4): with the goal test
 /// asking for 100 s within 0.1 m (`goal_hold_ticks` 1000 at dt 0.1 s) the
 /// robot counts as arrived only if it stays there that long, and every row
-/// from its arrival to the end of the run (at least 100 s later) is within
-/// 0.1 m of the goal. With the file's 3-tick hold the run would end 3 ticks
+/// from its arrival to the end of the run (the 1000 ticks from the arrival
+/// on, 99.9 s) is within 0.1 m of the goal. With the file's 3-tick hold the run would end 3 ticks
 /// after arrival and "held" would be the goal test again: it first comes
 /// within 0.1 m at about 115 s but leaves again; the 100 s hold starts at
 /// 141.3 s.
