@@ -82,7 +82,13 @@ fn assert_safe_on_path_and_home(out: &Path, ticks: &[Tick], goal: [f64; 2]) {
         dev["mean"].as_f64().expect("path_deviation.mean"),
         dev["max"].as_f64().expect("path_deviation.max"),
     );
-    assert!(0.0 <= mean && mean <= max, "{dev}");
+    assert!(mean.is_finite() && max.is_finite(), "{dev}");
+}
+
+/// The largest distance of the robot's centre from the straight path
+/// y = 0 over the run, from trajectory.csv.
+fn off_straight_path(ticks: &[Tick]) -> f64 {
+    ticks.iter().map(|t| t.robot.y.abs()).fold(0.0, f64::max)
 }
 
 /// The rows of diagnostics.csv: (tick, time, robot, name, value).
@@ -109,14 +115,35 @@ fn diagnostics(dir: &Path) -> Vec<(u64, f64, String, String, f64)> {
 fn from_behind_the_robot_speeds_up_and_runs_ahead_of_the_obstacle() {
     let (out, ticks) = run_case("behind");
     assert_safe_on_path_and_home(&out, &ticks, [5.0, 0.0]);
-    // Above nominal speed and already half a metre ahead of the obstacle
-    // within the first 10 s: it ran ahead rather than letting it pass.
+    // On the path all along (fig 9a): within 1 cm of y = 0 in trajectory.csv
+    // and by the world's path_deviation metric.
+    let off = off_straight_path(&ticks);
+    assert!(off < 0.01, "{off} m off the path");
+    let max_dev = metrics(&out)["robots"]["robot"]["path_deviation"]["max"]
+        .as_f64()
+        .expect("max");
+    assert!(max_dev < 0.01, "path_deviation max {max_dev}");
+    // The obstacle (0.3 m/s) reaches the path (y = 0) at about 10.4 s, aimed
+    // where a robot at nominal speed would be then. The robot has sped up
+    // before that and is ahead of it by more than the contact distance when
+    // it arrives: it ran ahead rather than letting it pass.
+    let crossing = ticks
+        .iter()
+        .position(|t| t.obstacle.y >= 0.0)
+        .expect("the obstacle reaches the path");
+    let at = &ticks[crossing];
     assert!(
-        ticks.iter().any(|t| t.time <= 10.0
-            && t.obstacle.x < t.robot.x - 0.5
-            && t.speed() > NOMINAL + 0.05),
-        "never ahead at speed"
+        at.robot.x - at.obstacle.x > CONTACT,
+        "at {} s the robot is at x = {}, the obstacle at x = {}",
+        at.time,
+        at.robot.x,
+        at.obstacle.x
     );
+    let fastest = ticks[..crossing]
+        .iter()
+        .map(Tick::speed)
+        .fold(0.0, f64::max);
+    assert!(fastest > NOMINAL + 0.05, "at most {fastest} m/s before");
     let at_10 = ticks
         .iter()
         .find(|t| (t.time - 10.0).abs() < 1e-6)
@@ -133,6 +160,15 @@ fn from_the_front_the_robot_passes_on_the_left() {
     let min_y = ticks.iter().map(|t| t.robot.y).fold(f64::MAX, f64::min);
     assert!(max_y > 0.2, "swerved left by {max_y} m only");
     assert!(min_y > -0.05, "went right to {min_y}");
+    // Fig 9b: it accelerates while turning: above nominal speed on a tick
+    // where it is off the path and still moving further left.
+    assert!(
+        ticks
+            .iter()
+            .any(|t| t.speed() > NOMINAL + 0.1 && t.robot.y > 0.1 && t.robot.vy > 0.0),
+        "never faster than {} m/s while turning left",
+        NOMINAL + 0.1
+    );
     let m = metrics(&out);
     let max_dev = m["robots"]["robot"]["path_deviation"]["max"]
         .as_f64()
@@ -183,7 +219,10 @@ fn on_a_path_with_corners_the_blocked_corner_is_given_up_and_the_corridor_kept()
     let max_dev = m["robots"]["robot"]["path_deviation"]["max"]
         .as_f64()
         .expect("max");
-    assert!(max_dev <= 0.8, "{max_dev} m from the path");
+    // boundary_violations = 0 already keeps it within the 0.8 m corridor;
+    // turning short of the given-up corner takes it off the path, but by
+    // less than half the corridor.
+    assert!(max_dev > 0.02 && max_dev < 0.4, "{max_dev} m from the path");
     // The first corner (3, 0) is subgoal 1. With the body crossing it, the
     // robot gives it up (fig 3) before coming level with the vertex, which
     // it would otherwise have to do before turning (junction rule).

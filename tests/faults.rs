@@ -121,6 +121,68 @@ fn wait_for_event(out: &Path, secs: u64, f: impl Fn(&Value) -> bool) -> Value {
     }
 }
 
+/// Waits up to `secs` (a failure guard, not a timing) until the complete
+/// lines of events.jsonl satisfy `f`; returns them.
+fn wait_for_events(out: &Path, secs: u64, f: impl Fn(&[Value]) -> bool) -> Vec<Value> {
+    let start = Instant::now();
+    loop {
+        if let Ok(text) = std::fs::read_to_string(out.join("events.jsonl")) {
+            let whole = &text[..text.rfind('\n').map_or(0, |i| i + 1)];
+            let ev: Vec<Value> = whole
+                .lines()
+                .filter_map(|l| serde_json::from_str::<Value>(l).ok())
+                .collect();
+            if f(&ev) {
+                return ev;
+            }
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(secs),
+            "events not seen in {secs} s"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+/// Waits until both agents of a two-robot run have joined (their
+/// `agent_joined` events are on disk).
+fn wait_for_both_joined(out: &Path) {
+    wait_for_events(out, 60, |ev| {
+        ["a", "b"]
+            .iter()
+            .all(|r| !of(ev, "agent_joined", r).is_empty())
+    });
+}
+
+/// Waits until process `pid` (an agent with no world to join) sits in its
+/// retry loop: alive, asleep, and woken from sleep at least four times
+/// (`voluntary_ctxt_switches` in /proc), i.e. it has looked for a world
+/// and not found one. An agent emits nothing while it waits; this is the
+/// nearest state to observe.
+fn wait_until_waiting(pid: u32) {
+    let switches = || -> Option<u64> {
+        let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
+        status
+            .lines()
+            .find_map(|l| l.strip_prefix("voluntary_ctxt_switches:"))?
+            .trim()
+            .parse()
+            .ok()
+    };
+    let start = Instant::now();
+    loop {
+        assert!(!process_gone(pid), "agent {pid} ended while waiting");
+        if switches().is_some_and(|n| n >= 4) && process_state(pid) == Some('S') {
+            return;
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(30),
+            "agent {pid} never settled into waiting"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
 /// Longest run of consecutive ticks in `ticks` (sorted), and where it ends.
 fn longest_streak(ticks: &[u64]) -> (u64, u64) {
     let (mut best, mut end, mut cur) = (0, 0, 0);
@@ -226,7 +288,8 @@ fn a_killed_agent_in_realtime_is_restarted_by_the_launcher_and_rejoins_its_robot
     let id = run_id("rs");
     let mut l = launcher(&file, &out, &id, &["--restart-agents"]);
     let first = wait_for_process(&["agent", "--robot", "a", "--run", &id], &[], 30);
-    std::thread::sleep(Duration::from_millis(800));
+    // Killed mid-run: once both agents have joined (the clock then runs).
+    wait_for_both_joined(&out);
     if process_gone(first) {
         l.kill().ok();
         panic!("agent a ended before it was killed: {}", stderr_of(&mut l));
@@ -250,19 +313,16 @@ fn a_killed_agent_in_realtime_is_restarted_by_the_launcher_and_rejoins_its_robot
     assert_eq!(lost[0]["pid"], first);
     assert_eq!(back[0]["pid"], second);
     assert!(tick(back[0]) >= tick(lost[0]));
-    // Noticed within a few ticks: the misses right before the loss.
-    let misses: Vec<u64> = of(&ev, "deadline_miss", "a")
-        .iter()
-        .map(|e| tick(e))
-        .filter(|t| *t <= tick(lost[0]))
-        .collect();
-    let streak = misses
-        .iter()
-        .rev()
-        .zip((0..=tick(lost[0])).rev())
-        .take_while(|(t, want)| **t == *want || **t + 1 == *want)
-        .count();
-    assert!(streak <= 20, "{streak} ticks missed before the loss");
+    // Lost because its process died (seen by the world's process check),
+    // not by a timeout: no wall-clock bound on how soon.
+    assert!(
+        lost[0]["reason"]
+            .as_str()
+            .unwrap_or("")
+            .contains(&format!("agent process {first} died")),
+        "{}",
+        lost[0]
+    );
     let m = metrics(&out);
     assert_eq!(m["agents_lost"], 1, "{m:#}");
     assert_eq!(m["robots"]["a"]["agent_pid"], second);
@@ -329,22 +389,31 @@ fn an_agent_killed_twenty_times_still_rejoins_within_the_port_limits() {
 
 #[test]
 fn an_agent_stopped_in_realtime_misses_deadlines_while_the_world_keeps_ticking() {
-    // Goals out of reach: the run lasts exactly `duration`.
-    let text = two(100.0, "dt = 0.05\nduration = 4.0\nmode = \"realtime\"");
+    // Goals out of reach: the run lasts exactly `duration` (200 ticks of
+    // 50 ms; the stop and the return take a few seconds of it whatever the
+    // machine, as each waits for what the world has written).
+    let text = two(100.0, "dt = 0.05\nduration = 10.0\nmode = \"realtime\"");
     let (file, out) = scenario("stop-rt", &text);
     let id = run_id("srt");
     let mut l = launcher(&file, &out, &id, &[]);
     let pid = wait_for_process(&["agent", "--robot", "a", "--run", &id], &[], 30);
-    std::thread::sleep(Duration::from_millis(1000));
+    wait_for_both_joined(&out);
     send_signal(pid, libc::SIGSTOP);
-    std::thread::sleep(Duration::from_millis(1000));
+    // Stopped until the world has logged ten misses of a in a row.
+    wait_for_events(&out, 60, |ev| {
+        let t: Vec<u64> = of(ev, "deadline_miss", "a")
+            .iter()
+            .map(|e| tick(e))
+            .collect();
+        longest_streak(&t).0 >= 10
+    });
     send_signal(pid, libc::SIGCONT);
     let status = wait_timeout(&mut l, 60).expect("launcher ended");
     assert!(status.success(), "{}", stderr_of(&mut l));
     let m = metrics(&out);
     // Every tick happened although a did not answer for a second; a stopped
     // process is alive, so it was never lost.
-    assert_eq!(m["ticks"], 80, "{m:#}");
+    assert_eq!(m["ticks"], 200, "{m:#}");
     assert_eq!(m["agents_lost"], 0, "{m:#}");
     let ev = events(&out);
     let misses: Vec<u64> = of(&ev, "deadline_miss", "a")
@@ -354,7 +423,7 @@ fn an_agent_stopped_in_realtime_misses_deadlines_while_the_world_keeps_ticking()
     let (streak, end) = longest_streak(&misses);
     assert!(streak >= 10, "longest run of misses {streak}: {misses:?}");
     // After SIGCONT it answered again.
-    let answered_after = (end + 1..80).any(|t| !misses.contains(&t));
+    let answered_after = (end + 1..200).any(|t| !misses.contains(&t));
     assert!(
         answered_after,
         "a never answered after the stop: {misses:?}"
@@ -453,7 +522,7 @@ fn when_the_world_is_killed_the_launcher_names_it_and_every_agent_exits() {
     let (file, out) = scenario("world-dies", &text);
     let id = run_id("wd");
     let (mut l, wpid, agents) = launched(&file, &out, &id);
-    std::thread::sleep(Duration::from_millis(800));
+    wait_for_both_joined(&out);
     send_signal(wpid, libc::SIGKILL);
     let status = wait_timeout(&mut l, 30).expect("launcher ended");
     let err = stderr_of(&mut l);
@@ -497,7 +566,7 @@ fn a_killed_hand_started_world_leaves_nothing_that_blocks_the_next_world_of_that
     let short = two(3.0, "dt = 0.1\nduration = 30.0");
     let (file, out) = scenario("stale2", &short);
     let mut a = agent(&id, "a", None);
-    std::thread::sleep(Duration::from_millis(300));
+    wait_until_waiting(a.id());
     let mut w = world(&file, &out, &id);
     let mut b = agent(&id, "b", None);
     let ws = wait_timeout(&mut w, 60).expect("world ended");
@@ -691,13 +760,13 @@ fn a_runs_shared_memory_and_root_path_are_private_to_its_user() {
     let text = lanes(&[("a", "social-force")], 3.0, "dt = 0.1\nduration = 30.0");
     let (_out, id, mut w) = by_hand("private", "prv", &text);
     let root = PathBuf::from(format!("/tmp/mrsim/{id}"));
-    // The world's services exist once the join service's data is there.
-    let start = Instant::now();
-    while shm_leftovers(&id).len() < 5 {
-        assert!(start.elapsed() < Duration::from_secs(30), "world not up");
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    std::thread::sleep(Duration::from_millis(200));
+    // The world says it waits for its agents once every service is made.
+    let err = w.stderr.take().expect("world stderr");
+    let mut lines = std::io::BufRead::lines(std::io::BufReader::new(err));
+    let up = lines.any(|l| l.is_ok_and(|l| l.contains("waiting for 1 agents to join")));
+    assert!(up, "the world ended before it waited for its agents");
+    // Keep reading, so that the world's later lines never meet a closed pipe.
+    std::thread::spawn(move || lines.for_each(drop));
     let mode = |p: &Path| std::fs::metadata(p).expect("metadata").permissions().mode() & 0o777;
     assert_eq!(mode(&root), 0o700, "root path");
     let entries = shm_leftovers(&id);

@@ -57,8 +57,23 @@ fn the_good_file_runs() {
     let dir = fresh_dir("good");
     let file = dir.join("good.toml");
     std::fs::write(&file, GOOD).expect("write");
-    let o = run(&file, &dir.join("out"), &run_id("good"), &[]);
+    let out = dir.join("out");
+    let o = run(&file, &out, &run_id("good"), &["--quiet", "--no-report"]);
     assert_ok(&o);
+    // It ran: the whole 5 s at dt 0.1 (b's goal is 5 m away under homing),
+    // both robots and the obstacle in trajectory.csv.
+    let m = metrics(&out);
+    assert!(m["ticks"].as_u64().is_some_and(|t| t > 0), "{m:#}");
+    for name in ["a", "b"] {
+        assert!(
+            m["robots"][name].is_object(),
+            "no metrics for {name}: {m:#}"
+        );
+    }
+    let rows = trajectory(&out);
+    for body in ["a", "b", "o"] {
+        assert!(!track(&rows, body).is_empty(), "no rows of {body}");
+    }
 }
 
 #[test]
@@ -96,7 +111,7 @@ fn nan_is_refused_with_its_line() {
     refused(
         &GOOD.replace("goal = [5.0, 3.0]", "goal = [nan, 3.0]"),
         16,
-        "",
+        "must be finite numbers, got [NaN, 3]",
     );
 }
 
@@ -116,7 +131,11 @@ fn overlapping_starts_are_refused_with_its_line() {
 
 #[test]
 fn duplicate_names_are_refused_with_its_line() {
-    refused(&GOOD.replace("name = \"b\"", "name = \"a\""), 13, "a");
+    refused(
+        &GOOD.replace("name = \"b\"", "name = \"a\""),
+        13,
+        "duplicate name: there is already a robot `a`",
+    );
 }
 
 #[test]

@@ -23,66 +23,6 @@ fn run_file(file: &Path, tag: &str) -> PathBuf {
     out
 }
 
-fn norm(x: f64, y: f64) -> f64 {
-    x.hypot(y)
-}
-
-/// Ko & Choi cases 1-3: where the robot first crosses the obstacle's line
-/// (its offset along the obstacle's motion from the obstacle's centre, > 0
-/// in front of it), the reversals of its along-track velocity before that,
-/// and the smallest centre distance minus the obstacle's radius over the run.
-struct Crossing {
-    offset: f64,
-    reversals: usize,
-    min_gap: f64,
-}
-
-fn ko_choi_crossing(dir: &Path) -> Crossing {
-    let rows = trajectory(dir);
-    let (robot, obstacle) = (track(&rows, "robot"), track(&rows, "obstacle"));
-    assert_eq!(robot.len(), obstacle.len());
-    let o = obstacle[0];
-    let d = {
-        let n = norm(o.vx, o.vy);
-        (o.vx / n, o.vy / n)
-    };
-    let n = (-d.1, d.0);
-    let track_dir = (80.0 / norm(80.0, -42.0), -42.0 / norm(80.0, -42.0));
-    let mut offset = f64::NAN;
-    let mut reversals = 0;
-    let mut min_gap = f64::INFINITY;
-    let (mut side_prev, mut along_prev) = (f64::NAN, 0.0);
-    for (r, o) in robot.iter().zip(&obstacle) {
-        assert_eq!(r.tick, o.tick);
-        let rel = (r.x - o.x, r.y - o.y);
-        min_gap = min_gap.min(norm(rel.0, rel.1) - 5.0);
-        if offset.is_nan() {
-            let side = rel.0 * n.0 + rel.1 * n.1;
-            if side_prev.is_finite() && side * side_prev < 0.0 {
-                offset = rel.0 * d.0 + rel.1 * d.1;
-            } else {
-                let along = r.vx * track_dir.0 + r.vy * track_dir.1;
-                if along != 0.0 {
-                    if along * along_prev < 0.0 {
-                        reversals += 1;
-                    }
-                    along_prev = along;
-                }
-            }
-            side_prev = side;
-        }
-    }
-    assert!(
-        offset.is_finite(),
-        "the robot never crossed the obstacle's line"
-    );
-    Crossing {
-        offset,
-        reversals,
-        min_gap,
-    }
-}
-
 fn robot_metrics(dir: &Path, robot: &str) -> serde_json::Value {
     metrics(dir)["robots"][robot].clone()
 }
@@ -98,12 +38,17 @@ fn ko_choi_case_1_goes_ahead_of_the_obstacle_without_touching_it() {
     assert_eq!(robot_metrics(&dir, "robot")["reached_goal"], false);
 }
 
+/// The paper (section 5.1, fig 3): "the robot moves back and forth six times
+/// from t_16 to t_29" and then takes the obstacle's back track. Not
+/// reproduced in number: at the file's max_speed (23.3 cm/s) our robot
+/// reverses 4 times before crossing behind; six only at 23.7 cm/s (see
+/// tests/papers_band.rs). The test asserts the 4 we get.
 #[test]
 fn ko_choi_case_2_moves_back_and_forth_then_passes_behind_the_obstacle() {
     let dir = run_paper("ko-choi-case-2");
     let c = ko_choi_crossing(&dir);
     assert!(c.offset < 0.0, "offset {}", c.offset);
-    assert!(c.reversals >= 2, "reversals {}", c.reversals);
+    assert_eq!(c.reversals, 4, "reversals (the paper: about six)");
     // No overlap at any tick and no contact in any substep (the closest
     // tick-sampled gap is about 0.6 cm).
     assert!(c.min_gap > 0.0, "gap {}", c.min_gap);
@@ -161,11 +106,14 @@ fn ko_choi_case_5_collides_with_obstacle_1_where_case_4_avoids_every_obstacle() 
     let case5 = run_paper("ko-choi-case-5");
     assert_eq!(metrics(&case4)["collisions_total"], 0);
     assert!(events(&case4).iter().all(|e| e["type"] != "collision"));
-    // Case 5 touches o1 (a surface gap within the world's 1 mm), and o1 is
-    // the only body it collides with.
+    // Case 5 touches o1 first at tick 14, the paper's t_14, and o1 is the
+    // only body it collides with.
     let hits = robot_collisions_with(&case5, "o1");
-    assert!(!hits.is_empty(), "case 5 misses o1");
-    assert!(hits.iter().all(|&(_, gap)| gap <= 0.1), "{hits:?}");
+    assert_eq!(
+        hits.first().map(|h| h.0),
+        Some(14),
+        "case 5 hits o1 at {hits:?}"
+    );
     let m5 = metrics(&case5);
     assert_eq!(m5["collisions_total"].as_u64(), Some(hits.len() as u64));
     assert_eq!(m5["robots"]["robot"]["collisions"], m5["collisions_total"]);
@@ -180,19 +128,57 @@ fn ko_choi_case_5_collides_with_obstacle_1_where_case_4_avoids_every_obstacle() 
     assert!(closest4 > 0.1, "case 4 comes {closest4} cm from o1");
 }
 
+/// The largest change of the robot's heading from one tick to the next
+/// (degrees) up to tick `until`: how abruptly it turns.
+fn sharpest_turn(dir: &Path, until: u64) -> f64 {
+    let rows = trajectory(dir);
+    let heading: Vec<f64> = track(&rows, "robot")
+        .into_iter()
+        .filter(|r| r.tick <= until && norm(r.vx, r.vy) > 1e-6)
+        .map(|r| r.vy.atan2(r.vx))
+        .collect();
+    heading
+        .windows(2)
+        .map(|w| {
+            let d = (w[1] - w[0]).rem_euclid(std::f64::consts::TAU);
+            d.min(std::f64::consts::TAU - d).to_degrees()
+        })
+        .fold(0.0, f64::max)
+}
+
+/// The paper (fig 7): beta = 150 makes the robot begin avoiding obstacle 1
+/// at t_8, earlier than case 4, and its trajectory "changes more abruptly".
+/// Not reproduced: ours starts avoiding at tick 13, one tick before case 4
+/// (tick 14), not at t_8; and its sharpest turn (about 119 degrees in one
+/// tick) is gentler than case 4's (about 155 degrees), not more abrupt. The
+/// test asserts what we get.
 #[test]
-fn ko_choi_case_6_starts_avoiding_earlier_than_case_4() {
+fn ko_choi_case_6_starts_avoiding_one_tick_earlier_than_case_4_and_turns_less_sharply() {
     let case4 = run_paper("ko-choi-case-4");
     let case6 = run_paper("ko-choi-case-6");
     let (t4, t6) = (starts_avoiding(&case4), starts_avoiding(&case6));
-    assert!(t6 < t4, "case 6 at tick {t6}, case 4 at tick {t4}");
+    assert_eq!(
+        (t4, t6),
+        (14, 13),
+        "case 4 at tick {t4}, case 6 at tick {t6}"
+    );
+    let (a4, a6) = (sharpest_turn(&case4, 30), sharpest_turn(&case6, 30));
+    assert!(
+        a6 < a4 && a6 > 100.0,
+        "sharpest turns: case 6 {a6} deg, case 4 {a4} deg"
+    );
     assert_eq!(metrics(&case6)["collisions_total"], 0);
 }
 
 /// Runs case 7's scenario text with and without o3 (the last obstacle
 /// block) and checks that the robot does not respond to o3 until o3 hits
-/// it: before the tick of the hit its path stays within 0.1 cm of the path
-/// without o3, while o3 closes from beyond eps_vd (40 cm) to a few cm.
+/// it, at tick 40: before that tick its path stays within 0.1 cm of the
+/// path without o3, while o3 closes from beyond eps_vd (40 cm) to a few cm.
+///
+/// The paper (fig 8) has the robot ignore o3 and then make "an unnecessary
+/// detour after it passes away the obstacle 3 path". The detour is not
+/// reproduced: our robot never passes o3's path unharmed, o3 hits it first
+/// (tick 40), so there is no detour after to assert.
 fn ko_choi_case_7_ignores_obstacle_3(text: &str, tag: &str) {
     let start = text.find("[[obstacle]]\nname = \"o3\"").expect("o3 block");
     assert!(
@@ -209,6 +195,7 @@ fn ko_choi_case_7_ignores_obstacle_3(text: &str, tag: &str) {
         .first()
         .map(|&(tick, _)| tick)
         .expect("case 7 runs into o3");
+    assert_eq!(hit, 40, "{tag}: o3 hits at tick {hit}");
     let rows = trajectory(&with_o3);
     let rows0 = trajectory(&no_o3);
     let (a, b) = (track(&rows, "robot"), track(&rows0, "robot"));
@@ -276,18 +263,37 @@ fn chung_strategy_2_keeps_swinging_through_its_goal() {
     assert_eq!(robot_metrics(&dir, "robot")["reached_goal"], false);
 }
 
+/// Strategy III settles (Chung et al. section 4, fig 4): with the goal test
+/// asking for 100 s within 0.1 m (`goal_hold_ticks` 1000 at dt 0.1 s) the
+/// robot counts as arrived only if it stays there that long, and every row
+/// from its arrival to the end of the run (the 1000 ticks from the arrival
+/// on, 99.9 s) is within 0.1 m of the goal. With the file's 3-tick hold the run would end 3 ticks
+/// after arrival and "held" would be the goal test again: it first comes
+/// within 0.1 m at about 115 s but leaves again; the 100 s hold starts at
+/// 141.3 s.
 #[test]
-fn chung_strategy_3_settles_at_its_goal() {
-    // The run ends once every robot has held its goal (the crossers arrive
-    // at 20 s, this robot at about 115 s), so the test checks the arrival
-    // and every tick after it rather than a window after 200 s.
-    let dir = run_paper("chung-strategy-3");
-    let m = robot_metrics(&dir, "robot");
-    assert_eq!(m["reached_goal"], true);
+fn chung_strategy_3_settles_at_its_goal_and_stays_there_for_100_s() {
+    let out = fresh_dir("chung-strategy-3-hold");
+    let id = run_id("chung3hold");
+    let file = root().join("scenarios/papers/chung-strategy-3.toml");
+    let sets = [
+        "--set",
+        "defaults.goal_hold_ticks=1000",
+        "--set",
+        "world.duration=500",
+        "--quiet",
+        "--no-report",
+    ];
+    assert_ok(&run(&file, &out, &id, &sets));
+    assert_clean(&id);
+    let m = robot_metrics(&out, "robot");
+    assert_eq!(m["reached_goal"], true, "{m:#}");
     let t = m["time_to_goal"].as_f64().expect("time_to_goal");
-    let rows = trajectory(&dir);
+    let rows = trajectory(&out);
     let held = after(&rows, "robot", t);
-    assert!(held.len() >= 3);
+    let span = held.last().expect("rows after arrival").time - t;
+    // 1000 ticks counted from the arrival's own tick: 99.9 s of rows after it.
+    assert!(span >= 99.9 - 1e-6, "held for {span} s only");
     for r in held {
         assert!(
             norm(r.x - 10.0, r.y) <= 0.1,
@@ -296,7 +302,7 @@ fn chung_strategy_3_settles_at_its_goal() {
             r.time
         );
     }
-    assert_eq!(metrics(&dir)["collisions_total"], 0);
+    assert_eq!(metrics(&out)["collisions_total"], 0);
 }
 
 #[test]
@@ -320,20 +326,47 @@ fn chung_homing_oscillation_falls_as_alpha_grows() {
     assert!(a001 > a01 && a01 > a1 && a1 > 0.1, "{a001} {a01} {a1}");
 }
 
-/// Peak speed and largest tick-to-tick velocity change of the robot.
-fn hydro_speeds(dir: &Path) -> (f64, f64) {
+/// Peak speed of the robot, its largest tick-to-tick velocity change, and
+/// that change over the median of the ten changes around it (how much the
+/// largest change stands out from its neighbours: a jump).
+fn hydro_speeds(dir: &Path) -> (f64, f64, f64) {
     let rows = trajectory(dir);
     let robot = track(&rows, "robot");
     let peak = robot.iter().map(|r| norm(r.vx, r.vy)).fold(0.0, f64::max);
-    let jump = robot
+    let dv: Vec<f64> = robot
         .windows(2)
         .map(|w| norm(w[1].vx - w[0].vx, w[1].vy - w[0].vy))
-        .fold(0.0, f64::max);
-    (peak, jump)
+        .collect();
+    let (k, jump) = dv
+        .iter()
+        .copied()
+        .enumerate()
+        .fold((0, 0.0), |a, (i, x)| if x > a.1 { (i, x) } else { a });
+    let mut around: Vec<f64> = dv[k.saturating_sub(5)..k]
+        .iter()
+        .chain(dv.get(k + 1..(k + 6).min(dv.len())).unwrap_or(&[]))
+        .copied()
+        .collect();
+    around.sort_by(f64::total_cmp);
+    let median = around[around.len() / 2];
+    (peak, jump, jump / median)
 }
 
+/// Sugiyama et al. figs 15-20. The paper: with the ellipse "the maximum
+/// velocity of the new method is a half maximum velocity of our previous
+/// method" (the circle), and with the new correction function b_j the
+/// velocity "has no discontinuous point at all time" where the binary b_j
+/// has one at the maximum-velocity point.
+///
+/// The half is not reproduced: our ellipse's peak is 0.72 of the circle's
+/// (0.722 against 1.002 m/s binary, 1.011 smooth); the test asserts the
+/// ratio we get (0.70-0.74). The smooth correction's claim holds as the
+/// paper makes it: a jump is the largest tick-to-tick velocity change
+/// standing out from the median of the ten around it by more than 25 %;
+/// binary has one with both shapes (1.54 and 4.95 times), smooth with
+/// neither (1.11 and 1.03), and its largest change is smaller too.
 #[test]
-fn hydro_variants_reach_the_goal_and_the_ellipse_and_smooth_correction_calm_the_speed() {
+fn hydro_variants_reach_the_goal_the_ellipse_lowers_the_peak_and_smooth_b_has_no_jump() {
     let mut s = std::collections::BTreeMap::new();
     for shape in ["circle", "ellipse"] {
         for correction in ["binary", "smooth"] {
@@ -347,18 +380,17 @@ fn hydro_variants_reach_the_goal_and_the_ellipse_and_smooth_correction_calm_the_
                 r["min_clearance"].as_f64().expect("clearance") > 0.0,
                 "{name}"
             );
-            let (peak, jump) = hydro_speeds(&dir);
-            eprintln!("{name}: peak speed {peak:.3} m/s, max tick-to-tick change {jump:.4} m/s");
-            s.insert((shape, correction), (peak, jump));
+            s.insert((shape, correction), hydro_speeds(&dir));
         }
     }
     for c in ["binary", "smooth"] {
-        assert!(s[&("ellipse", c)].0 < s[&("circle", c)].0, "{c}: {s:?}");
+        let ratio = s[&("ellipse", c)].0 / s[&("circle", c)].0;
+        assert!((0.70..0.74).contains(&ratio), "{c}: ratio {ratio} {s:?}");
     }
     for shape in ["circle", "ellipse"] {
-        assert!(
-            s[&(shape, "smooth")].1 < s[&(shape, "binary")].1,
-            "{shape}: {s:?}"
-        );
+        let (b, sm) = (s[&(shape, "binary")], s[&(shape, "smooth")]);
+        assert!(b.2 > 1.25, "{shape}: binary has no jump: {s:?}");
+        assert!(sm.2 < 1.25, "{shape}: smooth has a jump: {s:?}");
+        assert!(sm.1 < b.1, "{shape}: {s:?}");
     }
 }

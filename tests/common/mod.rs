@@ -238,3 +238,64 @@ pub fn remove_leftovers(run_id: &str) {
     }
     let _ = std::fs::remove_dir_all(format!("/tmp/mrsim/{run_id}"));
 }
+
+/// The length of (x, y).
+pub fn norm(x: f64, y: f64) -> f64 {
+    x.hypot(y)
+}
+
+/// Ko & Choi cases 1-3: where the robot first crosses the obstacle's line
+/// (its offset along the obstacle's motion from the obstacle's centre, > 0
+/// in front of it), the reversals of its along-track velocity before that,
+/// and the smallest centre distance minus the obstacle's radius over the run.
+pub struct Crossing {
+    pub offset: f64,
+    pub reversals: usize,
+    pub min_gap: f64,
+}
+
+pub fn ko_choi_crossing(dir: &Path) -> Crossing {
+    let rows = trajectory(dir);
+    let (robot, obstacle) = (track(&rows, "robot"), track(&rows, "obstacle"));
+    assert_eq!(robot.len(), obstacle.len());
+    let o = obstacle[0];
+    let d = {
+        let n = norm(o.vx, o.vy);
+        (o.vx / n, o.vy / n)
+    };
+    let n = (-d.1, d.0);
+    let track_dir = (80.0 / norm(80.0, -42.0), -42.0 / norm(80.0, -42.0));
+    let mut offset = f64::NAN;
+    let mut reversals = 0;
+    let mut min_gap = f64::INFINITY;
+    let (mut side_prev, mut along_prev) = (f64::NAN, 0.0);
+    for (r, o) in robot.iter().zip(&obstacle) {
+        assert_eq!(r.tick, o.tick);
+        let rel = (r.x - o.x, r.y - o.y);
+        min_gap = min_gap.min(norm(rel.0, rel.1) - 5.0);
+        if offset.is_nan() {
+            let side = rel.0 * n.0 + rel.1 * n.1;
+            if side_prev.is_finite() && side * side_prev < 0.0 {
+                offset = rel.0 * d.0 + rel.1 * d.1;
+            } else {
+                let along = r.vx * track_dir.0 + r.vy * track_dir.1;
+                if along != 0.0 {
+                    if along * along_prev < 0.0 {
+                        reversals += 1;
+                    }
+                    along_prev = along;
+                }
+            }
+            side_prev = side;
+        }
+    }
+    assert!(
+        offset.is_finite(),
+        "the robot never crossed the obstacle's line"
+    );
+    Crossing {
+        offset,
+        reversals,
+        min_gap,
+    }
+}

@@ -261,7 +261,62 @@ mod tests {
     }
 
     #[test]
-    fn the_goal_is_an_equilibrium_whatever_the_bodies() {
+    fn position_repulsion_has_the_hand_computed_value_with_its_goal_counter_term() {
+        // Robot at rest at the origin, goal (10, 0), one body at rest at
+        // (3, 4); Strategy I, f_g = 1, f_m = 20. By hand:
+        //   attraction            (1, 0)
+        //   (r_i - r_j)/|.|^3     (-3, -4)/125          = (-0.024, -0.032)
+        //   (r_g - r_j)/|.|^3     (7, -4)/65^1.5        = (0.0133576, -0.0076329)
+        //   f = (1, 0) + 20 [(-0.024, -0.032) - (0.0133576, -0.0076329)]
+        //     = (0.2528483, -0.4873419)
+        let mut p = chung(Strategy::I);
+        let o = [body(1, Vec2::new(3.0, 4.0), Vec2::zeros())];
+        let f = force(
+            &mut p,
+            me(Vec2::zeros(), Vec2::zeros()),
+            Vec2::new(10.0, 0.0),
+            &o,
+        );
+        assert!((f - Vec2::new(0.2528483, -0.4873419)).norm() < 1e-6, "{f}");
+    }
+
+    #[test]
+    fn strategy_three_velocity_term_has_the_hand_computed_value() {
+        // Robot at the origin moving at (0.5, 0), goal (10, 0), one body at
+        // (2, 0) moving at (-0.3, 0.4); f_v = 20. Eq (5) as we read it:
+        //   (v_i - v_j) f_v / |r_i - r_j|^3 = (0.8, -0.4) 20/8   = (2, -1)
+        //   - (v_g - v_j) f_v / |r_g - r_j|^3 = -(0.3, -0.4) 20/512
+        //                                     = (-0.01171875, 0.015625)
+        // so Strategy III's force is Strategy I's (same f_m) plus
+        // (1.98828125, -0.984375); and in full, with attraction (1, 0),
+        // damping -0.8 (0.5, 0) and position repulsion
+        // 10 [(-2, 0)/8 - (8, 0)/512] = (-2.65625, 0):
+        //   (-0.06796875, -0.984375).
+        let o = [body(1, Vec2::new(2.0, 0.0), Vec2::new(-0.3, 0.4))];
+        let at = me(Vec2::zeros(), Vec2::new(0.5, 0.0));
+        let goal = Vec2::new(10.0, 0.0);
+        let f3 = force(&mut chung(Strategy::III), at, goal, &o);
+        let mut one = chung(Strategy::I);
+        one.f_m = 10.0;
+        let f1 = force(&mut one, at, goal, &o);
+        assert!(
+            (f3 - f1 - Vec2::new(1.98828125, -0.984375)).norm() < 1e-12,
+            "{}",
+            f3 - f1
+        );
+        assert!(
+            (f3 - Vec2::new(-0.06796875, -0.984375)).norm() < 1e-12,
+            "{f3}"
+        );
+    }
+
+    #[test]
+    fn the_goal_is_an_equilibrium_because_the_counter_terms_cancel_the_bodies_there() {
+        // At the goal at rest each term is its own value minus its value at
+        // the goal, so the force vanishes whatever the bodies do. That alone
+        // would hold for any kernel; what makes it the paper's equilibrium is
+        // that the same bodies push hard 5 cm away (the hand-computed kernel
+        // is pinned by the two tests above).
         let goal = Vec2::new(3.0, 1.0);
         let others = [
             body(1, Vec2::new(4.0, 1.5), Vec2::new(0.2, -0.1)),
@@ -271,6 +326,10 @@ mod tests {
             let mut p = chung(s);
             let f = force(&mut p, me(goal, Vec2::zeros()), goal, &others);
             assert!(f.norm() < 1e-12, "{s:?}: {f}");
+            let near = me(goal + Vec2::new(0.05, 0.0), Vec2::zeros());
+            let with = force(&mut chung(s), near, goal, &others);
+            let without = force(&mut chung(s), near, goal, &[]);
+            assert!((with - without).norm() > 0.1, "{s:?}: {}", with - without);
         }
     }
 

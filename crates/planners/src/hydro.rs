@@ -557,6 +557,40 @@ mod tests {
     }
 
     #[test]
+    fn the_flow_has_the_hand_computed_values_at_a_point_beside_a_cylinder() {
+        // Goal at the origin, start at (-100, 0) (so eq 3's first factor is
+        // 1 - e^-208 = 1), z = (4, 2), m = 0.5, c2 = 2: r = |z| = sqrt 20,
+        //   h = r (1 - e^{-2r}) = 4.4721360 * 0.9998695 = 4.4715524.
+        // No body: conj v = -h m / z, v = -h m z / |z|^2
+        //   = (-0.4471552, -0.2235776), speed m (1 - e^{-2r}) = 0.4999348.
+        // A standing cylinder of radius 1 at (4, 0): eq (1) with the image
+        // point 4 + 1/conj(0 - 4) = 3.75, relative to the centre
+        //   G'/m = -1/(2i + 4) - 1/(2i + 0.25) + 1/(2i)
+        //        = (-0.2 + 0.1i) + (-0.0615385 + 0.4923077i) - 0.5i
+        //        = -0.2615385 + 0.0923077i,
+        //   v = conj(h G') = (-0.5847415, -0.2063793).
+        // The same cylinder moving at (0.5, 0): z is abeam, b = 1 (eq 4),
+        //   the doublet adds D' = a^2 u / (2i)^2 = -0.125 (eq 2),
+        //   v = (-0.7097415, -0.2063793).
+        let circle = Hydro {
+            shape: Shape::Circle,
+            ..Hydro::default()
+        };
+        let (z, start, goal) = (Vec2::new(4.0, 2.0), Vec2::new(-100.0, 0.0), Vec2::zeros());
+        assert!((circle.speed_correction(z, start, goal) - 4.4715524).abs() < 1e-7);
+        let cylinder = |u: f64| circle.body(Vec2::new(4.0, 0.0), Vec2::new(u, 0.0), 1.0, 0.0);
+        let cases = [
+            (vec![], (-0.4471552, -0.2235776)),
+            (vec![cylinder(0.0)], (-0.5847415, -0.2063793)),
+            (vec![cylinder(0.5)], (-0.7097415, -0.2063793)),
+        ];
+        for (bodies, (vx, vy)) in cases {
+            let v = circle.velocity_at(z, start, goal, &bodies);
+            assert!((v - Vec2::new(vx, vy)).norm() < 1e-7, "{v}");
+        }
+    }
+
+    #[test]
     fn far_from_everything_the_speed_is_the_sink_strength() {
         let p = Hydro::default();
         let start = Vec2::new(0.0, 0.0);
@@ -870,24 +904,39 @@ mod tests {
         max_dv_time: f64,
         peak_speed: f64,
         max_dv: f64,
-        speeds: Vec<f64>,
+        velocities: Vec<Vec2>,
     }
 
     fn experiment(shape: &str, correction: &str) -> Run {
         experiment_d(shape, correction, ex::ELLIPSE_TIME)
     }
 
+    /// Sugiyama et al. fig 17: the ellipse's peak speed is "a half" of the
+    /// circle's. Ours falls as the ellipse lengthens (`ellipse_time` 0 is the
+    /// circle, the files use 2 s: 1.002 to 0.722 m/s) but stays above 0.6 of
+    /// the circle's even at 4 s (0.623 m/s), so the half is not reached in
+    /// this range; every length still reaches the goal without contact, and
+    /// the smooth correction never makes the largest velocity change worse.
     #[test]
-    #[ignore = "prints peak speed and velocity change against ellipse_time"]
-    fn print_ellipse_time_scan() {
+    fn a_longer_ellipse_lowers_the_peak_speed_but_not_to_half_the_circles() {
+        let circle = experiment_d("ellipse", "binary", 0.0).peak_speed;
+        let mut last = f64::INFINITY;
         for d in [0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 4.0] {
-            for c in ["binary", "smooth"] {
-                let r = experiment_d("ellipse", c, d);
-                eprintln!(
-                    "d {d} {c}: reached {} clearance {:.3} peak {:.4} dv {:.4}",
-                    r.reached, r.min_clearance, r.peak_speed, r.max_dv
-                );
+            let (b, s) = (
+                experiment_d("ellipse", "binary", d),
+                experiment_d("ellipse", "smooth", d),
+            );
+            for r in [&b, &s] {
+                assert!(r.reached && r.min_clearance > 0.0, "ellipse_time {d}");
             }
+            assert!(b.peak_speed < last, "ellipse_time {d}: {}", b.peak_speed);
+            assert!(
+                b.peak_speed > 0.6 * circle,
+                "ellipse_time {d}: {}",
+                b.peak_speed
+            );
+            assert!(s.max_dv <= b.max_dv + 1e-9, "ellipse_time {d}");
+            last = b.peak_speed;
         }
     }
 
@@ -926,7 +975,7 @@ mod tests {
             max_dv_time: 0.0,
             peak_speed: 0.0,
             max_dv: 0.0,
-            speeds: Vec::new(),
+            velocities: Vec::new(),
         };
         let mut last_v = Vec2::zeros();
         for _ in 0..ticks {
@@ -942,7 +991,7 @@ mod tests {
                 run.max_dv = (s.velocity - last_v).norm();
                 run.max_dv_time = t;
             }
-            run.speeds.push(s.velocity.norm());
+            run.velocities.push(s.velocity);
             last_v = s.velocity;
             if !run.reached && (s.position - goal).norm() <= ex::GOAL_TOLERANCE {
                 run.reached = true;
@@ -1035,13 +1084,16 @@ mod tests {
         }
     }
 
+    /// The paper (fig 17): the ellipse's peak speed is half the circle's.
+    /// Not reproduced: ours is 0.72 of it (0.722 against 1.002 m/s binary,
+    /// 1.011 smooth); asserted as measured.
     #[test]
-    fn paper_experiment_ellipse_peak_speed_is_below_the_circles() {
+    fn paper_experiment_ellipse_peak_speed_is_0_72_of_the_circles_not_half() {
         for correction in ["binary", "smooth"] {
             let c = experiment("circle", correction);
             let e = experiment("ellipse", correction);
             assert!(
-                e.peak_speed < c.peak_speed,
+                (0.70..0.74).contains(&(e.peak_speed / c.peak_speed)),
                 "{correction}: ellipse {} circle {}",
                 e.peak_speed,
                 c.peak_speed
@@ -1063,20 +1115,31 @@ mod tests {
         }
     }
 
-    #[test]
-    #[ignore = "prints the speed traces of the four variants"]
-    fn print_speed_traces() {
-        let runs: Vec<_> = ["circle", "ellipse"]
+    /// The largest tick-to-tick velocity change over the median of the ten around it: above 1.25 it stands out from
+    /// its neighbours, a jump.
+    fn sharpest_change(speeds: &[Vec2]) -> f64 {
+        let dv: Vec<f64> = speeds.windows(2).map(|w| (w[1] - w[0]).norm()).collect();
+        let k = (0..dv.len()).fold(0, |k, i| if dv[i] > dv[k] { i } else { k });
+        let mut around: Vec<f64> = dv[k.saturating_sub(5)..k]
             .iter()
-            .flat_map(|s| ["binary", "smooth"].map(|c| (*s, c)))
-            .map(|(s, c)| experiment(s, c).speeds)
+            .chain(&dv[(k + 1).min(dv.len())..(k + 6).min(dv.len())])
+            .copied()
             .collect();
-        for (k, s) in runs[0].iter().enumerate() {
-            let t = (k + 1) as f64 * ex::DT;
-            eprintln!(
-                "{t:.2} {s:.4} {:.4} {:.4} {:.4}",
-                runs[1][k], runs[2][k], runs[3][k]
-            );
+        around.sort_by(f64::total_cmp);
+        dv[k] / around[around.len() / 2]
+    }
+
+    /// Sugiyama et al. figs 17 and 20: with the binary b_j the velocity has
+    /// a discontinuous point at its maximum; with the smooth b_j, none.
+    #[test]
+    fn paper_experiment_binary_correction_jumps_and_smooth_does_not() {
+        for shape in ["circle", "ellipse"] {
+            let b = experiment(shape, "binary");
+            let s = experiment(shape, "smooth");
+            let jb = sharpest_change(&b.velocities);
+            let js = sharpest_change(&s.velocities);
+            assert!(jb > 1.25, "{shape}: binary {jb}");
+            assert!(js < 1.25, "{shape}: smooth {js}");
         }
     }
 }

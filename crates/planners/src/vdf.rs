@@ -401,12 +401,59 @@ mod tests {
             let fd = -Vec2::new(gx, gy);
             let rel = (rep.force - fd).norm() / fd.norm().max(1e-12);
             assert!(rel < 1e-6, "at {p}: analytic {} vs fd {fd}", rep.force);
-            // And the outward-speed part matters: without it the gradient differs.
-            if v_o.norm() > 0.0 {
-                let mut d_only = fd;
-                d_only.x += 1.0;
-                assert!((rep.force - d_only).norm() > 1e-9);
+            // And the outward-speed part matters: the force with v_or's own
+            // dependence on P dropped (grad vd = alpha grad d / (beta - v_or),
+            // eq 3 with v_or held fixed) differs from the finite difference
+            // wherever the body moves across the line of sight.
+            let rel = p_o - p;
+            let u = rel / rel.norm();
+            let across = (v_o - u * v_o.dot(&u)).norm();
+            if across > 0.0 {
+                let denom = v.beta - v_o.dot(&u);
+                let coef = v.eta * (1.0 / rep.vd - 1.0 / v.eps_vd) / (rep.vd * rep.vd);
+                let d_only = -u * (v.alpha / denom) * coef;
+                let miss = (d_only - fd).norm() / fd.norm();
+                assert!(
+                    miss > 1e-3,
+                    "at {p}: v_or's gradient changes the force by {miss}"
+                );
             }
+        }
+    }
+
+    #[test]
+    fn eq_7_has_the_hand_computed_values() {
+        // Robot (a point) at the origin, a body of radius 5 at (20, 0), so
+        // d = 15 and u = (1, 0); alpha = beta = 5, eta = 1000, eps_vd = 40.
+        // Approaching at (-3, 0): v_or = -3, vd = 5 * 15 / 8 = 9.375,
+        //   U = 500 (1/9.375 - 1/40)^2 = 3.3347222,
+        //   grad vd = 5 (-1, 0)/8, F = 1000 (1/9.375 - 1/40)/9.375^2 grad vd
+        //     = (-0.5807407, 0).
+        // Crossing at (0, 4): v_or = 0, vd = 15, U = 500 (1/15 - 1/40)^2
+        //   = 0.8680556; grad v_or = -(0, 4)/20, grad vd = 5 [5 (-1, 0)
+        //   + 15 (0, -0.2)]/25 = (-1, -0.6), F = 1000 (1/15 - 1/40)/225
+        //   (-1, -0.6) = (-0.1851852, -0.1111111).
+        // Receding at (3, 0): vd = 37.5, U = 0.0013889; at (3.5, 0): vd = 50
+        //   is beyond eps_vd, U = 0 and no force.
+        let v = Vdf::new(5.0, 5.0, 1000.0, 2.0, 40.0);
+        let p_o = Vec2::new(20.0, 0.0);
+        let cases = [
+            ((-3.0, 0.0), 9.375, 3.3347222, (-0.5807407, 0.0)),
+            ((0.0, 4.0), 15.0, 0.8680556, (-0.1851852, -0.1111111)),
+            ((3.0, 0.0), 37.5, 0.0013889, (-0.0029630, 0.0)),
+            ((3.5, 0.0), 50.0, 0.0, (0.0, 0.0)),
+        ];
+        for ((vx, vy), vd, u, (fx, fy)) in cases {
+            let v_o = Vec2::new(vx, vy);
+            let rep = v.repulsion(Vec2::zeros(), 0.0, p_o, v_o, 5.0);
+            assert!((rep.vd - vd).abs() < 1e-12, "{v_o}: vd {}", rep.vd);
+            let pot = v.potential(Vec2::zeros(), 0.0, p_o, v_o, 5.0);
+            assert!((pot - u).abs() < 1e-7, "{v_o}: U {pot}");
+            assert!(
+                (rep.force - Vec2::new(fx, fy)).norm() < 1e-7,
+                "{v_o}: {}",
+                rep.force
+            );
         }
     }
 
