@@ -21,6 +21,7 @@
 
 mod error;
 mod generate;
+pub mod map;
 mod overrides;
 mod raw;
 mod resolve;

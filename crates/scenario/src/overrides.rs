@@ -53,7 +53,7 @@ impl RobotPatch<'_> {
 }
 
 const TARGETS: &str = "name, description, length_unit, planner, world.KEY, defaults.KEY, \
-     robot.NAME.KEY, robot.*.KEY, obstacle.NAME.KEY, obstacle.*.KEY, wall.INDEX.KEY, generate.KEY";
+     robot.NAME.KEY, robot.*.KEY, obstacle.NAME.KEY, obstacle.*.KEY, wall.INDEX.KEY, generate.KEY, map.KEY";
 
 /// Applies every override to `doc`; returns those that (also) select robots,
 /// for the generated robots.
@@ -85,7 +85,7 @@ pub(crate) fn apply<'i>(
                 });
             }
             ("name" | "description" | "length_unit", 1)
-            | ("world" | "defaults" | "generate", 2..) => {
+            | ("world" | "defaults" | "generate" | "map", 2..) => {
                 set_path(doc, &segs, value, &span).map_err(&fail)?;
             }
             ("robot", 3..) => {

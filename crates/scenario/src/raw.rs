@@ -1,7 +1,7 @@
 //! The scenario file as written: every key optional and spanned, unknown
 //! keys refused. `resolve` turns it into the types of `types.rs`.
 
-use crate::types::{LengthUnit, MissPolicy, Mode, ParamValue, VelocitySource};
+use crate::types::{LengthUnit, MissPolicy, Mode, ParamValue, UnknownCells, VelocitySource};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use toml::Spanned;
@@ -41,6 +41,15 @@ pub(crate) struct RawDoc {
     pub obstacle: Vec<S<RawObstacle>>,
     pub wall: Vec<S<RawWall>>,
     pub generate: Option<S<RawGenerate>>,
+    pub map: Option<S<RawMap>>,
+}
+
+/// `[map]`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub(crate) struct RawMap {
+    pub file: Option<S<String>>,
+    pub unknown: Option<S<UnknownCells>>,
 }
 
 /// `[world]`.

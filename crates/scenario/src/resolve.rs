@@ -782,7 +782,7 @@ pub(crate) fn resolve(
             "no robots: add [[robot]] tables or a [generate] table",
         ));
     }
-    let scenario = Scenario {
+    let mut scenario = Scenario {
         name: raw.name.as_ref().map_or_else(
             || {
                 std::path::Path::new(spans.origin)
@@ -803,7 +803,17 @@ pub(crate) fn resolve(
         robots,
         obstacles,
         walls,
+        map: None,
     };
+    if let Some(m) = &raw.map {
+        crate::map::attach(
+            m,
+            spans.origin,
+            &mut scenario,
+            &robot_spans,
+            &obstacle_spans,
+        )?;
+    }
     check_scene(&scenario, &robot_spans, &obstacle_spans, &raw)?;
     Ok(Resolved {
         scenario,

@@ -241,6 +241,38 @@ pub struct WallSpec {
     pub segment: [[f64; 2]; 2],
 }
 
+/// What an unknown cell of a map (neither occupied nor free) is for the
+/// simulation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum UnknownCells {
+    /// A wall (the default): nobody has seen what is there, so no robot
+    /// goes there.
+    #[default]
+    Occupied,
+    /// Free space.
+    Free,
+}
+
+/// The `[map]` a scenario's walls were traced from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MapInfo {
+    /// The map's YAML file, as found from the scenario's folder.
+    pub file: String,
+    /// The map's image.
+    pub image: String,
+    /// Cells across and up.
+    pub size: [usize; 2],
+    /// Metres a cell.
+    pub resolution: f64,
+    /// Pose of the lower-left cell: x, y (metres), yaw (radians).
+    pub origin: [f64; 3],
+    /// What unknown cells were taken as.
+    pub unknown: UnknownCells,
+    /// How many of [`Scenario::walls`], the last ones, are the map's.
+    pub walls: usize,
+}
+
 /// A fully resolved, validated scenario.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Scenario {
@@ -256,8 +288,11 @@ pub struct Scenario {
     pub robots: Vec<RobotSpec>,
     /// Scripted obstacles, in file order.
     pub obstacles: Vec<ObstacleSpec>,
-    /// Walls (not including the arena's).
+    /// Walls (not including the arena's): the file's, then the map's.
     pub walls: Vec<WallSpec>,
+    /// The map the last walls come from, if the scenario has one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub map: Option<MapInfo>,
 }
 
 impl Scenario {

@@ -138,6 +138,7 @@ pub fn scenario(n: usize) -> Scenario {
         walls: vec![mrsim_scenario::WallSpec {
             segment: [[-1.0, -5.0], [-1.0, -4.0]],
         }],
+        map: None,
     }
 }
 

@@ -1,0 +1,132 @@
+//! A scenario's `[map]`: load the map, refuse robots and obstacles that
+//! start (or robots whose goal is) in or too near its walls, and add its
+//! traced walls to the scenario's.
+
+use super::OccupancyMap;
+use crate::error::Fail;
+use crate::raw::{RawMap, S};
+use crate::resolve::{RobotSpans, dist_to_segment};
+use crate::types::{MapInfo, Scenario, WallSpec};
+use std::ops::Range;
+use std::path::Path;
+
+/// Loads `[map]` (its `file` relative to the folder of the scenario file
+/// `origin`), checks the bodies against it and appends its walls to
+/// `scenario.walls`, in the scenario's length unit (the map's are metres).
+pub(crate) fn attach(
+    raw: &S<RawMap>,
+    origin: &str,
+    scenario: &mut Scenario,
+    robot_spans: &[RobotSpans],
+    obstacle_spans: &[Range<usize>],
+) -> Result<(), Fail> {
+    let m = raw.get_ref();
+    let Some(file) = &m.file else {
+        return Err(Fail::new(
+            Some(raw.span()),
+            "map",
+            "missing `file` (the map's YAML in ROS map_server's format, relative to the scenario's folder)",
+        ));
+    };
+    let given = Path::new(file.get_ref());
+    let path = if given.is_absolute() {
+        given.to_path_buf()
+    } else {
+        Path::new(origin)
+            .parent()
+            .unwrap_or(Path::new(""))
+            .join(given)
+    };
+    let map = super::load(&path).map_err(|e| Fail::new(Some(file.span()), "map", e.to_string()))?;
+    let unknown = m.unknown.as_ref().map(|u| *u.get_ref()).unwrap_or_default();
+    let scale = scenario.length_unit.per_metre();
+    let walls: Vec<[[f64; 2]; 2]> = map
+        .walls(unknown)
+        .into_iter()
+        .map(|[a, b]| [[a[0] * scale, a[1] * scale], [b[0] * scale, b[1] * scale]])
+        .collect();
+    let name = path.display().to_string();
+    let check = Check {
+        map: &map,
+        name: &name,
+        walls: &walls,
+        scale,
+        unknown,
+    };
+    for (r, sp) in scenario.robots.iter().zip(robot_spans) {
+        let what = format!("robot `{}`", r.name);
+        check
+            .place(r.start, r.radius, "start")
+            .map_err(|reason| Fail::new(sp.start.clone(), &what, reason))?;
+        check
+            .place(r.goal, r.radius, "goal")
+            .map_err(|reason| Fail::new(sp.goal.clone(), &what, reason))?;
+    }
+    for (o, sp) in scenario.obstacles.iter().zip(obstacle_spans) {
+        check.place(o.start, 0.0, "start").map_err(|reason| {
+            Fail::new(Some(sp.clone()), format!("obstacle `{}`", o.name), reason)
+        })?;
+    }
+    scenario.map = Some(MapInfo {
+        file: name,
+        image: map.meta.image.display().to_string(),
+        size: [map.width, map.height],
+        resolution: map.meta.resolution,
+        origin: map.meta.origin,
+        unknown,
+        walls: walls.len(),
+    });
+    scenario
+        .walls
+        .extend(walls.into_iter().map(|segment| WallSpec { segment }));
+    Ok(())
+}
+
+struct Check<'a> {
+    map: &'a OccupancyMap,
+    name: &'a str,
+    walls: &'a [[[f64; 2]; 2]],
+    scale: f64,
+    unknown: crate::types::UnknownCells,
+}
+
+impl Check<'_> {
+    /// Is a disc of `radius` at `p` (scenario units) clear of the map's
+    /// walls? The error says why not.
+    fn place(&self, p: [f64; 2], radius: f64, key: &str) -> Result<(), String> {
+        let at = format!("{key} [{}, {}]", p[0], p[1]);
+        let metres = [p[0] / self.scale, p[1] / self.scale];
+        let Some((i, j)) = self.map.cell_of(metres) else {
+            return Err(format!(
+                "{at} is outside map {} ({} x {} cells)",
+                self.name, self.map.width, self.map.height
+            ));
+        };
+        if self.map.is_wall(i, j, self.unknown) {
+            let kind = if self.map.value(i, j) == 100 {
+                "an occupied"
+            } else {
+                "an unknown"
+            };
+            return Err(format!(
+                "{at} is inside a wall of map {}: {kind} cell (column {i}, row {j} from the \
+                 lower left)",
+                self.name
+            ));
+        }
+        if radius > 0.0
+            && let Some(d) = self
+                .walls
+                .iter()
+                .map(|w| dist_to_segment(p, *w))
+                .min_by(f64::total_cmp)
+            && d < radius
+        {
+            return Err(format!(
+                "{at} is {d:.4} from a wall of map {}, less than the radius {radius}",
+                self.name
+            ));
+        }
+        Ok(())
+    }
+}
