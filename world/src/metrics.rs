@@ -2,23 +2,10 @@
 //! metrics.json (field names as in the design).
 
 use hdrhistogram::Histogram;
-use serde::Serialize;
-use std::collections::BTreeMap;
-
-/// Percentiles of a latency histogram, µs.
-#[derive(Debug, Clone, Copy, Default, Serialize, PartialEq)]
-pub struct Percentiles {
-    /// Median.
-    pub p50: f64,
-    /// 99th percentile.
-    pub p99: f64,
-    /// 99.9th percentile.
-    pub p999: f64,
-    /// Largest sample.
-    pub max: f64,
-    /// Number of samples.
-    pub count: u64,
-}
+pub use mrsim_runfolder::metrics::{
+    PathDeviation, Percentiles, RobotMetrics, RunMetrics, TimingMetrics,
+};
+use mrsim_spatial::{BoundedGrid as Cells, Buckets, HashedGrid as Fine};
 
 /// A histogram of durations recorded in ns, reported in µs.
 ///
@@ -179,120 +166,6 @@ pub struct RobotAccumulator {
     pub late: u64,
 }
 
-/// One robot's row of metrics.json.
-#[derive(Debug, Clone, Serialize)]
-pub struct RobotMetrics {
-    /// Planner name.
-    pub planner: String,
-    /// Reached its goal.
-    pub reached_goal: bool,
-    /// Arrival time, s (null if never).
-    pub time_to_goal: Option<f64>,
-    /// Distance travelled.
-    pub path_length: f64,
-    /// Contacts started.
-    pub collisions: u64,
-    /// Smallest surface distance to any body or wall (null if nothing else).
-    pub min_clearance: Option<f64>,
-    /// Largest speed.
-    pub max_speed: f64,
-    /// Deadline misses.
-    pub deadline_misses: u64,
-    /// Snapshot published -> command received, µs.
-    pub latency_us: Percentiles,
-    /// Snapshot published -> agent awake, µs.
-    pub wake_us: Percentiles,
-    /// Planner compute time, µs.
-    pub compute_us: Percentiles,
-    /// The agent process's id.
-    pub agent_pid: Option<u32>,
-    /// Times the agent was lost.
-    pub lost: u32,
-    /// Commands rejected that named this robot.
-    pub commands_rejected: u64,
-    /// Commands that arrived after their deadline.
-    pub commands_late: u64,
-    /// Distance from the designated path, per tick (null without a path).
-    pub path_deviation: Option<crate::path_metrics::PathDeviation>,
-    /// Ticks with the centre farther than `boundary` from the path (null
-    /// without a path or a boundary).
-    pub boundary_violations: Option<u64>,
-}
-
-/// metrics.json.
-#[derive(Debug, Clone, Serialize)]
-pub struct RunMetrics {
-    /// Scenario name.
-    pub scenario: String,
-    /// Per robot, keyed by name.
-    pub robots: BTreeMap<String, RobotMetrics>,
-    /// Contacts started, all robots (a robot-robot contact counts once).
-    pub collisions_total: u64,
-    /// Fraction of robots that reached their goal.
-    pub success_rate: f64,
-    /// Ticks simulated.
-    pub ticks: u64,
-    /// Simulated time, s.
-    pub sim_time: f64,
-    /// lockstep or realtime.
-    pub mode: String,
-    /// Simulated seconds per wall-clock second.
-    pub realtime_factor: f64,
-    /// Agents lost (died or stalled) during the run.
-    pub agents_lost: u64,
-    /// Commands rejected (wrong robot, wrong tick, garbage, duplicates).
-    pub commands_rejected: u64,
-    /// Commands that came after their tick's deadline.
-    pub commands_late: u64,
-    /// Commands rejected that named no robot of the scenario.
-    pub commands_rejected_unknown: u64,
-    /// The world process's id.
-    pub world_pid: u32,
-    /// The run id (iceoryx2 namespace).
-    pub run_id: String,
-    /// The transport: shm or inproc.
-    pub transport: String,
-    /// True if the run was stopped early by a signal.
-    pub interrupted: bool,
-    /// How the run kept time and what the world process used.
-    pub timing: TimingMetrics,
-}
-
-/// metrics.json's `timing`: the run as a real-time system.
-#[derive(Debug, Clone, Default, Serialize)]
-pub struct TimingMetrics {
-    /// Wall-clock duration of the tick loop, s.
-    pub wall_s: f64,
-    /// Every robot's snapshot published -> command received, µs.
-    pub latency_us: Percentiles,
-    /// Every robot's snapshot published -> agent awake, µs.
-    pub wake_us: Percentiles,
-    /// Every robot's planner compute time, µs.
-    pub compute_us: Percentiles,
-    /// Realtime: actual tick start (snapshot published) minus scheduled, µs.
-    pub jitter_us: Percentiles,
-    /// Snapshot published -> last command in, on ticks where every live
-    /// agent answered in time, µs.
-    pub allin_us: Percentiles,
-    /// The world thread's own work per tick: publish, record, take in and
-    /// check the commands (not the wait for them), apply, physics, goal
-    /// test, µs. (The other metrics of the robots' motion and the
-    /// commands' timing histograms are computed off the tick loop.)
-    pub world_tick_us: Percentiles,
-    /// Rapier's own step within it (all substeps), µs: the floor
-    /// `world_tick_us` compares with, the same bodies in the same tick.
-    pub physics_us: Percentiles,
-    /// CPU seconds of the world's process during the tick loop (with the
-    /// in-process transport this includes the agent threads).
-    pub process_cpu_s: f64,
-    /// Peak resident set size of the world's process at the end, KiB.
-    pub process_maxrss_kb: u64,
-    /// Time the hypervisor took the CPUs the world may run on away during
-    /// the tick loop (/proc/stat's steal: a virtual machine's CPUs not
-    /// running at all), s; `None` where /proc/stat is unreadable.
-    pub cpus_steal_s: Option<f64>,
-}
-
 /// `p` minus the point of segment `w` nearest to it.
 fn segment_offset(w: [[f64; 2]; 2], p: [f64; 2]) -> [f64; 2] {
     let (a, b) = (w[0], w[1]);
@@ -356,51 +229,34 @@ pub fn clearly_beyond(d2: f64, reach: f64) -> bool {
     reach >= 0.0 && d2 > reach * reach * (1.0 + 1e-9) + 1e-300
 }
 
-/// Bodies sorted by bucket (a counting sort): bucket `c` holds bodies
-/// `order[start[c]..start[c + 1]]`, whose centres and radii are copied in
-/// the same order into `at` (so a bucket's search reads one run of memory).
-#[derive(Debug, Clone, Default)]
-struct Buckets {
-    start: Vec<u32>,
-    order: Vec<u32>,
-    at: Vec<[f64; 3]>,
-    key: Vec<u32>,
-    fill: Vec<u32>,
+/// Sorts `states` into `buckets` buckets by `keys` (one per body).
+fn sort_states(
+    into: &mut Buckets,
+    states: &[mrsim_proto::BodyState],
+    buckets: usize,
+    keys: impl Iterator<Item = usize>,
+) {
+    into.sort(
+        buckets,
+        keys.zip(states)
+            .map(|(c, q)| (c, [q.position[0], q.position[1], q.radius])),
+    );
 }
 
-impl Buckets {
-    /// Sorts `states` into `buckets` buckets by `keys` (one per body).
-    fn sort(
-        &mut self,
+/// The clearance searches over one [`Buckets`].
+trait Nearest {
+    fn nearest_in_box(
+        &self,
         states: &[mrsim_proto::BodyState],
-        buckets: usize,
-        keys: impl Iterator<Item = usize>,
-    ) {
-        self.start.clear();
-        self.start.resize(buckets + 1, 0);
-        self.key.clear();
-        for c in keys {
-            self.key.push(c as u32);
-            self.start[c + 1] += 1;
-        }
-        for c in 0..buckets {
-            self.start[c + 1] += self.start[c];
-        }
-        self.order.clear();
-        self.order.resize(self.key.len(), 0);
-        self.fill.clear();
-        self.fill.extend_from_slice(&self.start[..buckets]);
-        for (j, &c) in self.key.iter().enumerate() {
-            self.order[self.fill[c as usize] as usize] = j as u32;
-            self.fill[c as usize] += 1;
-        }
-        self.at.clear();
-        self.at.extend(self.order.iter().map(|&j| {
-            let q = &states[j as usize];
-            [q.position[0], q.position[1], q.radius]
-        }));
-    }
+        i: usize,
+        reach: f64,
+        cell: impl Fn(f64, usize) -> i64,
+        bucket: impl Fn(i64, i64) -> usize,
+    ) -> f64;
+    fn nearest_in(&self, states: &[mrsim_proto::BodyState], i: usize, c: usize, best: f64) -> f64;
+}
 
+impl Nearest for Buckets {
     /// Robot `i`'s smallest clearance to the bodies whose centres may lie
     /// within `reach` of its own (infinity if none): the buckets of the
     /// cells of that box, `cell(v, axis)` giving a coordinate's cell (never
@@ -435,8 +291,8 @@ impl Buckets {
         mut best: f64,
     ) -> f64 {
         let s = &states[i];
-        let range = self.start[c] as usize..self.start[c + 1] as usize;
-        for (&j, &[qx, qy, qr]) in self.order[range.clone()].iter().zip(&self.at[range]) {
+        let (order, at) = self.bucket(c);
+        for (&j, &[qx, qy, qr]) in order.iter().zip(at) {
             if j as usize == i {
                 continue;
             }
@@ -453,72 +309,12 @@ impl Buckets {
     }
 }
 
-/// The fine grid of one tick: cells of `cell` from `lo`, hashed into
-/// `1 << bits` buckets.
-#[derive(Clone, Copy)]
-struct Fine {
-    lo: [f64; 2],
-    cell: f64,
-    bits: u32,
-}
-
-impl Fine {
-    /// The cell index of coordinate `v` on axis `k`: truncated, not
-    /// floored (no libm call), which merges cells -1 and 0 but keeps the
-    /// index monotonic in `v`, all a search box needs. `as` saturates.
-    fn at(&self, v: f64, k: usize) -> i64 {
-        ((v - self.lo[k]) / self.cell) as i64
-    }
-
-    /// The bucket of cell (`x`, `y`).
-    fn bucket(&self, x: i64, y: i64) -> usize {
-        let h = (x as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
-            ^ (y as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F);
-        (h >> (64 - self.bits)) as usize
-    }
-}
-
 /// Distance between two bodies' centres: the plain square root of the sum
 /// of squares (`hypot`'s overflow guard costs a quarter of the whole
 /// clearance pass at 1000 robots, and positions are nowhere near 1e150).
 fn centre_distance(a: &mrsim_proto::BodyState, b: &mrsim_proto::BodyState) -> f64 {
     let (dx, dy) = (a.position[0] - b.position[0], a.position[1] - b.position[1]);
     (dx * dx + dy * dy).sqrt()
-}
-
-/// The grid of one tick: origin, cell size and cell counts.
-#[derive(Clone, Copy)]
-struct Cells {
-    lo: [f64; 2],
-    cell: f64,
-    nx: usize,
-    ny: usize,
-}
-
-impl Cells {
-    /// About one cell per body over the box `lo`..`hi`, never narrower than
-    /// the largest diameter, at most about 4n cells whatever the shape.
-    fn spanning(lo: [f64; 2], hi: [f64; 2], n: usize, rmax: f64) -> Self {
-        let (w, h) = ((hi[0] - lo[0]).max(1e-9), (hi[1] - lo[1]).max(1e-9));
-        let mut cell = (w * h / n as f64).sqrt().max(2.0 * rmax).max(1e-9);
-        while (w / cell + 1.0) * (h / cell + 1.0) > 4.0 * n as f64 + 4.0 {
-            cell *= 1.5;
-        }
-        Self {
-            lo,
-            cell,
-            nx: (w / cell) as usize + 1,
-            ny: (h / cell) as usize + 1,
-        }
-    }
-
-    /// The cell column (or row) of coordinate `v` on axis `k`, clamped
-    /// into the grid.
-    fn at(&self, v: f64, k: usize) -> usize {
-        let n = if k == 0 { self.nx } else { self.ny };
-        // `as` saturates: below the origin gives 0.
-        (((v - self.lo[k]) / self.cell) as usize).min(n - 1)
-    }
 }
 
 impl ClearanceGrid {
@@ -589,7 +385,8 @@ impl ClearanceGrid {
             }
             let g = *coarse.get_or_insert_with(|| {
                 let g = Cells::spanning(lo, hi, n, rmax);
-                self.coarse.sort(
+                sort_states(
+                    &mut self.coarse,
                     states,
                     g.nx * g.ny,
                     states
@@ -636,17 +433,11 @@ impl ClearanceGrid {
         // Cell indices far beyond 2^53 would lose their meaning (and a
         // search box its size): no fine grid at such scales.
         let span = (hi[0] - lo[0]).max(hi[1] - lo[1]);
-        if !cell.is_finite() || cell <= 0.0 || span / cell > 1e12 {
-            return None;
-        }
-        let bits = (2 * states.len())
-            .next_power_of_two()
-            .trailing_zeros()
-            .max(4);
-        let f = Fine { lo, cell, bits };
-        self.fine.sort(
+        let f = Fine::new(lo, cell, states.len(), span)?;
+        sort_states(
+            &mut self.fine,
             states,
-            1 << bits,
+            f.buckets(),
             states
                 .iter()
                 .map(|s| f.bucket(f.at(s.position[0], 0), f.at(s.position[1], 1))),
@@ -883,7 +674,7 @@ mod tests {
             }
         }
         // The fine grid was used (nine in ten robots bounded).
-        assert!(!grid.fine.order.is_empty());
+        assert!(!grid.fine.is_empty());
     }
 
     #[test]

@@ -63,8 +63,11 @@ impl Recorder {
     /// thread. `names[i]` is body i's name; `tracker` takes in every tick's
     /// states, in order.
     pub fn start(dir: &Path, names: Vec<String>, mut tracker: Tracker) -> std::io::Result<Self> {
-        let mut traj = BufWriter::with_capacity(1 << 16, File::create(dir.join("trajectory.csv"))?);
-        let mut events = BufWriter::new(File::create(dir.join("events.jsonl"))?);
+        let mut traj = BufWriter::with_capacity(
+            1 << 16,
+            File::create(dir.join(mrsim_runfolder::TRAJECTORY_FILE))?,
+        );
+        let mut events = BufWriter::new(File::create(dir.join(mrsim_runfolder::EVENTS_FILE))?);
         writeln!(traj, "tick,time,body,kind,x,y,vx,vy")?;
         traj.flush()?;
         let (tx, rx) = bounded::<Msg>(256);
