@@ -87,7 +87,7 @@ const TIMING_BATCH: usize = 32;
 /// compute time.
 ///
 /// Samples are kept in a small buffer and go into the histograms
-/// [`TIMING_BATCH`] at a time, so that a tick does not touch 3 x robots
+/// `TIMING_BATCH` at a time, so that a tick does not touch 3 x robots
 /// histograms far apart in memory, one cache miss each.
 #[derive(Debug, Clone)]
 pub struct RobotTimings {

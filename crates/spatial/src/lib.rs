@@ -269,7 +269,7 @@ impl NeighbourGrid {
         let Some(g) = self.grid else {
             return false;
         };
-        if !(reach <= g.cell) || !p.iter().all(|v| v.is_finite()) {
+        if reach.is_nan() || reach > g.cell || !p.iter().all(|v| v.is_finite()) {
             return false;
         }
         // Floored, so a point below the origin has its own cell.
