@@ -1,17 +1,37 @@
 //! The mrsim world: the one process that owns the physics.
 //!
-//! Shaped like rapier's own sets and pipelines: [`World`] is data plus a
-//! step (read commands, step, publish), and [`run::run`] is the tick loop
-//! that drives a `World` through an injected
-//! [`WorldTransport`](mrsim_transport::WorldTransport), so the same loop
-//! serves iceoryx2 processes and in-process threads. The world never sees a
-//! planner (it borrows only the pure `distance_to_path` helper of the
-//! planners crate for the designated-path metrics): it enforces each robot's actuator limits whatever the agent
+//! The world never sees a planner (it borrows only the pure
+//! `distance_to_path` helper of the planners crate for the designated-path
+//! metrics): it enforces each robot's actuator limits whatever the agent
 //! asks, moves scripted obstacles, detects collisions, and records
-//! everything a researcher needs afterwards ([`record`]).
+//! everything a researcher needs afterwards.
+//!
+//! The crate is shaped by role, the way rapier shapes its sets and
+//! pipelines, so that each part can be read and tested on its own:
+//!
+//! - [`physics`]: [`World`], data plus a step (apply commands, move the
+//!   obstacles ([`motion`]), step rapier, report contacts). No clock, no
+//!   transport.
+//! - [`run`](mod@run): the tick loop, driving a `World` through an injected
+//!   [`WorldTransport`](mrsim_transport::WorldTransport) so the same loop
+//!   serves iceoryx2 processes and in-process threads. Split by role:
+//!   [`run::admission`] (joins, tokens, which commands count: verdicts and
+//!   events, no side effects), [`run::schedule`] (lockstep waits, realtime
+//!   deadlines, on an injectable clock), [`run::recording`] (events,
+//!   counts, live statistics, metrics.json); [`run()`] wires them. Its unit
+//!   tests run over an in-memory transport and a clock it moves.
+//! - Off the tick loop, on their own threads: [`record`] (trajectory.csv,
+//!   events.jsonl, fed in [`batch`]es), [`tracking`] (the motion metrics
+//!   from the recorded states, with [`clearance`] on the grids of
+//!   `mrsim-spatial` and [`path_metrics`]), [`timings`] (the commands'
+//!   [`histogram`]s), and [`live`] statistics for observers.
+//! - [`metrics`]: what the loop accumulates per robot; the schema of
+//!   metrics.json is `mrsim-runfolder`'s, which every reader shares.
 #![warn(missing_docs)]
 
 pub mod batch;
+pub mod clearance;
+pub mod histogram;
 pub mod live;
 pub mod metrics;
 pub mod motion;

@@ -1,0 +1,706 @@
+//! The tick loop: join, then each tick publish, collect, step, record.
+//!
+//! Split by role, as rapier splits its pipeline: [`admission`] decides who
+//! drives which robot and which commands count (verdicts and events, no
+//! side effects beyond its own table), [`schedule`] when ticks start and
+//! how long the world waits for answers, [`recording`] what is written,
+//! counted and shown live. [`run`] wires them: it owns the world and the
+//! transport, applies the verdicts (moving, braking and flagging robots),
+//! logs, and is the only one that waits.
+//!
+//! Lockstep waits for every live agent's command (or `stall_timeout`, after
+//! which the agent is lost); realtime ticks on the wall clock and counts a
+//! command that is not in by the deadline as a miss, after which the robot
+//! holds its last command or brakes. A command without the robot's current
+//! token, for another tick, with non-finite values, or a second one in a
+//! tick, is rejected, counted and logged, and never drives a robot.
+
+pub mod admission;
+#[cfg(test)]
+mod fake;
+mod options;
+pub mod recording;
+pub mod schedule;
+#[cfg(test)]
+mod tests;
+
+use crate::metrics::TimingMetrics;
+use crate::physics::{Applied, World};
+use crate::record::Recorder;
+use crate::timings::TimingRecorder;
+use crate::tracking::Tracker;
+use admission::{Admission, Agent, Event, TickWindow, Verdict};
+use mrsim_proto::{
+    CommandMsg, JoinRequest, SnapshotHeader, StatsHeader, command_kind, flags, now_ns, run_phase,
+};
+use mrsim_runfolder::{FileError, METRICS_FILE, SCENARIO_FILE, TRAJECTORY_FILE};
+use mrsim_scenario::{MissPolicy, Mode};
+use mrsim_sys::sched::BelowAgents;
+use mrsim_sys::usage::{CpusTime, process_usage, thread_usage};
+use mrsim_transport::{TransportError, WorldTransport};
+use recording::{Recording, Stamp, Summary};
+use schedule::{Clock, Schedule, SystemClock, Wait, wait_until};
+use serde_json::json;
+use std::time::{Duration, Instant};
+
+pub use crate::metrics::RunMetrics;
+pub use mrsim_sys::process::pid_alive;
+use options::out_err;
+pub use options::{RunError, RunOptions, RunOutcome};
+
+/// The loop's state: the world and its transport, and one struct per role.
+struct Loop<'a> {
+    world: World,
+    link: &'a mut dyn WorldTransport,
+    clock: &'a dyn Clock,
+    opts: RunOptions,
+    admission: Admission,
+    schedule: Schedule,
+    recording: Recording,
+    /// The tick being answered: its number, publish time and deadline.
+    window: TickWindow,
+    /// Latest receive time of a command accepted this tick.
+    last_in_ns: u64,
+    /// Commands taken from the transport, reused from drain to drain.
+    inbox: Vec<(CommandMsg, u64)>,
+    last_pid_check: Instant,
+    pid_checks: u64,
+    clock_start: Option<Instant>,
+}
+
+impl<'a> Loop<'a> {
+    /// A loop over `world` and `link` with the outputs started in
+    /// `opts.out_dir` (the recorder and timings threads).
+    fn new(
+        world: World,
+        link: &'a mut dyn WorldTransport,
+        clock: &'a dyn Clock,
+        opts: RunOptions,
+        rec: Recorder,
+        timings: TimingRecorder,
+    ) -> Self {
+        let scenario = &world.scenario;
+        let robots: Vec<String> = scenario.robots.iter().map(|r| r.name.clone()).collect();
+        let names: Vec<String> = robots
+            .iter()
+            .cloned()
+            .chain(scenario.obstacles.iter().map(|o| o.name.clone()))
+            .collect();
+        let n = robots.len();
+        let schedule = Schedule::new(scenario);
+        Self {
+            admission: Admission::new(robots, std::process::id()),
+            recording: Recording::new(rec, timings, names, n),
+            // Before the first tick nothing is late.
+            window: TickWindow {
+                tick: 0,
+                published_ns: 0,
+                deadline_ns: u64::MAX,
+                realtime: schedule.realtime,
+            },
+            schedule,
+            world,
+            link,
+            clock,
+            opts,
+            last_in_ns: 0,
+            inbox: Vec::with_capacity(n),
+            last_pid_check: clock.now(),
+            pid_checks: 0,
+            clock_start: None,
+        }
+    }
+
+    fn stamp(&self) -> Stamp {
+        Stamp {
+            tick: self.window.tick,
+            time: self.world.time(),
+        }
+    }
+
+    fn log(&self, msg: &str) {
+        if self.opts.verbose {
+            eprintln!("world: {msg}");
+        }
+    }
+
+    /// Records and logs what admission did, and moves the robot: a lost
+    /// robot brakes and is flagged lost, a (re)joined one is unflagged.
+    fn apply(&mut self, e: Event) {
+        self.recording.admitted(self.stamp(), &e);
+        match e {
+            Event::Joined { robot, pid } => {
+                self.unflag_lost(robot);
+                let name = self.recording.name(robot);
+                self.log(&format!("agent for {name} joined (pid {pid})"));
+            }
+            Event::Rejoined {
+                robot,
+                pid,
+                by_command,
+            } => {
+                self.unflag_lost(robot);
+                let name = self.recording.name(robot);
+                if by_command {
+                    self.log(&format!("agent for {name} answered again and rejoined"));
+                } else {
+                    self.log(&format!("agent for {name} rejoined (pid {pid})"));
+                }
+            }
+            Event::JoinRefused { reason, .. } => {
+                self.log(&format!("refused a join: {reason}"));
+            }
+            Event::Lost { robot, reason, .. } => {
+                self.world.set_command(robot, Applied::BRAKE);
+                let flags = self.world.states()[robot].flags | flags::LOST;
+                self.world.set_flags(robot, flags);
+                let name = self.recording.name(robot);
+                self.log(&format!("lost the agent for {name}: {reason}"));
+            }
+        }
+    }
+
+    fn unflag_lost(&mut self, robot: usize) {
+        let flags = self.world.states()[robot].flags & !flags::LOST;
+        self.world.set_flags(robot, flags);
+    }
+
+    fn lose(&mut self, i: usize, reason: String) {
+        if let Some(e) = self.admission.lose(i, reason) {
+            self.apply(e);
+        }
+    }
+
+    fn handle_join(&mut self, req: JoinRequest) -> Result<(), TransportError> {
+        let (reply, events) = self.admission.join(&req, now_ns(), pid_alive);
+        for e in events {
+            let lost = matches!(e, Event::Lost { .. });
+            self.apply(e);
+            if lost {
+                // The dead agent's leftovers freed before its successor
+                // takes its place.
+                self.link.cleanup_dead();
+            }
+        }
+        self.link.reply_join(&reply)
+    }
+
+    fn handle_command(&mut self, cmd: CommandMsg, received_ns: u64) {
+        match self.admission.command(&cmd, self.window) {
+            Verdict::Accepted { robot, rejoined } => {
+                if let Some(pid) = rejoined {
+                    self.apply(Event::Rejoined {
+                        robot,
+                        pid,
+                        by_command: true,
+                    });
+                }
+                let published = self.window.published_ns;
+                self.recording.timings.record(
+                    robot,
+                    received_ns.saturating_sub(published),
+                    cmd.woke_ns.saturating_sub(published),
+                    cmd.compute_ns,
+                );
+                self.last_in_ns = self.last_in_ns.max(received_ns);
+            }
+            Verdict::Ready { .. } => {}
+            Verdict::Late { robot } => self.recording.late(robot),
+            Verdict::Rejected { robot, reason } => {
+                let at = self.stamp();
+                self.recording
+                    .rejected(at, robot, cmd.robot_id, reason, cmd.tick);
+            }
+        }
+    }
+
+    fn check_pids(&mut self) {
+        let now = self.clock.now();
+        if now.saturating_duration_since(self.last_pid_check) < Duration::from_millis(100) {
+            return;
+        }
+        self.last_pid_check = now;
+        // Every 100 ms whether each agent's process exists (one syscall);
+        // every second also whether it is a zombie its parent has not
+        // reaped yet (a /proc read: too dear to do every time).
+        self.pid_checks += 1;
+        let alive = if self.pid_checks.is_multiple_of(10) {
+            pid_alive
+        } else {
+            mrsim_sys::process::pid_exists
+        };
+        // An agent in the world's own process (the in-process transport)
+        // cannot die on its own: its thread's failure comes through the
+        // transport, and reading /proc/self for each would walk every
+        // thread of this process.
+        let dead = self.admission.dead(alive, std::process::id());
+        for &i in &dead {
+            let Agent::Live { pid, .. } = self.admission.agents()[i] else {
+                continue;
+            };
+            self.lose(i, format!("agent process {pid} died"));
+        }
+        if !dead.is_empty() {
+            self.link.cleanup_dead();
+        }
+    }
+
+    fn drain(&mut self) -> Result<(), TransportError> {
+        let mut joins = Vec::new();
+        self.link.drain_joins(&mut |j| joins.push(j))?;
+        let any = !joins.is_empty();
+        for j in joins {
+            self.handle_join(j)?;
+        }
+        if any {
+            self.link.joins_answered()?;
+        }
+        self.drain_commands()
+    }
+
+    /// Takes in every command received so far.
+    fn drain_commands(&mut self) -> Result<(), TransportError> {
+        let mut inbox = std::mem::take(&mut self.inbox);
+        inbox.clear();
+        let drained = self.link.drain_commands(&mut |c, t| inbox.push((c, t)));
+        if drained.is_ok() {
+            for (c, t) in inbox.drain(..) {
+                self.handle_command(c, t);
+            }
+        }
+        self.inbox = inbox;
+        drained
+    }
+
+    /// One round of waiting before the clock starts: joins and ready
+    /// commands taken in, pids checked, and the live statistics published
+    /// (which also lets go of the join-time connections of agents that
+    /// closed theirs).
+    fn before_start(&mut self, wait: Duration) -> Result<(), TransportError> {
+        self.link.wait(wait)?;
+        // Before the first tick a late answer is no miss.
+        let realtime = std::mem::replace(&mut self.window.realtime, false);
+        let drained = self.drain();
+        self.window.realtime = realtime;
+        drained?;
+        // Commands before the first tick are from nobody we know yet.
+        self.admission.got.iter_mut().for_each(|g| *g = None);
+        self.check_pids();
+        self.publish_stats(run_phase::JOINING, false);
+        Ok(())
+    }
+
+    /// Publishes the live statistics for observers when due (or now, with
+    /// `force`).
+    fn publish_stats(&mut self, phase: u32, force: bool) {
+        let wall = self.clock_start.map_or(0.0, |t| {
+            self.clock.now().saturating_duration_since(t).as_secs_f64()
+        });
+        let time = self.world.time();
+        let header = StatsHeader {
+            tick: self.window.tick,
+            max_ticks: self.world.scenario.max_ticks(),
+            sim_time: time,
+            realtime_factor: if wall > 0.0 { time / wall } else { 0.0 },
+            published_ns: now_ns(),
+            collisions_total: 0,
+            agents_lost: 0,
+            phase,
+            realtime: u32::from(self.world.scenario.world.mode == Mode::Realtime),
+            robot_count: self.admission.agents().len() as u32,
+            world_pid: std::process::id(),
+        };
+        self.recording
+            .publish_stats(&mut *self.link, self.admission.agents(), header, force);
+    }
+
+    /// Waits until every robot has an agent and every agent is ready (or
+    /// the start timeout, or a termination request: then true).
+    fn join_phase(&mut self) -> Result<bool, RunError> {
+        let join_start = self.clock.now();
+        while self.admission.any_waiting() || !self.admission.all_ready() {
+            if self.link.termination_requested() {
+                return Ok(true);
+            }
+            if let Some(t) = self.opts.start_timeout
+                && self.clock.now().saturating_duration_since(join_start) > t
+            {
+                let missing: Vec<&str> = self
+                    .admission
+                    .not_ready()
+                    .into_iter()
+                    .map(|i| self.recording.name(i))
+                    .collect();
+                let missing = missing.join(", ");
+                // Tell the agents that did join to stop.
+                let header = SnapshotHeader {
+                    finished: 1,
+                    ..Default::default()
+                };
+                let _ = self.link.publish_snapshot(&header, &[]);
+                return Err(RunError::StartTimeout {
+                    missing,
+                    secs: t.as_secs_f64(),
+                });
+            }
+            self.before_start(Duration::from_millis(50))?;
+        }
+        Ok(false)
+    }
+
+    /// Connects the tick's channels and, over a transport that says so,
+    /// waits (a bounded time, not at all if `interrupted`) for each agent
+    /// to have taken up its side. True if the run is interrupted.
+    fn prepare_ticks(&mut self, interrupted: bool) -> Result<bool, RunError> {
+        if !self.link.prepare_ticks()? {
+            return Ok(interrupted);
+        }
+        // The second ready commands wait in the transport until drained.
+        self.admission.ready.fill(false);
+        // A run that cannot wait starts anyway: an agent of this protocol
+        // answers at once, and tick 0's deadline still holds for the rest.
+        let n = self.admission.agents().len();
+        let limit = Duration::from_secs(2) + Duration::from_millis(5 * n as u64);
+        let started = self.clock.now();
+        while !interrupted
+            && !self.admission.all_ready()
+            && self.clock.now().saturating_duration_since(started) < limit
+        {
+            if self.link.termination_requested() {
+                return Ok(true);
+            }
+            self.before_start(Duration::from_millis(20))?;
+        }
+        if !self.admission.all_ready() {
+            self.log("not every agent took up the tick's channels in time; starting anyway");
+        }
+        Ok(interrupted)
+    }
+
+    /// Takes in this tick's commands until every live agent has answered
+    /// or time is up (lockstep: the silent agents are then lost). Returns
+    /// the time spent taking them in (the world's own work; waiting for
+    /// them is not).
+    fn collect(&mut self, published: Instant) -> Result<Duration, TransportError> {
+        let mut own = Duration::ZERO;
+        loop {
+            let drain_start = self.clock.now();
+            self.drain()?;
+            own += self.clock.now().saturating_duration_since(drain_start);
+            self.check_pids();
+            self.recording.rec.send_if_due();
+            self.recording.timings.send_if_due();
+            if self.admission.all_answered() || self.link.termination_requested() {
+                return Ok(own);
+            }
+            let waited = self.clock.now().saturating_duration_since(published);
+            match self.schedule.next_wait(published, waited) {
+                Wait::TimedOut => {
+                    if !self.schedule.realtime {
+                        for i in self.admission.silent() {
+                            self.lose(i, self.schedule.stall_reason());
+                        }
+                    }
+                    return Ok(own);
+                }
+                Wait::Until(at) => wait_until(self.link, self.clock, at)?,
+                Wait::For(d) => self.link.wait(d)?,
+            }
+        }
+    }
+
+    /// Applies this tick's answers: a valid command, or the policy for a
+    /// miss, or brake.
+    fn apply_commands(&mut self) {
+        let brake_on_miss = self.world.scenario.world.on_deadline_miss == MissPolicy::Brake;
+        for i in 0..self.admission.agents().len() {
+            let (agent, got, garbage) = (
+                self.admission.agents()[i],
+                self.admission.got[i],
+                self.admission.garbage[i],
+            );
+            match (agent, got) {
+                (Agent::Live { .. }, Some(c)) => {
+                    let applied = if c.kind == command_kind::VELOCITY {
+                        Applied::Velocity(c.value)
+                    } else {
+                        Applied::Force(c.value)
+                    };
+                    self.world.set_command(i, applied);
+                }
+                (Agent::Live { .. }, None) if garbage => self.world.set_command(i, Applied::BRAKE),
+                (Agent::Live { .. }, None) => {
+                    let at = self.stamp();
+                    self.recording.miss(at, i);
+                    if brake_on_miss {
+                        self.world.set_command(i, Applied::BRAKE);
+                    }
+                }
+                _ => self.world.set_command(i, Applied::BRAKE),
+            }
+        }
+    }
+
+    /// One tick: wait for its time (realtime), publish, collect, apply,
+    /// step, record. True when the run is over.
+    fn tick(
+        &mut self,
+        wall_start: Instant,
+        fifo: bool,
+        contacts: &mut Vec<crate::physics::Contact>,
+    ) -> Result<bool, TransportError> {
+        let tick = self.window.tick;
+        let scheduled = self.schedule.due(wall_start, tick);
+        if let Some(at) = scheduled {
+            while self.clock.now() < at {
+                wait_until(self.link, self.clock, at)?;
+                self.drain()?;
+            }
+        }
+        self.admission.new_tick();
+        self.last_in_ns = 0;
+        let pub_instant = self.clock.now();
+        let pub_cpu = if fifo { thread_usage().0 } else { 0.0 };
+        if let Some(at) = scheduled {
+            // Tick jitter: actual start of the tick minus its scheduled time.
+            self.recording
+                .costs
+                .jitter
+                .record_ns(pub_instant.saturating_duration_since(at).as_nanos() as u64);
+        }
+        self.window = self.schedule.window(tick, now_ns());
+        let header = SnapshotHeader {
+            tick,
+            sim_time: self.world.time(),
+            published_ns: self.window.published_ns,
+            deadline_ns: if self.schedule.realtime {
+                self.window.deadline_ns
+            } else {
+                0
+            },
+            finished: 0,
+            body_count: self.world.states().len() as u32,
+        };
+        self.link.expect_answers(tick, self.admission.live());
+        self.link.publish_snapshot(&header, self.world.states())?;
+        self.recording
+            .rec
+            .tick(tick, self.world.time(), self.world.states());
+        // Under SCHED_FIFO the agents the doorbell wakes preempt the world
+        // while it publishes: the publish's cost is then the thread's CPU
+        // time, not the wall time.
+        let mut own = if fifo {
+            Duration::from_secs_f64((thread_usage().0 - pub_cpu).max(0.0))
+        } else {
+            self.clock.now().saturating_duration_since(pub_instant)
+        };
+        own += self.collect(pub_instant)?;
+        // All in: published -> the last command in, on ticks where every
+        // live agent answered in time.
+        if self.admission.all_answered() && self.admission.got.iter().any(Option::is_some) {
+            let allin = self.last_in_ns.saturating_sub(self.window.published_ns);
+            self.recording.costs.allin.record_ns(allin);
+        }
+        let work_start = self.clock.now();
+        self.apply_commands();
+        self.world.step(contacts);
+        self.recording
+            .costs
+            .physics
+            .record_ns(self.world.physics_ns());
+        self.window.tick += 1;
+        let at = self.stamp();
+        self.recording.contacts(at, contacts);
+        let positions = self.world.states().iter().map(|s| s.position);
+        let scenario = &self.world.scenario;
+        let reached = self.recording.goals(at, scenario, positions);
+        for i in reached {
+            let flags = self.world.states()[i].flags | flags::AT_GOAL;
+            self.world.set_flags(i, flags);
+        }
+        own += self.clock.now().saturating_duration_since(work_start);
+        self.recording
+            .costs
+            .tick_cost
+            .record_ns(own.as_nanos() as u64);
+        self.publish_stats(run_phase::RUNNING, false);
+        let acc = &self.recording.acc;
+        Ok(self.admission.done(|i| acc[i].reached_goal))
+    }
+}
+
+/// Runs `world` to the end over `link`, writing the outputs into
+/// `opts.out_dir`.
+pub fn run(
+    world: World,
+    link: &mut dyn WorldTransport,
+    opts: RunOptions,
+) -> Result<RunOutcome, RunError> {
+    run_with_clock(world, link, opts, &SystemClock)
+}
+
+/// [`run`] on the time of `clock`.
+fn run_with_clock(
+    world: World,
+    link: &mut dyn WorldTransport,
+    opts: RunOptions,
+    clock: &dyn Clock,
+) -> Result<RunOutcome, RunError> {
+    let dir = opts.out_dir.clone();
+    let out_err = |what| out_err(&dir, what);
+    let scenario = world.scenario.clone();
+    let n = scenario.robots.len();
+    let scenario_json =
+        serde_json::to_vec_pretty(&scenario).map_err(|e| out_err(SCENARIO_FILE)(e.into()))?;
+    std::fs::write(dir.join(SCENARIO_FILE), &scenario_json).map_err(out_err(SCENARIO_FILE))?;
+    // Absolute, so that an agent started from another folder writes its
+    // diagnostics into this run's folder.
+    let out_dir = std::fs::canonicalize(&dir).unwrap_or_else(|_| dir.clone());
+    let setup = serde_json::to_vec(
+        &json!({"run_id": opts.run_id, "out_dir": out_dir, "scenario": scenario}),
+    )
+    .map_err(|e| out_err("setup")(e.into()))?;
+    let names: Vec<String> = scenario
+        .robots
+        .iter()
+        .map(|r| r.name.clone())
+        .chain(scenario.obstacles.iter().map(|o| o.name.clone()))
+        .collect();
+    let tracker = Tracker::new(&scenario, world.walls());
+    let rec = Recorder::start(&dir, names, tracker).map_err(out_err(TRAJECTORY_FILE))?;
+    link.publish_setup(&setup)?;
+    let timings = TimingRecorder::start(n).map_err(out_err(METRICS_FILE))?;
+    let mut lp = Loop::new(world, link, clock, opts, rec, timings);
+
+    // Join: every robot's agent must be there, then ready (setup read,
+    // planner built), before the clock starts, so that the first ticks are
+    // not lost to start-up in realtime, nor its time counted as the first
+    // tick's latency in lockstep.
+    lp.log(&format!(
+        "waiting for {n} agents to join run {}",
+        lp.opts.run_id
+    ));
+    let mut interrupted = lp.join_phase()?;
+    lp.log("all agents joined; running");
+    // Tick 0 costs what any tick costs: the channels are connected, the
+    // agents take up their side, and in realtime tick 0 comes one tick
+    // after that.
+    interrupted = lp.prepare_ticks(interrupted)?;
+    let wall_start = clock.now() + lp.schedule.settle();
+    lp.clock_start = Some(wall_start);
+    // Under SCHED_FIFO (`--rt`) the world ticks one level below its agents.
+    let below = BelowAgents::enter();
+    let fifo = below.active();
+    lp.publish_stats(run_phase::RUNNING, true);
+    let (cpu_start, _) = process_usage();
+    let cpus_start = CpusTime::now();
+    let max_ticks = scenario.max_ticks();
+    let mut contacts = Vec::new();
+    while !interrupted && lp.window.tick < max_ticks {
+        if lp.link.termination_requested() {
+            interrupted = true;
+            break;
+        }
+        if lp.tick(wall_start, fifo, &mut contacts)? {
+            break;
+        }
+    }
+    drop(below);
+    // Commands already on their way for the last tick (an agent that sent
+    // two, a late one) are still counted and logged, not left unread.
+    let _ = lp.drain_commands();
+    // A termination request that came while the last tick ended the run
+    // (its agents stopped with it) still makes the run an interrupted one.
+    interrupted |= lp.link.termination_requested();
+    let (tick, time) = (lp.window.tick, lp.world.time());
+    lp.recording.rec.tick(tick, time, lp.world.states());
+    let wall = clock
+        .now()
+        .saturating_duration_since(wall_start)
+        .as_secs_f64();
+    let (cpu_end, maxrss_kb) = process_usage();
+    finish(
+        lp,
+        interrupted,
+        wall,
+        cpu_end - cpu_start,
+        maxrss_kb,
+        cpus_start,
+    )
+}
+
+/// Tells the agents the run is over and writes metrics.json.
+fn finish(
+    mut lp: Loop<'_>,
+    interrupted: bool,
+    wall: f64,
+    cpu_s: f64,
+    maxrss_kb: u64,
+    cpus_start: Option<CpusTime>,
+) -> Result<RunOutcome, RunError> {
+    let dir = lp.opts.out_dir.clone();
+    let out_err = |what| out_err(&dir, what);
+    // Every command's timings recorded (the live summary too).
+    let mut timings = lp
+        .recording
+        .timings
+        .finish()
+        .map_err(out_err(METRICS_FILE))?;
+    let cpus = cpus_start.zip(CpusTime::now()).map(|(a, b)| b.since(a));
+    let costs = &lp.recording.costs;
+    let timing = TimingMetrics {
+        wall_s: wall,
+        latency_us: timings.all[0].percentiles(),
+        wake_us: timings.all[1].percentiles(),
+        compute_us: timings.all[2].percentiles(),
+        jitter_us: costs.jitter.percentiles(),
+        allin_us: costs.allin.percentiles(),
+        world_tick_us: costs.tick_cost.percentiles(),
+        physics_us: costs.physics.percentiles(),
+        process_cpu_s: cpu_s.max(0.0),
+        process_maxrss_kb: maxrss_kb,
+        cpus_steal_s: cpus.map(|c| c.steal_s),
+    };
+
+    lp.publish_stats(run_phase::FINISHED, true);
+    // Tell every agent the run is over (twice, in case one is mid-read).
+    let header = SnapshotHeader {
+        tick: lp.window.tick,
+        sim_time: lp.world.time(),
+        published_ns: now_ns(),
+        deadline_ns: 0,
+        finished: 1,
+        body_count: lp.world.states().len() as u32,
+    };
+    lp.link.publish_snapshot(&header, lp.world.states())?;
+    lp.link.publish_snapshot(&header, lp.world.states())?;
+    if interrupted {
+        lp.recording
+            .event(lp.stamp(), json!({"type": "interrupted"}));
+    }
+
+    // Every tick's states taken in: the motion metrics are complete.
+    let Recording {
+        mut rec,
+        acc,
+        counts,
+        ..
+    } = lp.recording;
+    let tracker = rec.finish().map_err(out_err(TRAJECTORY_FILE))?;
+    let metrics = Summary {
+        scenario: &lp.world.scenario,
+        ticks: lp.window.tick,
+        sim_time: lp.world.time(),
+        wall_s: wall,
+        run_id: lp.opts.run_id.clone(),
+        transport: lp.opts.transport.clone(),
+        interrupted,
+        timing,
+    }
+    .metrics(counts, &acc, &mut timings.robots, &tracker);
+    mrsim_runfolder::write_metrics(&lp.opts.out_dir, &metrics).map_err(|e| match e {
+        FileError::Io { source, .. } => out_err(METRICS_FILE)(source),
+        FileError::Json { source, .. } => out_err(METRICS_FILE)(source.into()),
+    })?;
+    Ok(RunOutcome { metrics })
+}

@@ -1,0 +1,397 @@
+//! Recording: what the tick loop hands to the recorder (events), the
+//! timings thread and the live view, and what it counts on the way to
+//! metrics.json.
+//!
+//! Events are written with the tick and simulated time they happened at.
+//! Admission's verdicts and events come here to be counted and written;
+//! the loop logs them and moves the robots.
+
+use super::admission::{Agent, Event};
+use crate::histogram::DurationHistogram;
+use crate::live::LiveStats;
+use crate::metrics::{RobotAccumulator, RobotMetrics, RunMetrics, TimingMetrics};
+use crate::physics::{Contact, Owner};
+use crate::record::Recorder;
+use crate::timings::TimingRecorder;
+use crate::tracking::Tracker;
+use mrsim_proto::{StatsHeader, agent_state};
+use mrsim_scenario::Scenario;
+use mrsim_transport::WorldTransport;
+use serde_json::json;
+use std::time::Instant;
+
+/// Tick and simulated time of what is recorded.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stamp {
+    /// Tick.
+    pub tick: u64,
+    /// Simulated time, s.
+    pub time: f64,
+}
+
+/// Run-wide counts of metrics.json.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Counts {
+    /// Contacts started that involve a robot.
+    pub collisions_total: u64,
+    /// Agents lost.
+    pub agents_lost: u64,
+    /// Commands rejected.
+    pub rejected: u64,
+    /// Commands rejected that named no robot.
+    pub rejected_unknown: u64,
+    /// Commands late.
+    pub late: u64,
+}
+
+/// The tick loop's own costs, one sample per tick.
+#[derive(Debug, Clone, Default)]
+pub struct LoopCosts {
+    /// Realtime: actual tick start minus scheduled.
+    pub jitter: DurationHistogram,
+    /// Published -> last command in, on ticks where every agent answered.
+    pub allin: DurationHistogram,
+    /// The loop's own work per tick.
+    pub tick_cost: DurationHistogram,
+    /// Rapier's step.
+    pub physics: DurationHistogram,
+}
+
+/// Everything the loop records.
+pub struct Recording {
+    /// trajectory.csv and events.jsonl, on their thread.
+    pub rec: Recorder,
+    /// The commands' timings, on their thread.
+    pub timings: TimingRecorder,
+    live: LiveStats,
+    /// Per robot.
+    pub acc: Vec<RobotAccumulator>,
+    /// Every body's name: the robots, then the obstacles.
+    names: Vec<String>,
+    /// Run-wide counts.
+    pub counts: Counts,
+    /// The loop's own costs.
+    pub costs: LoopCosts,
+}
+
+impl Recording {
+    /// Recording for `robots` robots among the bodies called `names`.
+    pub fn new(rec: Recorder, timings: TimingRecorder, names: Vec<String>, robots: usize) -> Self {
+        Self {
+            rec,
+            timings,
+            live: LiveStats::new(robots),
+            acc: vec![
+                RobotAccumulator {
+                    min_contact_gap: f64::INFINITY,
+                    ..Default::default()
+                };
+                robots
+            ],
+            names,
+            counts: Counts::default(),
+            costs: LoopCosts::default(),
+        }
+    }
+
+    /// Body `i`'s name.
+    pub fn name(&self, i: usize) -> &str {
+        &self.names[i]
+    }
+
+    /// Writes one event, stamped.
+    pub fn event(&self, at: Stamp, mut v: serde_json::Value) {
+        if let Some(o) = v.as_object_mut() {
+            o.insert("tick".into(), json!(at.tick));
+            o.insert("time".into(), json!(at.time));
+        }
+        self.rec.event(v);
+    }
+
+    /// Counts and writes what admission did.
+    pub fn admitted(&mut self, at: Stamp, e: &Event) {
+        match e {
+            Event::Joined { robot, pid } => {
+                self.acc[*robot].agent_pid = Some(*pid);
+                let name = self.names[*robot].clone();
+                self.event(
+                    at,
+                    json!({"type": "agent_joined", "robot": name, "pid": pid}),
+                );
+            }
+            Event::Rejoined {
+                robot,
+                pid,
+                by_command,
+            } => {
+                if !by_command {
+                    self.acc[*robot].agent_pid = Some(*pid);
+                }
+                let name = self.names[*robot].clone();
+                self.event(
+                    at,
+                    json!({"type": "agent_rejoined", "robot": name, "pid": pid}),
+                );
+            }
+            Event::JoinRefused { robot, pid, reason } => self.event(
+                at,
+                json!({"type": "join_refused", "robot": robot, "pid": pid, "reason": reason}),
+            ),
+            Event::Lost { robot, pid, reason } => {
+                self.counts.agents_lost += 1;
+                self.acc[*robot].lost += 1;
+                let name = self.names[*robot].clone();
+                self.event(
+                    at,
+                    json!({"type": "agent_lost", "robot": name, "pid": pid, "reason": reason}),
+                );
+            }
+        }
+    }
+
+    /// Counts and writes a rejected command (`robot`: the robot it named,
+    /// `None` for an id `id` that names none).
+    pub fn rejected(
+        &mut self,
+        at: Stamp,
+        robot: Option<usize>,
+        id: u32,
+        reason: &str,
+        for_tick: u64,
+    ) {
+        self.counts.rejected += 1;
+        let robot = match robot {
+            Some(i) => {
+                self.acc[i].rejected += 1;
+                self.names[i].clone()
+            }
+            None => {
+                self.counts.rejected_unknown += 1;
+                format!("#{id}")
+            }
+        };
+        self.event(
+            at,
+            json!({"type": "command_rejected", "robot": robot, "reason": reason,
+                          "for_tick": for_tick}),
+        );
+    }
+
+    /// Counts a command that came after its deadline.
+    pub fn late(&mut self, robot: usize) {
+        self.counts.late += 1;
+        self.acc[robot].late += 1;
+    }
+
+    /// Counts and writes a tick robot `robot` did not answer in time.
+    pub fn miss(&mut self, at: Stamp, robot: usize) {
+        self.acc[robot].deadline_misses += 1;
+        let name = self.names[robot].clone();
+        self.event(at, json!({"type": "deadline_miss", "robot": name}));
+    }
+
+    /// Counts and writes the contacts of a step that involve a robot.
+    pub fn contacts(&mut self, at: Stamp, contacts: &[Contact]) {
+        let n = self.acc.len();
+        for c in contacts {
+            if !matches!(c.a, Owner::Robot(_)) && !matches!(c.b, Owner::Robot(_)) {
+                continue;
+            }
+            self.counts.collisions_total += 1;
+            for o in [c.a, c.b] {
+                if let Owner::Robot(i) = o {
+                    self.acc[i].collisions += 1;
+                    self.acc[i].min_contact_gap = self.acc[i].min_contact_gap.min(c.gap);
+                }
+            }
+            let name = |o: Owner| match o {
+                Owner::Robot(i) => self.names[i].clone(),
+                Owner::Obstacle(k) => self.names[n + k].clone(),
+                Owner::Wall(w) => format!("wall{w}"),
+            };
+            self.event(
+                at,
+                json!({"type": "collision", "a": name(c.a), "b": name(c.b),
+                              "x": c.at[0], "y": c.at[1], "gap": c.gap}),
+            );
+        }
+    }
+
+    /// The goal test after a step (Ko & Choi eq 22: within tolerance for
+    /// `goal_hold_ticks` ticks running), for robots at `positions`; writes
+    /// and returns the robots that reached their goal just now. The other
+    /// metrics of the robots' motion come from the recorded states, off
+    /// this loop ([`crate::tracking`]).
+    pub fn goals(
+        &mut self,
+        at: Stamp,
+        scenario: &Scenario,
+        positions: impl Iterator<Item = [f64; 2]>,
+    ) -> Vec<usize> {
+        let mut reached = Vec::new();
+        let robots = positions.zip(&scenario.robots);
+        for (i, ((p, spec), acc)) in robots.zip(&mut self.acc).enumerate() {
+            let d = (spec.goal[0] - p[0]).hypot(spec.goal[1] - p[1]);
+            if d <= spec.goal_tolerance {
+                if acc.hold == 0 {
+                    acc.hold_start = at.time;
+                }
+                acc.hold += 1;
+                if !acc.reached_goal && acc.hold >= spec.goal_hold_ticks.max(1) {
+                    acc.reached_goal = true;
+                    acc.time_to_goal = Some(acc.hold_start);
+                    reached.push(i);
+                }
+            } else {
+                acc.hold = 0;
+            }
+        }
+        for &i in &reached {
+            let name = self.names[i].clone();
+            let t = self.acc[i].time_to_goal;
+            self.event(
+                at,
+                json!({"type": "goal_reached", "robot": name, "time_to_goal": t}),
+            );
+        }
+        reached
+    }
+
+    /// Publishes the live statistics for observers when due (or now, with
+    /// `force`): no allocation, and a failure never stops the run.
+    /// `header` has everything but the counts, which this fills in.
+    pub fn publish_stats(
+        &mut self,
+        link: &mut dyn WorldTransport,
+        agents: &[Agent],
+        mut header: StatsHeader,
+        force: bool,
+    ) {
+        let now = Instant::now();
+        if !force && !self.live.due(now) {
+            return;
+        }
+        let (acc, rows) = (&self.acc, self.live.robots_mut());
+        self.timings.live(|latency| {
+            for (i, row) in rows.iter_mut().enumerate() {
+                let l = latency.get(i).copied().unwrap_or_default();
+                row.latency_p50_us = l.p50_us;
+                row.latency_p99_us = l.p99_us;
+                row.commands = l.commands;
+            }
+        });
+        for (i, row) in rows.iter_mut().enumerate() {
+            let acc = &acc[i];
+            row.state = match agents[i] {
+                Agent::Waiting => agent_state::WAITING,
+                Agent::Live { .. } => agent_state::LIVE,
+                Agent::Lost { .. } => agent_state::LOST,
+            };
+            row.reached_goal = u32::from(acc.reached_goal);
+            row.agent_pid = acc.agent_pid.unwrap_or(0);
+            row.deadline_misses = acc.deadline_misses;
+            row.collisions = acc.collisions;
+            row.commands_rejected = acc.rejected;
+        }
+        header.collisions_total = self.counts.collisions_total;
+        header.agents_lost = self.counts.agents_lost;
+        let _ = self.live.publish(link, &header, now);
+    }
+}
+
+/// metrics.json from what was recorded: the loop's `counts` and
+/// accumulators, the commands' `robot_timings`, the motion metrics of
+/// `tracker`, and the run-wide `timing`.
+pub struct Summary<'a> {
+    /// The scenario run.
+    pub scenario: &'a Scenario,
+    /// Ticks run.
+    pub ticks: u64,
+    /// Simulated time at the end, s.
+    pub sim_time: f64,
+    /// Wall-clock time of the tick loop, s.
+    pub wall_s: f64,
+    /// The run id.
+    pub run_id: String,
+    /// The transport's name.
+    pub transport: String,
+    /// Stopped by a signal.
+    pub interrupted: bool,
+    /// The run as a real-time system.
+    pub timing: TimingMetrics,
+}
+
+impl Summary<'_> {
+    /// The metrics of a finished run.
+    pub fn metrics(
+        self,
+        counts: Counts,
+        acc: &[RobotAccumulator],
+        robot_timings: &mut [crate::histogram::RobotTimings],
+        tracker: &Tracker,
+    ) -> RunMetrics {
+        let n = self.scenario.robots.len();
+        let robots = self
+            .scenario
+            .robots
+            .iter()
+            .zip(acc)
+            .zip(robot_timings)
+            .zip(tracker.robots())
+            .map(|(((spec, a), t), m)| {
+                let [latency, wake, compute] = t.histograms();
+                let min_clearance = m.min_clearance.min(a.min_contact_gap);
+                (
+                    spec.name.clone(),
+                    RobotMetrics {
+                        planner: spec.planner.clone(),
+                        reached_goal: a.reached_goal,
+                        time_to_goal: a.time_to_goal,
+                        path_length: m.path_length,
+                        collisions: a.collisions,
+                        min_clearance: min_clearance.is_finite().then_some(min_clearance),
+                        max_speed: m.max_speed,
+                        deadline_misses: a.deadline_misses,
+                        latency_us: latency.percentiles(),
+                        wake_us: wake.percentiles(),
+                        compute_us: compute.percentiles(),
+                        agent_pid: a.agent_pid,
+                        lost: a.lost,
+                        commands_rejected: a.rejected,
+                        commands_late: a.late,
+                        path_deviation: m.path.as_ref().map(|p| p.deviation()),
+                        boundary_violations: m.path.as_ref().and_then(|p| p.boundary_violations()),
+                    },
+                )
+            })
+            .collect();
+        let reached = acc.iter().filter(|a| a.reached_goal).count();
+        RunMetrics {
+            scenario: self.scenario.name.clone(),
+            robots,
+            collisions_total: counts.collisions_total,
+            success_rate: if n > 0 {
+                reached as f64 / n as f64
+            } else {
+                0.0
+            },
+            ticks: self.ticks,
+            sim_time: self.sim_time,
+            mode: self.scenario.world.mode.to_string(),
+            realtime_factor: if self.wall_s > 0.0 {
+                self.sim_time / self.wall_s
+            } else {
+                0.0
+            },
+            agents_lost: counts.agents_lost,
+            commands_rejected: counts.rejected,
+            commands_late: counts.late,
+            commands_rejected_unknown: counts.rejected_unknown,
+            world_pid: std::process::id(),
+            run_id: self.run_id,
+            transport: self.transport,
+            interrupted: self.interrupted,
+            timing: self.timing,
+        }
+    }
+}
