@@ -5,8 +5,8 @@
 
 use super::schedule::Clock;
 use mrsim_proto::{
-    BodyState, CommandMsg, FixedStr, JoinReply, JoinRequest, PROTOCOL_VERSION, SnapshotHeader,
-    command_kind,
+    BodyState, CommandMsg, FixedStr, JoinReply, JoinRequest, PROTOCOL_VERSION, RobotStats,
+    SnapshotHeader, StatsHeader, command_kind,
 };
 use mrsim_transport::{TransportError, WorldTransport};
 use std::cell::{Cell, RefCell};
@@ -179,5 +179,27 @@ impl WorldTransport for FakeTransport {
 
     fn cleanup_dead(&mut self) {
         self.state().cleanups += 1;
+    }
+
+    /// Nothing to count: commands are queued in `publish_snapshot`.
+    fn expect_answers(&mut self, _tick: u64, _count: usize) {}
+
+    /// Nothing to do: replies are kept in `replies` as they come.
+    fn joins_answered(&mut self) -> Result<(), TransportError> {
+        Ok(())
+    }
+
+    /// Nothing to connect.
+    fn prepare_ticks(&mut self) -> Result<bool, TransportError> {
+        Ok(false)
+    }
+
+    /// No observers.
+    fn publish_stats(
+        &mut self,
+        _header: &StatsHeader,
+        _robots: &[RobotStats],
+    ) -> Result<(), TransportError> {
+        Ok(())
     }
 }
