@@ -714,10 +714,19 @@ fn bad_commands_are_rejected_counted_logged_and_never_drive_a_robot() {
         );
     }
     // Wrong ticks: never applied; unanswered, the robot is lost and brakes.
-    for (r, why) in [("past", "past tick"), ("future", "future tick")] {
+    // Once the world has stopped waiting for the lost robot it ticks on
+    // without it, so an answer to an old snapshot that names "the next
+    // tick" can arrive when that tick is already past: rejected as a past
+    // tick. How often depends on the scheduler, so either reason counts for
+    // it, and at least one must be the fault's own.
+    for (r, why, also) in [
+        ("past", "past tick", "past tick"),
+        ("future", "future tick", "past tick"),
+    ] {
         let got = reasons(r);
         assert!(
-            !got.is_empty() && got.iter().all(|w| w.contains(why)),
+            got.iter().any(|w| w.contains(why))
+                && got.iter().all(|w| w.contains(why) || w.contains(also)),
             "{got:?}"
         );
         assert_eq!(m["robots"][r]["lost"], 1);
