@@ -15,6 +15,7 @@ pub mod batch;
 pub mod live;
 pub mod metrics;
 pub mod motion;
+pub mod names;
 pub mod path_metrics;
 pub mod physics;
 pub mod record;

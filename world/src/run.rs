@@ -69,7 +69,7 @@ pub enum RunError {
     /// Not every agent joined in time.
     #[error("agents for {missing} did not join within {secs:.0} s")]
     StartTimeout {
-        /// Comma-separated robot names.
+        /// The first few robot names, comma-separated, and how many more.
         missing: String,
         /// The timeout.
         secs: f64,
@@ -669,7 +669,7 @@ pub fn run(
             };
             let _ = lp.link.publish_snapshot(&header, &[]);
             return Err(RunError::StartTimeout {
-                missing: missing.join(", "),
+                missing: crate::names::first_few(&missing, 5),
                 secs: t.as_secs_f64(),
             });
         }
