@@ -1,4 +1,4 @@
-//! CPU time and peak memory of the run's parts, for `mrsim bench`.
+//! CPU time and peak memory of the run's parts (usage.json, read by `mrsim bench`).
 //!
 //! Each part measures itself with getrusage (the same counters as
 //! /proc/PID/stat's utime + stime and /proc/PID/status's VmHWM, read by
@@ -136,3 +136,19 @@ impl AgentTransport for Metered<'_> {
         self.inner.joined()
     }
 }
+
+/// Writes `usage.json` into `dir`: what the agents used while the run
+/// ticked, over `transport` (`shm` or `inproc`).
+pub fn write_report(dir: &Path, transport: &str, usage: &[AgentUsage]) -> std::io::Result<()> {
+    let v = json!({
+        "transport": transport,
+        "agents_reported": usage.len(),
+        "agents_cpu_s": usage.iter().map(|u| u.cpu_s).sum::<f64>(),
+        // In-process agents share the world's process: no RSS of their own.
+        "agent_maxrss_kb": (transport == "shm").then(|| usage.iter().map(|u| u.maxrss_kb).max()).flatten(),
+    });
+    std::fs::write(dir.join(USAGE_FILE), format!("{v:#}\n"))
+}
+
+/// The run folder's record of what the agents used.
+pub const USAGE_FILE: &str = "usage.json";
