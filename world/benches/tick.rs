@@ -26,7 +26,7 @@ use mrsim_proto::{
     command_kind, now_ns,
 };
 use mrsim_transport::{TransportError, WorldTransport};
-use mrsim_world::metrics::ClearanceGrid;
+use mrsim_world::clearance::ClearanceGrid;
 use mrsim_world::{Applied, RunOptions, World};
 use rapier2d::prelude::*;
 use std::hint::black_box;

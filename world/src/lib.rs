@@ -12,6 +12,8 @@
 #![warn(missing_docs)]
 
 pub mod batch;
+pub mod clearance;
+pub mod histogram;
 pub mod live;
 pub mod metrics;
 pub mod motion;

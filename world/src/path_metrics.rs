@@ -15,16 +15,8 @@
 
 use mrsim_planners::Vec2;
 use mrsim_planners::designated_path::distance_to_path;
-use serde::Serialize;
 
-/// Distance from the designated path over a run.
-#[derive(Debug, Clone, Copy, Default, Serialize, PartialEq)]
-pub struct PathDeviation {
-    /// Mean over the ticks recorded.
-    pub mean: f64,
-    /// Largest.
-    pub max: f64,
-}
+pub use mrsim_runfolder::metrics::PathDeviation;
 
 /// Accumulates one robot's path metrics tick by tick.
 #[derive(Debug, Clone, Default)]

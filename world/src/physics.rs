@@ -101,8 +101,8 @@ pub fn clamp_norm(v: [f64; 2], max: f64) -> [f64; 2] {
     if v.iter().any(|c| c.is_nan()) {
         return [0.0, 0.0];
     }
-    // The plain root of the sum of squares, and `hypot` only where that
-    // overflows or underflows (`hypot` was 5 % of the world's step).
+    // The plain root of the sum of squares, and `hypot` (slow) only where
+    // that overflows or underflows.
     let n2 = v[0] * v[0] + v[1] * v[1];
     let n = if n2.is_finite() && n2 > f64::MIN_POSITIVE {
         n2.sqrt()
@@ -447,7 +447,7 @@ impl World {
         match (self.owner_position(a), self.owner_position(b), a, b) {
             (Some(p), Some(q), _, _) => (p[0] - q[0]).hypot(p[1] - q[1]) - r,
             (Some(p), None, _, Owner::Wall(w)) | (None, Some(p), Owner::Wall(w), _) => {
-                crate::metrics::segment_distance(self.walls[w], p) - r
+                crate::clearance::segment_distance(self.walls[w], p) - r
             }
             _ => 0.0,
         }

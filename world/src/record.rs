@@ -6,9 +6,8 @@
 //! with a whole tick and a whole line (no torn rows after a crash).
 //!
 //! Ticks go to the thread in batches of up to [`BATCH_TICKS`] (or whatever
-//! is pending after [`BATCH_AGE`]): one wake-up of the thread per tick cost
-//! the loop a futex wake, about 7 % of the world's tick at 64 robots.
-//! Batch buffers are returned to the loop for reuse.
+//! is pending after [`BATCH_AGE`]), so the loop does not pay a futex wake
+//! of the thread each tick. Batch buffers are returned to the loop for reuse.
 //!
 //! The same thread computes the robots' motion metrics from the states it
 //! writes ([`crate::tracking`]) and hands them back at the end.
@@ -63,8 +62,11 @@ impl Recorder {
     /// thread. `names[i]` is body i's name; `tracker` takes in every tick's
     /// states, in order.
     pub fn start(dir: &Path, names: Vec<String>, mut tracker: Tracker) -> std::io::Result<Self> {
-        let mut traj = BufWriter::with_capacity(1 << 16, File::create(dir.join("trajectory.csv"))?);
-        let mut events = BufWriter::new(File::create(dir.join("events.jsonl"))?);
+        let mut traj = BufWriter::with_capacity(
+            1 << 16,
+            File::create(dir.join(mrsim_runfolder::TRAJECTORY_FILE))?,
+        );
+        let mut events = BufWriter::new(File::create(dir.join(mrsim_runfolder::EVENTS_FILE))?);
         writeln!(traj, "tick,time,body,kind,x,y,vx,vy")?;
         traj.flush()?;
         let (tx, rx) = bounded::<Msg>(256);

@@ -20,6 +20,7 @@ use mrsim_proto::{
     CommandMsg, FixedStr, JoinReply, JoinRequest, PROTOCOL_VERSION, SnapshotHeader, StatsHeader,
     agent_state, command_kind, flags, now_ns, run_phase,
 };
+use mrsim_runfolder::{FileError, METRICS_FILE, SCENARIO_FILE, TRAJECTORY_FILE};
 use mrsim_scenario::{MissPolicy, Mode};
 use mrsim_sys::sched::BelowAgents;
 use mrsim_sys::usage::{CpusTime, process_usage, thread_usage};
@@ -585,8 +586,8 @@ pub fn run(
         .chain(scenario.obstacles.iter().map(|o| o.name.clone()))
         .collect();
     let scenario_json =
-        serde_json::to_vec_pretty(&scenario).map_err(|e| out_err("scenario.json")(e.into()))?;
-    std::fs::write(dir.join("scenario.json"), &scenario_json).map_err(out_err("scenario.json"))?;
+        serde_json::to_vec_pretty(&scenario).map_err(|e| out_err(SCENARIO_FILE)(e.into()))?;
+    std::fs::write(dir.join(SCENARIO_FILE), &scenario_json).map_err(out_err(SCENARIO_FILE))?;
     // Absolute, so that an agent started from another folder writes its
     // diagnostics into this run's folder.
     let out_dir = std::fs::canonicalize(&dir).unwrap_or_else(|_| dir.clone());
@@ -595,7 +596,7 @@ pub fn run(
     )
     .map_err(|e| out_err("setup")(e.into()))?;
     let tracker = Tracker::new(&scenario, world.walls());
-    let rec = Recorder::start(&dir, names.clone(), tracker).map_err(out_err("trajectory.csv"))?;
+    let rec = Recorder::start(&dir, names.clone(), tracker).map_err(out_err(TRAJECTORY_FILE))?;
     link.publish_setup(&setup)?;
 
     let realtime = scenario.world.mode == Mode::Realtime;
@@ -624,7 +625,7 @@ pub fn run(
         published_ns: 0,
         deadline_ns: u64::MAX,
         last_in_ns: 0,
-        timings: TimingRecorder::start(n).map_err(out_err("metrics.json"))?,
+        timings: TimingRecorder::start(n).map_err(out_err(METRICS_FILE))?,
         inbox: Vec::with_capacity(n),
         last_pid_check: Instant::now(),
         pid_checks: 0,
@@ -865,7 +866,7 @@ pub fn run(
     let wall = wall_start.elapsed().as_secs_f64();
     let (cpu_end, maxrss_kb) = process_usage();
     // Every command's timings recorded (the live summary too).
-    let mut timings = lp.timings.finish().map_err(out_err("metrics.json"))?;
+    let mut timings = lp.timings.finish().map_err(out_err(METRICS_FILE))?;
     let cpus = cpus_start.zip(CpusTime::now()).map(|(a, b)| b.since(a));
     let timing = TimingMetrics {
         wall_s: wall,
@@ -898,7 +899,7 @@ pub fn run(
     }
 
     // Every tick's states taken in: the motion metrics are complete.
-    let tracker = lp.rec.finish().map_err(out_err("trajectory.csv"))?;
+    let tracker = lp.rec.finish().map_err(out_err(TRAJECTORY_FILE))?;
     let robots = scenario
         .robots
         .iter()
@@ -956,8 +957,9 @@ pub fn run(
         interrupted,
         timing,
     };
-    let text =
-        serde_json::to_string_pretty(&metrics).map_err(|e| out_err("metrics.json")(e.into()))?;
-    std::fs::write(dir.join("metrics.json"), text).map_err(out_err("metrics.json"))?;
+    mrsim_runfolder::write_metrics(&dir, &metrics).map_err(|e| match e {
+        FileError::Io { source, .. } => out_err(METRICS_FILE)(source),
+        FileError::Json { source, .. } => out_err(METRICS_FILE)(source.into()),
+    })?;
     Ok(RunOutcome { metrics })
 }

@@ -4,12 +4,10 @@
 //! (snapshot published -> command received), the agent's wake-up
 //! (published -> awake) and the planner's compute time. The world keeps a
 //! histogram of each per robot and for the whole run. Recorded on the tick
-//! loop, that was six histogram records per robot and tick, each in memory
-//! of its own: at 1000 robots, in-process and lockstep, a quarter of the
-//! world thread's samples, nearly as many as rapier's step (`perf`,
-//! BENCHMARKS.md, "Fifth round").
+//! loop, that would be six histogram records per robot and tick, each in
+//! memory of its own (BENCHMARKS.md, "Fifth round", has the profile).
 //!
-//! The loop now appends each command's timings to one flat buffer and
+//! The loop appends each command's timings to one flat buffer and
 //! hands the buffer over in batches (of [`BATCH`] samples, or whatever is
 //! pending after [`BATCH_AGE`]) to a thread that owns the histograms and
 //! runs at low priority ([`mrsim_sys::sched::background_thread`]). The live
@@ -19,7 +17,7 @@
 //! them.
 
 use crate::batch::Batcher;
-use crate::metrics::{DurationHistogram, RobotTimings};
+use crate::histogram::{DurationHistogram, RobotTimings};
 use crossbeam::channel::{bounded, unbounded};
 use std::sync::{Arc, Mutex, PoisonError};
 use std::thread::JoinHandle;

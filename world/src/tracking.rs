@@ -5,16 +5,15 @@
 //! alone, tick after tick. The recording thread already gets every tick's
 //! states, in order, to write trajectory.csv ([`crate::record`]); it feeds
 //! them to a [`Tracker`] too, and hands the tracker back when the run
-//! ends. On the tick loop they were a fifth of the world thread's samples
-//! at 1000 robots, in-process and lockstep (the clearance grid most of it;
-//! `perf`, BENCHMARKS.md, "Fifth round"), and the loop waited for them
-//! before it published the next tick.
+//! ends, so the tick loop neither computes them nor waits for them before
+//! it publishes the next tick (BENCHMARKS.md, "Fifth round", has the
+//! profile).
 //!
 //! What the loop must know at once stays there: goals reached (they flag
 //! the robot in the next snapshot and can end the run), contacts (events
 //! as they happen) and deadline misses.
 
-use crate::metrics::{ClearanceGrid, clearly_beyond, segment_distance, segment_distance_sq};
+use crate::clearance::{ClearanceGrid, clearly_beyond, segment_distance, segment_distance_sq};
 use crate::path_metrics::PathAccumulator;
 use mrsim_proto::BodyState;
 use mrsim_scenario::Scenario;

@@ -8,16 +8,14 @@ use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
-/// Name of the resolved scenario in a run folder.
-pub const SCENARIO_FILE: &str = "scenario.json";
-/// Name of the trajectory in a run folder.
-pub const TRAJECTORY_FILE: &str = "trajectory.csv";
-/// Name of the event log in a run folder.
-pub const EVENTS_FILE: &str = "events.jsonl";
-/// Name of the metrics in a run folder.
-pub const METRICS_FILE: &str = "metrics.json";
-/// Name of the (optional) planner diagnostics in a run folder.
-pub const DIAGNOSTICS_FILE: &str = "diagnostics.csv";
+pub use mrsim_runfolder::{
+    DIAGNOSTICS_FILE, EVENTS_FILE, METRICS_FILE, Percentiles, RobotMetrics, SCENARIO_FILE,
+    TRAJECTORY_FILE,
+};
+
+/// `metrics.json`, the run folder crate's schema (the name this crate has
+/// always used for it).
+pub type Metrics = mrsim_runfolder::RunMetrics;
 
 /// What a body in `trajectory.csv` is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -157,72 +155,6 @@ pub struct Event {
     /// What happened.
     #[serde(flatten)]
     pub kind: EventKind,
-}
-
-/// Percentiles of a latency, µs.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct Percentiles {
-    /// Median.
-    pub p50: Option<f64>,
-    /// 99th percentile.
-    pub p99: Option<f64>,
-    /// 99.9th percentile.
-    pub p999: Option<f64>,
-    /// Maximum.
-    pub max: Option<f64>,
-}
-
-/// One robot's entry in `metrics.json`.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct RobotMetrics {
-    /// Whether it reached its goal.
-    pub reached_goal: bool,
-    /// Simulated time to the goal, s.
-    pub time_to_goal: Option<f64>,
-    /// Distance travelled.
-    pub path_length: Option<f64>,
-    /// Collisions it was in.
-    pub collisions: u64,
-    /// Smallest clearance to any other body or wall.
-    pub min_clearance: Option<f64>,
-    /// Highest speed.
-    pub max_speed: Option<f64>,
-    /// Deadline misses (realtime).
-    pub deadline_misses: u64,
-    /// Snapshot-to-command latency.
-    pub latency_us: Option<Percentiles>,
-    /// Planner compute time.
-    pub compute_us: Option<Percentiles>,
-    /// Process id of its agent.
-    pub agent_pid: Option<u64>,
-    /// Planner name.
-    pub planner: Option<String>,
-}
-
-/// `metrics.json`. Fields this reader does not know are ignored.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct Metrics {
-    /// Per robot, by name.
-    pub robots: BTreeMap<String, RobotMetrics>,
-    /// Collisions in the whole run.
-    pub collisions_total: u64,
-    /// Fraction of robots that reached their goal.
-    pub success_rate: Option<f64>,
-    /// Ticks run.
-    pub ticks: u64,
-    /// `lockstep` or `realtime`.
-    pub mode: Option<String>,
-    /// Simulated time over wall time.
-    pub realtime_factor: Option<f64>,
-    /// Agents lost during the run.
-    pub agents_lost: u64,
-    /// Commands the world refused.
-    pub commands_rejected: u64,
-    /// Process id of the world.
-    pub world_pid: Option<u64>,
 }
 
 /// One row of `diagnostics.csv`.

@@ -25,11 +25,8 @@ fn a_run_folder_loads_with_every_file() {
     assert_eq!(run.trajectory.body("o1").unwrap().kind, BodyKind::Obstacle);
     let metrics = run.metrics.as_ref().unwrap();
     assert_eq!(metrics.robots["r1"].deadline_misses, 2);
-    assert_eq!(
-        metrics.robots["r1"].latency_us.as_ref().unwrap().p99,
-        Some(90.0)
-    );
-    assert_eq!(metrics.world_pid, Some(999));
+    assert_eq!(metrics.robots["r1"].latency_us.p99, 90.0);
+    assert_eq!(metrics.world_pid, 999);
     let diagnostics = run.diagnostics.as_ref().unwrap();
     assert_eq!(diagnostics.len(), 2 * 3 * (TICKS as usize + 1));
     assert_eq!(run.robot_index("r2"), Some(2));

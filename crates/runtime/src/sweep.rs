@@ -233,10 +233,8 @@ pub fn read_run(dir: &Path) -> Result<RunMetrics, String> {
             _ => all_arrived = false,
         }
         let straight = (r.goal[0] - r.start[0]).hypot(r.goal[1] - r.start[1]);
-        if let Some(len) = rm.path_length
-            && straight > 0.0
-        {
-            ratios.push(len / straight);
+        if straight > 0.0 {
+            ratios.push(rm.path_length / straight);
         }
         if let Some(c) = rm.min_clearance {
             clearance = Some(clearance.map_or(c, |m: f64| m.min(c)));
@@ -249,7 +247,7 @@ pub fn read_run(dir: &Path) -> Result<RunMetrics, String> {
         ticks * sc.world.dt
     };
     Ok(RunMetrics {
-        success_rate: m.success_rate.unwrap_or(0.0),
+        success_rate: m.success_rate,
         collisions_total: m.collisions_total as f64,
         makespan,
         path_ratio: mean(&ratios),

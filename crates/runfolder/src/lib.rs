@@ -1,0 +1,129 @@
+//! The run folder: what a run (or a bench, or a sweep) leaves on disk.
+//!
+//! One crate owns it so that the writer and every reader agree: the file
+//! names are the constants below, and the JSON files have one typed schema
+//! each ([`metrics::RunMetrics`] for `metrics.json`, [`usage::Usage`] for
+//! `usage.json`, [`bench::BenchDoc`] for `bench.json`), with `Serialize` for
+//! the process that writes them and `Deserialize` for everything that reads
+//! them. The world writes `metrics.json` with [`write_metrics`]; the report,
+//! the summary table, sweeps and the bench read it with [`read_metrics`].
+//!
+//! Reading is tolerant (a missing field takes its default, an unknown one
+//! is ignored) so that a folder written by an older world, or a hand-made
+//! one in a test, still reads; writing is exact (every field, in the order
+//! declared, `null` for an absent value).
+#![warn(missing_docs)]
+
+pub mod bench;
+pub mod metrics;
+pub mod usage;
+
+pub use metrics::{Percentiles, RobotMetrics, RunMetrics, TimingMetrics};
+
+use std::path::{Path, PathBuf};
+
+/// The resolved scenario, as the world ran it.
+pub const SCENARIO_FILE: &str = "scenario.json";
+/// Every body's state at every tick.
+pub const TRAJECTORY_FILE: &str = "trajectory.csv";
+/// One JSON object per line: joins, losses, contacts, goals, rejections.
+pub const EVENTS_FILE: &str = "events.jsonl";
+/// The run's metrics ([`metrics::RunMetrics`]).
+pub const METRICS_FILE: &str = "metrics.json";
+/// The planners' per-tick diagnostics (only when some planner reported any).
+pub const DIAGNOSTICS_FILE: &str = "diagnostics.csv";
+/// The static plot, vector.
+pub const PLOT_SVG_FILE: &str = "plot.svg";
+/// The static plot, bitmap.
+pub const PLOT_PNG_FILE: &str = "plot.png";
+/// The self-contained replay page.
+pub const REPLAY_FILE: &str = "replay.html";
+/// What the agents used while the run ticked ([`usage::Usage`]).
+pub const USAGE_FILE: &str = "usage.json";
+/// `mrsim bench`'s rows ([`bench::BenchDoc`]).
+pub const BENCH_FILE: &str = "bench.json";
+/// `mrsim bench`'s rows flattened to CSV.
+pub const BENCH_CSV_FILE: &str = "bench.csv";
+/// `mrsim bench`'s plot.
+pub const BENCH_SVG_FILE: &str = "bench.svg";
+/// `mrsim sweep`: one row per run.
+pub const SWEEP_FILE: &str = "sweep.csv";
+/// `mrsim sweep`: means and confidence intervals per setting.
+pub const SUMMARY_FILE: &str = "summary.csv";
+/// `mrsim sweep --allowable`: the largest allowable value per seed.
+pub const ALLOWABLE_FILE: &str = "allowable.csv";
+
+/// Prefix of an agent's diagnostics part file (merged into
+/// [`DIAGNOSTICS_FILE`] when the run ends).
+pub const DIAGNOSTICS_PART_PREFIX: &str = "diagnostics-";
+/// Suffix of an agent's diagnostics part file.
+pub const DIAGNOSTICS_PART_SUFFIX: &str = ".part";
+
+/// Name of the diagnostics part file of robot `robot_id` written by process
+/// `pid` (one per process, so a restarted agent does not overwrite its
+/// predecessor's values).
+pub fn diagnostics_part_file(robot_id: usize, pid: u32) -> String {
+    format!("{DIAGNOSTICS_PART_PREFIX}{robot_id}-{pid}{DIAGNOSTICS_PART_SUFFIX}")
+}
+
+/// Name of the file in which the agent of `robot` leaves its usage for the
+/// launcher (hidden; the launcher sums them into [`USAGE_FILE`] and removes
+/// them).
+pub fn agent_usage_file(robot: &str) -> String {
+    format!(".usage-{robot}.json")
+}
+
+/// Why a run folder's file could not be read or written.
+#[derive(Debug, thiserror::Error)]
+pub enum FileError {
+    /// The file could not be read or written.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// The file is not what its schema says.
+    #[error("{}: {source}", path.display())]
+    Json {
+        /// The file.
+        path: PathBuf,
+        /// The parse (or encoding) error.
+        source: serde_json::Error,
+    },
+}
+
+impl FileError {
+    /// The file concerned.
+    pub fn path(&self) -> &Path {
+        match self {
+            Self::Io { path, .. } | Self::Json { path, .. } => path,
+        }
+    }
+}
+
+/// Reads `dir/name` as JSON of type `T`.
+pub fn read_json<T: serde::de::DeserializeOwned>(dir: &Path, name: &str) -> Result<T, FileError> {
+    let path = dir.join(name);
+    let text = std::fs::read_to_string(&path).map_err(|source| FileError::Io {
+        path: path.clone(),
+        source,
+    })?;
+    serde_json::from_str(&text).map_err(|source| FileError::Json { path, source })
+}
+
+/// Reads `dir/metrics.json`.
+pub fn read_metrics(dir: &Path) -> Result<RunMetrics, FileError> {
+    read_json(dir, METRICS_FILE)
+}
+
+/// Writes `dir/metrics.json` (pretty-printed, fields in declared order).
+pub fn write_metrics(dir: &Path, metrics: &RunMetrics) -> Result<(), FileError> {
+    let path = dir.join(METRICS_FILE);
+    let text = serde_json::to_string_pretty(metrics).map_err(|source| FileError::Json {
+        path: path.clone(),
+        source,
+    })?;
+    std::fs::write(&path, text).map_err(|source| FileError::Io { path, source })
+}
