@@ -5,8 +5,8 @@
 use crate::cli::BenchArgs;
 use crate::exit::fail;
 use anyhow::Result;
+use mrsim_runfolder::bench::BenchRow;
 use mrsim_runtime::bench::{BenchPlan, BenchStep};
-use serde_json::Value;
 use std::io::{IsTerminal, Write};
 use std::time::Instant;
 
@@ -48,14 +48,17 @@ impl Progress {
     }
 }
 
-fn f(v: &Value, digits: usize) -> String {
-    v.as_f64()
-        .map(|x| format!("{x:.digits$}"))
+fn f(v: Option<f64>, digits: usize) -> String {
+    v.map(|x| format!("{x:.digits$}"))
         .unwrap_or_else(|| "-".to_string())
 }
 
+fn text(s: &str) -> String {
+    if s.is_empty() { "-" } else { s }.to_string()
+}
+
 /// The table printed at the end: one row per combination.
-pub fn table(rows: &[Value]) -> String {
+pub fn table(rows: &[BenchRow]) -> String {
     let header = [
         "agents",
         "transport",
@@ -79,26 +82,23 @@ pub fn table(rows: &[Value]) -> String {
         .iter()
         .map(|r| {
             vec![
-                r["agents"].to_string(),
-                r["transport"].as_str().unwrap_or("-").to_string(),
-                f(&r["roundtrip_us"]["p50"], 0),
-                f(&r["roundtrip_us"]["p99"], 0),
-                f(&r["roundtrip_us"]["p999"], 0),
-                f(&r["roundtrip_us"]["max"], 0),
-                r["miss_rate"]
-                    .as_f64()
-                    .map(|m| format!("{:.3}", 100.0 * m))
-                    .unwrap_or_else(|| "-".into()),
-                f(&r["realtime_factor"], 2),
-                f(&r["jitter_us_p99"], 0),
-                f(&r["allin_us"]["p99"], 0),
-                f(&r["baseline_allin_us"]["p99"], 0),
-                f(&r["baseline_roundtrip_us"]["p99"], 0),
-                f(&r["world_cpu_pct"], 1),
-                f(&r["agents_cpu_pct"], 1),
-                f(&r["steal_pct"], 1),
-                f(&r["world_rss_mb"], 1),
-                f(&r["agent_rss_mb"], 1),
+                r.agents.to_string(),
+                text(&r.transport),
+                f(r.roundtrip_us.p50, 0),
+                f(r.roundtrip_us.p99, 0),
+                f(r.roundtrip_us.p999, 0),
+                f(r.roundtrip_us.max, 0),
+                format!("{:.3}", 100.0 * r.miss_rate),
+                f(Some(r.realtime_factor), 2),
+                f(r.jitter_us_p99, 0),
+                f(r.allin_us.p99, 0),
+                f(r.baseline_allin_us.and_then(|b| b.p99), 0),
+                f(r.baseline_roundtrip_us.and_then(|b| b.p99), 0),
+                f(Some(r.world_cpu_pct), 1),
+                f(Some(r.agents_cpu_pct), 1),
+                f(r.steal_pct, 1),
+                f(r.world_rss_mb, 1),
+                f(r.agent_rss_mb, 1),
             ]
         })
         .collect();

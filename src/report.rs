@@ -13,11 +13,11 @@ use std::path::Path;
 pub fn main(dir: &Path) -> Result<i32> {
     match mrsim_report::render_all(dir) {
         Ok(()) => {
-            if !dir.join(mrsim_report::METRICS_FILE).exists() {
+            if !dir.join(mrsim_runfolder::METRICS_FILE).exists() {
                 eprintln!(
                     "note: {} has no {}: the run was cut short; drew what was recorded",
                     dir.display(),
-                    mrsim_report::METRICS_FILE
+                    mrsim_runfolder::METRICS_FILE
                 );
             }
             println!(

@@ -18,6 +18,7 @@
 use crate::cli::SweepArgs;
 use crate::exit::fail;
 use anyhow::{Context, Result, anyhow};
+use mrsim_runfolder::{ALLOWABLE_FILE, SUMMARY_FILE, SWEEP_FILE};
 use mrsim_runtime::sweep::{
     Job, JobDone, JobResult, METRICS, RunMetrics, SweepPlan, largest_allowable, mean_ci,
 };
@@ -110,8 +111,8 @@ pub fn main(args: &SweepArgs) -> Result<i32> {
         csv.push_str(&row.join(","));
         csv.push('\n');
     }
-    std::fs::write(dir.join("sweep.csv"), &csv)
-        .with_context(|| format!("writing {}", dir.join("sweep.csv").display()))?;
+    std::fs::write(dir.join(SWEEP_FILE), &csv)
+        .with_context(|| format!("writing {}", dir.join(SWEEP_FILE).display()))?;
 
     // Summary: per combination, mean and 95 % half-width of each metric.
     let mut summary = String::new();
@@ -170,8 +171,8 @@ pub fn main(args: &SweepArgs) -> Result<i32> {
         summary.push('\n');
         table.push(trow);
     }
-    std::fs::write(dir.join("summary.csv"), &summary)
-        .with_context(|| format!("writing {}", dir.join("summary.csv").display()))?;
+    std::fs::write(dir.join(SUMMARY_FILE), &summary)
+        .with_context(|| format!("writing {}", dir.join(SUMMARY_FILE).display()))?;
     let widths: Vec<usize> = (0..table[0].len())
         .map(|c| {
             table
@@ -205,8 +206,8 @@ pub fn main(args: &SweepArgs) -> Result<i32> {
     );
     if let Some(key) = &args.allowable {
         let text = allowable(key, axes, combos, jobs, &results)?;
-        std::fs::write(dir.join("allowable.csv"), &text.0)
-            .with_context(|| format!("writing {}", dir.join("allowable.csv").display()))?;
+        std::fs::write(dir.join(ALLOWABLE_FILE), &text.0)
+            .with_context(|| format!("writing {}", dir.join(ALLOWABLE_FILE).display()))?;
         print!("{}", text.1);
     }
     println!(

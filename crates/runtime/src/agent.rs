@@ -115,7 +115,7 @@ pub fn run(req: &AgentRequest) -> AgentEnd {
     let usage_error = req
         .usage_out
         .as_ref()
-        .and_then(|path| metered.usage().write(path).err());
+        .and_then(|path| crate::usage::write_agent(path, &metered.usage()).err());
     AgentEnd {
         result: result.map(|_| ()).map_err(|error| AgentError::Run {
             robot: req.robot.clone(),

@@ -24,7 +24,12 @@
 use crate::error::{Invalid, Refusal};
 use crate::launch::Transport;
 use crate::sched::{Applied, Sched};
-use serde_json::{Value, json};
+use mrsim_runfolder::bench::{BenchDoc, BenchRow, MedianP99, Quantiles};
+use mrsim_runfolder::usage::Usage;
+use mrsim_runfolder::{
+    BENCH_CSV_FILE, BENCH_FILE, BENCH_SVG_FILE, FileError, Percentiles, RunMetrics,
+};
+use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
@@ -184,77 +189,80 @@ planner = "{planner}"
     )
 }
 
-/// Percentiles of a metrics.json histogram; null where it has no samples.
-fn pct(v: &Value, keys: &[&str]) -> Value {
-    let empty = v["count"].as_u64().unwrap_or(0) == 0;
-    keys.iter()
-        .map(|k| {
-            (
-                k.to_string(),
-                if empty { Value::Null } else { v[*k].clone() },
-            )
-        })
-        .collect::<serde_json::Map<_, _>>()
-        .into()
+/// Percentiles of a metrics.json histogram; none where it has no samples.
+fn quantiles(p: &Percentiles) -> Quantiles {
+    let has = p.count > 0;
+    Quantiles {
+        p50: has.then_some(p.p50),
+        p99: has.then_some(p.p99),
+        p999: has.then_some(p.p999),
+        max: has.then_some(p.max),
+    }
 }
 
-const ALL: &[&str] = &["p50", "p99", "p999", "max"];
+/// Median and 99th percentile of a metrics.json histogram; none where it
+/// has no samples.
+fn median_p99(p: &Percentiles) -> MedianP99 {
+    let q = quantiles(p);
+    MedianP99 {
+        p50: q.p50,
+        p99: q.p99,
+    }
+}
 
-/// One row of bench.json from a run folder's metrics.json and usage.json.
+/// One row of bench.json from a run folder's metrics.json and usage.json
+/// (the bench's own fields, `cpus`, `rt`, `planner`, `run_dir`, left
+/// empty).
 pub fn row_from_run(
     agents: usize,
     transport: Transport,
     rate: f64,
-    metrics: &Value,
-    usage: &Value,
-) -> Value {
-    let t = &metrics["timing"];
-    let wall = t["wall_s"].as_f64().unwrap_or(0.0);
-    let ticks = metrics["ticks"].as_u64().unwrap_or(0);
-    let misses: u64 = metrics["robots"]
-        .as_object()
-        .map(|r| {
-            r.values()
-                .filter_map(|v| v["deadline_misses"].as_u64())
-                .sum()
-        })
-        .unwrap_or(0);
+    metrics: &RunMetrics,
+    usage: &Usage,
+) -> BenchRow {
+    let t = &metrics.timing;
+    let wall = t.wall_s;
+    let ticks = metrics.ticks;
+    let misses: u64 = metrics.robots.values().map(|r| r.deadline_misses).sum();
     let slots = ticks * agents as u64;
-    let process_cpu = t["process_cpu_s"].as_f64().unwrap_or(0.0);
-    let agents_cpu = usage["agents_cpu_s"].as_f64().unwrap_or(0.0);
+    let agents_cpu = usage.agents_cpu_s;
     // In-process, the world's process holds the agent threads too.
     let world_cpu = match transport {
-        Transport::Shm => process_cpu,
-        Transport::Inproc => (process_cpu - agents_cpu).max(0.0),
+        Transport::Shm => t.process_cpu_s,
+        Transport::Inproc => (t.process_cpu_s - agents_cpu).max(0.0),
     };
     let pct_of_wall = |s: f64| if wall > 0.0 { 100.0 * s / wall } else { 0.0 };
-    let steal = t["cpus_steal_s"].as_f64().map(pct_of_wall);
-    let mb = |kb: Option<u64>| kb.map(|k| k as f64 / 1024.0);
-    json!({
-        "agents": agents,
-        "transport": transport.name(),
-        "rate_hz": rate,
-        "roundtrip_us": pct(&t["latency_us"], ALL),
-        "allin_us": pct(&t["allin_us"], &["p50", "p99"]),
-        "miss_rate": if slots > 0 { misses as f64 / slots as f64 } else { 0.0 },
-        "jitter_us_p99": pct(&t["jitter_us"], &["p99"])["p99"],
-        "world_cpu_pct": pct_of_wall(world_cpu),
-        "agents_cpu_pct": pct_of_wall(agents_cpu),
-        "steal_pct": steal,
-        "world_rss_mb": mb(t["process_maxrss_kb"].as_u64()),
-        "agent_rss_mb": mb(usage["agent_maxrss_kb"].as_u64()),
-        "wake_us": pct(&t["wake_us"], ALL),
-        "compute_us": pct(&t["compute_us"], ALL),
-        "world_tick_us": pct(&t["world_tick_us"], ALL),
-        "physics_us": pct(&t["physics_us"], ALL),
-        "ticks": ticks,
-        "deadline_misses": misses,
-        "wall_s": wall,
+    let mb = |kb: u64| kb as f64 / 1024.0;
+    BenchRow {
+        agents,
+        transport: transport.name().to_string(),
+        rate_hz: rate,
+        roundtrip_us: quantiles(&t.latency_us),
+        allin_us: median_p99(&t.allin_us),
+        miss_rate: if slots > 0 {
+            misses as f64 / slots as f64
+        } else {
+            0.0
+        },
+        jitter_us_p99: quantiles(&t.jitter_us).p99,
+        world_cpu_pct: pct_of_wall(world_cpu),
+        agents_cpu_pct: pct_of_wall(agents_cpu),
+        steal_pct: t.cpus_steal_s.map(pct_of_wall),
+        world_rss_mb: Some(mb(t.process_maxrss_kb)),
+        agent_rss_mb: usage.agent_maxrss_kb.map(mb),
+        wake_us: quantiles(&t.wake_us),
+        compute_us: quantiles(&t.compute_us),
+        world_tick_us: quantiles(&t.world_tick_us),
+        physics_us: quantiles(&t.physics_us),
+        ticks,
+        deadline_misses: misses,
+        wall_s: wall,
         // Simulated over wall time of the tick loop: below 1 the world could
         // not hold the rate (ticks started ever later, see the jitter), and
         // the miss rate alone understates how far it fell behind.
-        "realtime_factor": metrics["realtime_factor"].as_f64().unwrap_or(0.0),
-    })
+        realtime_factor: metrics.realtime_factor,
+        ..Default::default()
+    }
 }
 
 /// A bench ready to start: checked, pinned, its folder made.
@@ -280,7 +288,7 @@ pub enum BenchStep {
 #[derive(Debug)]
 pub struct BenchOutcome {
     /// bench.json's rows, one per agent count and transport.
-    pub rows: Vec<Value>,
+    pub rows: Vec<BenchRow>,
     /// The output folder.
     pub out: PathBuf,
     /// bench.svg could not be drawn.
@@ -376,10 +384,10 @@ impl PreparedBench {
                 let dir = out.join("runs").join(format!("{}-{n}", t.name()));
                 let (metrics, usage) = run_one(&self.exe, &scene, &dir, t)?;
                 let mut row = row_from_run(n, t, plan.rate, &metrics, &usage);
-                row["cpus"] = json!(self.applied.cpus);
-                row["rt"] = json!(self.applied.rt);
-                row["planner"] = json!(plan.planner);
-                row["run_dir"] = json!(dir);
+                row.cpus = self.applied.cpus.clone();
+                row.rt = self.applied.rt;
+                row.planner = plan.planner.clone();
+                row.run_dir = dir.to_string_lossy().into_owned();
                 batch.push(row);
                 on_step(BenchStep::Done);
             }
@@ -389,8 +397,8 @@ impl PreparedBench {
                 )));
                 let b = run_baseline(program, out, n, plan)?;
                 for row in &mut batch {
-                    row["baseline_allin_us"] = pct(&b["allin_us"], &["p50", "p99"]);
-                    row["baseline_roundtrip_us"] = pct(&b["roundtrip_us"], &["p50", "p99"]);
+                    row.baseline_allin_us = Some(median_p99(&b.allin_us));
+                    row.baseline_roundtrip_us = Some(median_p99(&b.roundtrip_us));
                 }
                 on_step(BenchStep::Done);
             }
@@ -400,18 +408,28 @@ impl PreparedBench {
             let path = out.join(name);
             std::fs::write(&path, text).map_err(|source| BenchError::Write { path, source })
         };
-        write("bench.json", format!("{:#}\n", json!({"rows": rows})))?;
-        write("bench.csv", csv(&rows))?;
+        let doc = BenchDoc { rows };
+        let text = serde_json::to_string_pretty(&doc).map_err(|e| BenchError::Write {
+            path: out.join(BENCH_FILE),
+            source: e.into(),
+        })?;
+        write(BENCH_FILE, format!("{text}\n"))?;
+        let rows = doc.rows;
+        let flat: Vec<Value> = rows
+            .iter()
+            .map(|r| serde_json::to_value(r).unwrap_or_default())
+            .collect();
+        write(BENCH_CSV_FILE, csv(&flat))?;
         let series: Vec<mrsim_report::bench_plot::Point> = rows
             .iter()
             .map(|r| mrsim_report::bench_plot::Point {
-                series: r["transport"].as_str().unwrap_or("?").to_string(),
-                agents: r["agents"].as_u64().unwrap_or(0) as f64,
-                roundtrip_p99_ms: r["roundtrip_us"]["p99"].as_f64().unwrap_or(0.0) / 1000.0,
-                miss_pct: 100.0 * r["miss_rate"].as_f64().unwrap_or(0.0),
+                series: r.transport.clone(),
+                agents: r.agents as f64,
+                roundtrip_p99_ms: r.roundtrip_us.p99.unwrap_or(0.0) / 1000.0,
+                miss_pct: 100.0 * r.miss_rate,
             })
             .collect();
-        let svg_error = mrsim_report::bench_plot::write(&series, &out.join("bench.svg"))
+        let svg_error = mrsim_report::bench_plot::write(&series, &out.join(BENCH_SVG_FILE))
             .err()
             .map(|e| e.to_string());
         Ok(BenchOutcome {
@@ -422,12 +440,11 @@ impl PreparedBench {
     }
 }
 
-fn read_json(path: PathBuf) -> Result<Value, BenchError> {
-    let text = std::fs::read_to_string(&path).map_err(|source| BenchError::Read {
-        path: path.clone(),
-        source,
-    })?;
-    serde_json::from_str(&text).map_err(|source| BenchError::Parse { path, source })
+fn read_json<T: serde::de::DeserializeOwned>(dir: &Path, name: &str) -> Result<T, BenchError> {
+    mrsim_runfolder::read_json(dir, name).map_err(|e| match e {
+        FileError::Io { path, source } => BenchError::Read { path, source },
+        FileError::Json { path, source } => BenchError::Parse { path, source },
+    })
 }
 
 fn run_one(
@@ -435,7 +452,7 @@ fn run_one(
     scene: &Path,
     dir: &Path,
     transport: Transport,
-) -> Result<(Value, Value), BenchError> {
+) -> Result<(RunMetrics, Usage), BenchError> {
     let out = Command::new(exe)
         .arg("run")
         .arg(scene)
@@ -458,8 +475,8 @@ fn run_one(
         });
     }
     Ok((
-        read_json(dir.join(crate::finish::METRICS_FILE))?,
-        read_json(dir.join(crate::usage::USAGE_FILE))?,
+        read_json(dir, mrsim_runfolder::METRICS_FILE)?,
+        read_json(dir, mrsim_runfolder::USAGE_FILE)?,
     ))
 }
 
@@ -468,8 +485,9 @@ fn run_baseline(
     dir: &Path,
     agents: usize,
     plan: &BenchPlan,
-) -> Result<Value, BenchError> {
-    let file = dir.join(format!("baseline-{agents}.json"));
+) -> Result<BaselineResult, BenchError> {
+    let name = format!("baseline-{agents}.json");
+    let file = dir.join(&name);
     let run_id = mrsim_transport::Namespace::fresh_run_id();
     let out = Command::new(program)
         .args(["world", "--run", &run_id, "--agents"])
@@ -497,7 +515,17 @@ fn run_baseline(
             stderr: String::from_utf8_lossy(&out.stderr).trim().to_string(),
         });
     }
-    read_json(file)
+    read_json(dir, &name)
+}
+
+/// What the baseline program writes: its all-in time and round trip.
+#[derive(Debug, Clone, Default, serde::Deserialize)]
+#[serde(default)]
+struct BaselineResult {
+    /// Tick published -> last reply in, µs.
+    allin_us: Percentiles,
+    /// Tick published -> one reply in, µs.
+    roundtrip_us: Percentiles,
 }
 
 /// bench.csv: the rows flattened (nested percentiles as `field_p50` ...).
@@ -553,5 +581,55 @@ fn cell(v: &Value) -> String {
         Value::String(s) => s.clone(),
         Value::Array(a) => a.iter().map(cell).collect::<Vec<_>>().join(" "),
         other => other.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(transport: &str) -> (RunMetrics, Usage) {
+        let metrics: RunMetrics = serde_json::from_value(serde_json::json!({
+            "ticks": 10,
+            "realtime_factor": 0.9,
+            "robots": {"a": {"deadline_misses": 3}, "b": {"deadline_misses": 1}},
+            "timing": {
+                "wall_s": 2.0, "process_cpu_s": 1.0, "process_maxrss_kb": 2048,
+                "latency_us": {"p50": 10.0, "p99": 20.0, "p999": 30.0, "max": 40.0, "count": 5},
+                "allin_us": {"count": 0}
+            }
+        }))
+        .expect("metrics.json");
+        let usage = Usage {
+            transport: transport.into(),
+            agents_reported: 2,
+            agents_cpu_s: 0.4,
+            agent_maxrss_kb: (transport == "shm").then_some(1024),
+        };
+        (metrics, usage)
+    }
+
+    #[test]
+    fn a_row_counts_misses_per_slot_and_leaves_empty_histograms_null() {
+        let (m, u) = run("shm");
+        let row = row_from_run(2, Transport::Shm, 5.0, &m, &u);
+        assert_eq!(row.miss_rate, 4.0 / 20.0);
+        assert_eq!(row.roundtrip_us.p99, Some(20.0));
+        assert_eq!(row.allin_us, MedianP99::default(), "no sample: null");
+        assert_eq!((row.world_rss_mb, row.agent_rss_mb), (Some(2.0), Some(1.0)));
+        assert_eq!(row.world_cpu_pct, 50.0);
+    }
+
+    #[test]
+    fn in_process_the_agents_cpu_is_taken_out_of_the_worlds() {
+        let (m, u) = run("inproc");
+        let row = row_from_run(2, Transport::Inproc, 5.0, &m, &u);
+        assert!(
+            (row.world_cpu_pct - 30.0).abs() < 1e-9,
+            "{}",
+            row.world_cpu_pct
+        );
+        assert!((row.agents_cpu_pct - 20.0).abs() < 1e-9);
+        assert_eq!(row.agent_rss_mb, None);
     }
 }

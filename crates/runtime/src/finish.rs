@@ -7,10 +7,8 @@
 use crate::usage::AgentUsage;
 use mrsim_agents::diagnostics::MergeSummary;
 use mrsim_report::RenderError;
+use mrsim_runfolder::{FileError, RunMetrics};
 use std::path::{Path, PathBuf};
-
-/// The run's metrics file in its folder.
-pub const METRICS_FILE: &str = "metrics.json";
 
 /// How a run ended, for its caller to present.
 #[derive(Debug)]
@@ -27,7 +25,7 @@ pub struct Outcome {
     /// events.jsonl says what the world saw).
     pub agent_failures: Vec<AgentFailure>,
     /// metrics.json (absent when the world failed).
-    pub metrics: Option<serde_json::Value>,
+    pub metrics: Option<RunMetrics>,
     /// Drawing plot.svg/png and replay.html failed (the run itself did not).
     pub render_error: Option<RenderError>,
 }
@@ -35,9 +33,7 @@ pub struct Outcome {
 impl Outcome {
     /// True if the run was cut short by a signal (and wrote what it had).
     pub fn interrupted(&self) -> bool {
-        self.metrics
-            .as_ref()
-            .is_some_and(|m| m["interrupted"].as_bool() == Some(true))
+        self.metrics.as_ref().is_some_and(|m| m.interrupted)
     }
 }
 
@@ -127,15 +123,17 @@ pub fn finish(end: Ending<'_>) -> Result<Outcome, FinishError> {
     if let Some((transport, usage)) = end.usage {
         crate::usage::write_report(&outcome.dir, transport, usage).map_err(|source| {
             FinishError::Usage {
-                path: outcome.dir.join(crate::usage::USAGE_FILE),
+                path: outcome.dir.join(mrsim_runfolder::USAGE_FILE),
                 source,
             }
         })?;
     }
-    let path = outcome.dir.join(METRICS_FILE);
-    let text = std::fs::read_to_string(&path)
-        .map_err(|source| FinishError::ReadMetrics { path, source })?;
-    outcome.metrics = Some(serde_json::from_str(&text).map_err(FinishError::ParseMetrics)?);
+    outcome.metrics = Some(
+        mrsim_runfolder::read_metrics(&outcome.dir).map_err(|e| match e {
+            FileError::Io { path, source } => FinishError::ReadMetrics { path, source },
+            FileError::Json { source, .. } => FinishError::ParseMetrics(source),
+        })?,
+    );
     if end.render {
         outcome.render_error = mrsim_report::render_all(&outcome.dir).err();
     }

@@ -360,7 +360,7 @@ impl Prepared {
             .iter()
             .filter_map(|r| {
                 let f = usage_file(dir, &r.name);
-                let u = AgentUsage::read(&f);
+                let u = crate::usage::read_agent(&f);
                 let _ = std::fs::remove_file(&f);
                 u
             })
@@ -411,5 +411,5 @@ fn reap_agents(agents: &mut [(&str, Child)], world_status: ExitStatus) -> Vec<Ag
 
 /// Where the agent of `robot` writes what it used.
 fn usage_file(dir: &Path, robot: &str) -> PathBuf {
-    dir.join(format!(".usage-{robot}.json"))
+    dir.join(mrsim_runfolder::agent_usage_file(robot))
 }

@@ -205,21 +205,24 @@ pub const METRICS: [Column; 9] = [
     ("ticks", |m| Some(m.ticks)),
 ];
 
-/// Reads a run folder's metrics.json and scenario.json (with the report
-/// crate's reader of metrics.json and the scenario's own type).
+/// A run folder's file that could not be read, in words.
+fn file_error(e: mrsim_runfolder::FileError) -> String {
+    match e {
+        mrsim_runfolder::FileError::Io { path, source } => {
+            format!("reading {}: {source}", path.display())
+        }
+        mrsim_runfolder::FileError::Json { path, source } => {
+            format!("parsing {}: {source}", path.display())
+        }
+    }
+}
+
+/// Reads a run folder's metrics.json and scenario.json (with the run
+/// folder's schema and the scenario's own type).
 pub fn read_run(dir: &Path) -> Result<RunMetrics, String> {
-    let read = |f: &str| -> Result<(PathBuf, String), String> {
-        let p = dir.join(f);
-        let text =
-            std::fs::read_to_string(&p).map_err(|e| format!("reading {}: {e}", p.display()))?;
-        Ok((p, text))
-    };
-    let (p, text) = read(crate::finish::METRICS_FILE)?;
-    let m: mrsim_report::Metrics =
-        serde_json::from_str(&text).map_err(|e| format!("parsing {}: {e}", p.display()))?;
-    let (p, text) = read("scenario.json")?;
+    let m = mrsim_runfolder::read_metrics(dir).map_err(file_error)?;
     let sc: mrsim_scenario::Scenario =
-        serde_json::from_str(&text).map_err(|e| format!("parsing {}: {e}", p.display()))?;
+        mrsim_runfolder::read_json(dir, mrsim_runfolder::SCENARIO_FILE).map_err(file_error)?;
     let ticks = m.ticks as f64;
     let mut arrived = Vec::new();
     let mut ratios = Vec::new();
