@@ -266,7 +266,8 @@ impl Prepared {
 
     fn run_processes(self, on_event: &mut dyn FnMut(Event<'_>)) -> Result<Outcome, RunError> {
         let exe = std::env::current_exe().map_err(RunError::Exe)?;
-        let scenario = self.validated.scenario();
+        // The world runs in its own process: this one's copy goes.
+        let (source, scenario) = self.validated.into_scenario();
         let (dir, run_id) = (&self.dir, self.ns.run_id());
         // Hundreds of agent processes starting on two cores take a while to
         // join: the world and each agent wait a minute plus a second per
@@ -274,7 +275,7 @@ impl Prepared {
         let join_secs = format!("{}", 60.0 + scenario.robots.len() as f64);
         let mut world = Command::new(&exe)
             .arg("world")
-            .args(self.validated.source().to_args())
+            .args(source.to_args())
             .args([
                 "--run",
                 run_id,

@@ -161,6 +161,12 @@ impl Validated {
     pub fn into_world(self) -> (Scenario, World) {
         (self.loaded.scenario, self.world)
     }
+
+    /// Where the scenario came from and the scenario itself, without the
+    /// world (for a process that starts the world elsewhere).
+    pub fn into_scenario(self) -> (ScenarioSource, Scenario) {
+        (self.source, self.loaded.scenario)
+    }
 }
 
 #[cfg(test)]
