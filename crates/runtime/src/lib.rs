@@ -15,9 +15,10 @@
 //!   [`Outcome`].
 //! - [`bench`] and [`sweep`]: experiments made of many runs.
 //!
-//! It is shaped so because the command line, the Python bindings and tests
-//! all start runs: what a run does lives here once, and each caller only
-//! turns its own input into the request types and presents the outcome.
+//! It is shaped so because more than the command line starts runs (tests
+//! today, the planned Python bindings): what a run does lives here once,
+//! and each caller only turns its own input into the request types and
+//! presents the outcome.
 //! Hence the one rule of this crate: it prints nothing. Whatever a caller
 //! might show (warnings, notes, progress, restarts) comes back as a value
 //! or through an event callback. Errors are one enum per operation; the
