@@ -1,12 +1,11 @@
-//! Command-line interface.
+//! The command line: every clap type of `mrsim`, and their conversion into
+//! the runtime's plain request types (clap types never leave `src/`).
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use mrsim_runtime::ScenarioSource;
+use mrsim_runtime::launch::Transport;
+use mrsim_runtime::sched::Sched;
 use std::path::PathBuf;
-
-/// Exit status for a refused scenario or command line.
-pub const EXIT_INVALID: i32 = 2;
-/// Exit status for a run that failed.
-pub const EXIT_FAILED: i32 = 1;
 
 /// mrsim: many robots, one world, one agent process per robot.
 #[derive(Debug, Parser)]
@@ -27,7 +26,7 @@ pub enum ModeArg {
 }
 
 /// Options shared by `run` and `world`: which scenario and how.
-#[derive(Debug, Clone, Args)]
+#[derive(Debug, Clone, Default, Args)]
 pub struct ScenarioArgs {
     /// Scenario file (TOML). Without one, the built-in demo.
     pub scenario: Option<PathBuf>,
@@ -43,87 +42,205 @@ pub struct ScenarioArgs {
     pub out: Option<PathBuf>,
 }
 
+impl ScenarioArgs {
+    /// The scenario file and overrides, for the runtime.
+    pub fn source(&self) -> ScenarioSource {
+        ScenarioSource {
+            path: self.scenario.clone(),
+            mode: self.mode.map(|m| match m {
+                ModeArg::Lockstep => mrsim_scenario::Mode::Lockstep,
+                ModeArg::Realtime => mrsim_scenario::Mode::Realtime,
+            }),
+            set: self.set.clone(),
+        }
+    }
+}
+
+/// The transport between the world and its agents.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ValueEnum)]
+pub enum TransportArg {
+    /// iceoryx2 shared memory, one process per agent.
+    #[default]
+    Shm,
+    /// crossbeam channels, one thread per agent in one process.
+    Inproc,
+}
+
+impl From<TransportArg> for Transport {
+    fn from(t: TransportArg) -> Self {
+        match t {
+            TransportArg::Shm => Transport::Shm,
+            TransportArg::Inproc => Transport::Inproc,
+        }
+    }
+}
+
+/// `--cpus` and `--rt`.
+#[derive(Debug, Clone, Default, Args)]
+pub struct SchedArgs {
+    /// Pin every process of the run to these CPUs (e.g. `0,1` or `0-3`).
+    #[arg(long, value_name = "LIST")]
+    pub cpus: Option<String>,
+    /// Run the world and the agents under SCHED_FIFO where permitted (a
+    /// warning and normal scheduling where not).
+    #[arg(long)]
+    pub rt: bool,
+}
+
+impl From<&SchedArgs> for Sched {
+    fn from(a: &SchedArgs) -> Self {
+        Sched {
+            cpus: a.cpus.clone(),
+            rt: a.rt,
+        }
+    }
+}
+
+/// `mrsim run` options.
+#[derive(Debug, Clone, Default, Args)]
+pub struct RunArgs {
+    /// Scenario and overrides.
+    #[command(flatten)]
+    pub scenario: ScenarioArgs,
+    /// Run id (iceoryx2 namespace); default: a fresh one.
+    #[arg(long)]
+    pub run: Option<String>,
+    /// Print only the output folder, not the table.
+    #[arg(long)]
+    pub quiet: bool,
+    /// Restart an agent process that dies while the world runs (same
+    /// command line); it rejoins and drives its robot from where it is.
+    #[arg(long)]
+    pub restart_agents: bool,
+    /// World and agents as processes over iceoryx2 (shm) or as threads
+    /// of one process over crossbeam channels (inproc).
+    #[arg(long, value_enum, default_value = "shm")]
+    pub transport: TransportArg,
+    /// Scheduling: --cpus LIST, --rt.
+    #[command(flatten)]
+    pub sched: SchedArgs,
+    /// Do not draw plot.svg/png and replay.html.
+    #[arg(long, hide = true)]
+    pub no_report: bool,
+}
+
+/// `mrsim world` options.
+#[derive(Debug, Clone, Args)]
+pub struct WorldArgs {
+    /// Scenario and overrides.
+    #[command(flatten)]
+    pub scenario: ScenarioArgs,
+    /// Run id agents use to find this world.
+    #[arg(long, default_value = "default")]
+    pub run: String,
+    /// Give up if not every agent has joined after this many seconds
+    /// (default: wait forever).
+    #[arg(long)]
+    pub start_timeout: Option<f64>,
+    /// Started by `mrsim run`: the launcher cleans up and prints.
+    #[arg(long, hide = true)]
+    pub launched: bool,
+}
+
+/// `mrsim agent` options.
+#[derive(Debug, Clone, Args)]
+pub struct AgentArgs {
+    /// The robot's name in the scenario.
+    #[arg(long)]
+    pub robot: String,
+    /// The run id of the world.
+    #[arg(long, default_value = "default")]
+    pub run: String,
+    /// Seconds to wait for the world.
+    #[arg(long, default_value_t = 30.0)]
+    pub timeout: f64,
+    /// Fault injection for tests: put this robot id in every command.
+    #[arg(long, hide = true)]
+    pub impersonate: Option<u32>,
+    /// Fault injection for tests: nan, inf, huge, other-robot, past-tick,
+    /// future-tick, double, sent-late, join-twice, hang-at-tick=N, die-at-tick=N, stop-at-tick=N,
+    /// slow-ms=N.
+    #[arg(long, hide = true)]
+    pub fault: Option<mrsim_agents::fault::Fault>,
+    /// For tests of strangers: announce this protocol version.
+    #[arg(long, hide = true)]
+    pub protocol_version: Option<u32>,
+    /// Write CPU time and peak RSS here at the end (set by `mrsim run`).
+    #[arg(long, hide = true)]
+    pub usage_out: Option<PathBuf>,
+}
+
+/// `mrsim bench` options.
+#[derive(Debug, Clone, Args)]
+pub struct BenchArgs {
+    /// Agent counts, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "8,32,64,128,256")]
+    pub agents: Vec<usize>,
+    /// Tick rate, Hz.
+    #[arg(long, default_value_t = 100.0)]
+    pub rate: f64,
+    /// Seconds of each run.
+    #[arg(long, default_value_t = 10.0)]
+    pub duration: f64,
+    /// Transports, comma-separated.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "shm,inproc")]
+    pub transport: Vec<TransportArg>,
+    /// Planner of every robot.
+    #[arg(long, default_value = "chung-1")]
+    pub planner: String,
+    /// Deadline as a fraction of the tick (the scenario's world.deadline).
+    #[arg(long, default_value_t = 1.0)]
+    pub deadline: f64,
+    /// Also measure the bare iceoryx2 fan-out for each agent count (the
+    /// `mrsim-baseline` program next to this one).
+    #[arg(long)]
+    pub baseline: bool,
+    /// Output folder (default: runs/bench-<time>).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// CPUs to pin everything to (default: the first two, or all if fewer),
+    /// and --rt for SCHED_FIFO.
+    #[command(flatten)]
+    pub sched: SchedArgs,
+}
+
+/// What `mrsim sweep` was asked.
+#[derive(Debug, Clone, Args)]
+pub struct SweepArgs {
+    /// Scenario file (TOML).
+    pub scenario: PathBuf,
+    /// Values to sweep: KEY=V1,V2,... (KEY as for `run --set`; values
+    /// split at commas outside brackets, braces and quotes).
+    #[arg(long = "set", value_name = "KEY=V1,V2,...")]
+    pub set: Vec<String>,
+    /// Repeat each combination with world.seed = 1..=N.
+    #[arg(long, default_value_t = 1)]
+    pub seeds: u64,
+    /// Output folder (default: a fresh folder under runs/).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Runs at once (default: the number of cores).
+    #[arg(long)]
+    pub jobs: Option<usize>,
+    /// Also report, per seed and other combination, the largest value of
+    /// this swept key whose run had no collision.
+    #[arg(long, value_name = "KEY")]
+    pub allowable: Option<String>,
+}
+
 /// The subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Run a scenario: start the world and one agent process per robot,
     /// wait for the end, write the outputs, print a summary.
-    Run {
-        /// Scenario and overrides.
-        #[command(flatten)]
-        scenario: ScenarioArgs,
-        /// Run id (iceoryx2 namespace); default: a fresh one.
-        #[arg(long)]
-        run: Option<String>,
-        /// Print only the output folder, not the table.
-        #[arg(long)]
-        quiet: bool,
-        /// Restart an agent process that dies while the world runs (same
-        /// command line); it rejoins and drives its robot from where it is.
-        #[arg(long)]
-        restart_agents: bool,
-        /// World and agents as processes over iceoryx2 (shm) or as threads
-        /// of one process over crossbeam channels (inproc).
-        #[arg(long, value_enum, default_value = "shm")]
-        transport: crate::launch::Transport,
-        /// Scheduling: --cpus LIST, --rt.
-        #[command(flatten)]
-        sched: crate::sched::SchedArgs,
-        /// Do not draw plot.svg/png and replay.html.
-        #[arg(long, hide = true)]
-        no_report: bool,
-    },
+    Run(RunArgs),
     /// Measure timing under true concurrency: realtime runs of generated
     /// crossing scenes for each agent count and transport (see BENCHMARKS.md).
-    Bench(crate::bench::BenchArgs),
-    /// Raw iceoryx2 fan-out baseline, world side (started by `bench --baseline`).
-    #[command(hide = true)]
-    BaselineWorld(crate::baseline::WorldArgs),
-    /// Raw iceoryx2 fan-out baseline, agent side (started by `baseline-world`).
-    #[command(hide = true)]
-    BaselineAgent(crate::baseline::AgentArgs),
+    Bench(BenchArgs),
     /// Start a world by hand; agents join with `mrsim agent --robot NAME --run ID`.
-    World {
-        /// Scenario and overrides.
-        #[command(flatten)]
-        scenario: ScenarioArgs,
-        /// Run id agents use to find this world.
-        #[arg(long, default_value = "default")]
-        run: String,
-        /// Give up if not every agent has joined after this many seconds
-        /// (default: wait forever).
-        #[arg(long)]
-        start_timeout: Option<f64>,
-        /// Started by `mrsim run`: the launcher cleans up and prints.
-        #[arg(long, hide = true)]
-        launched: bool,
-    },
+    World(WorldArgs),
     /// Drive one robot of a running world.
-    Agent {
-        /// The robot's name in the scenario.
-        #[arg(long)]
-        robot: String,
-        /// The run id of the world.
-        #[arg(long, default_value = "default")]
-        run: String,
-        /// Seconds to wait for the world.
-        #[arg(long, default_value_t = 30.0)]
-        timeout: f64,
-        /// Fault injection for tests: put this robot id in every command.
-        #[arg(long, hide = true)]
-        impersonate: Option<u32>,
-        /// Fault injection for tests: nan, inf, huge, other-robot, past-tick,
-        /// future-tick, double, sent-late, join-twice, hang-at-tick=N, die-at-tick=N, stop-at-tick=N,
-        /// slow-ms=N.
-        #[arg(long, hide = true)]
-        fault: Option<mrsim_agents::fault::Fault>,
-        /// For tests of strangers: announce this protocol version.
-        #[arg(long, hide = true)]
-        protocol_version: Option<u32>,
-        /// Write CPU time and peak RSS here at the end (set by `mrsim run`).
-        #[arg(long, hide = true)]
-        usage_out: Option<PathBuf>,
-    },
+    Agent(AgentArgs),
     /// Watch a running world: a live dashboard of its bodies and agents
     /// (read-only; never slows the world or counts as an agent).
     Top {
@@ -144,107 +261,11 @@ pub enum Command {
     /// Run every combination of values (x seeds 1..N) in lockstep and
     /// tabulate the metrics: sweep.csv, summary.csv, a table of means with
     /// 95 % intervals.
-    Sweep(crate::sweep::SweepArgs),
+    Sweep(SweepArgs),
     /// Check a scenario file without running it.
     Check {
         /// Scenario and overrides.
         #[command(flatten)]
         scenario: ScenarioArgs,
     },
-}
-
-/// Runs the parsed command line; returns the process exit status.
-pub fn main(cli: Cli) -> i32 {
-    let command = cli.command.unwrap_or(Command::Run {
-        scenario: ScenarioArgs {
-            scenario: None,
-            mode: None,
-            set: Vec::new(),
-            out: None,
-        },
-        run: None,
-        quiet: false,
-        restart_agents: false,
-        transport: crate::launch::Transport::Shm,
-        sched: crate::sched::SchedArgs::default(),
-        no_report: false,
-    });
-    let result = match command {
-        Command::Run {
-            scenario,
-            run,
-            quiet,
-            restart_agents,
-            transport,
-            sched,
-            no_report,
-        } => crate::launch::run(
-            &scenario,
-            run,
-            quiet,
-            &crate::launch::RunHow {
-                transport,
-                sched,
-                no_report,
-                restart_agents,
-            },
-        ),
-        Command::Bench(args) => crate::bench::main(&args),
-        Command::BaselineWorld(args) => crate::baseline::world(&args),
-        Command::BaselineAgent(args) => crate::baseline::agent(&args),
-        Command::World {
-            scenario,
-            run,
-            start_timeout,
-            launched,
-        } => crate::launch::world(&scenario, &run, start_timeout, launched),
-        Command::Agent {
-            robot,
-            run,
-            timeout,
-            impersonate,
-            fault,
-            protocol_version,
-            usage_out,
-        } => crate::launch::agent(
-            &robot,
-            &run,
-            timeout,
-            crate::launch::Misbehave {
-                impersonate,
-                fault,
-                protocol_version,
-            },
-            usage_out.as_deref(),
-        ),
-        Command::Top { run, timeout } => crate::top::run(&run, timeout),
-        Command::Report { dir } => crate::report_cmd::run(&dir),
-        Command::Sweep(args) => crate::sweep::sweep(&args),
-        Command::Planners => {
-            for p in mrsim_planners::PLANNERS {
-                println!("{:<20} {}", p.name, p.summary);
-            }
-            Ok(0)
-        }
-        Command::Check { scenario } => crate::launch::load(&scenario).map(|l| {
-            println!(
-                "{}: ok ({} robots, {} obstacles)",
-                l.origin(),
-                l.scenario.robots.len(),
-                l.scenario.obstacles.len()
-            );
-            0
-        }),
-    };
-    match result {
-        Ok(code) => code,
-        Err(e) => {
-            if let Some(invalid) = e.downcast_ref::<crate::launch::Invalid>() {
-                eprintln!("error: {invalid}");
-                return EXIT_INVALID;
-            }
-            eprintln!("error: {e:#}");
-            EXIT_FAILED
-        }
-    }
 }

@@ -1,24 +1,26 @@
-//! The `mrsim` launcher: `run` (a whole run: world process, one agent
+//! The `mrsim` command line: `run` (a whole run: world process, one agent
 //! process per robot, outputs, summary), `world` and `agent` (the parts by
-//! hand), `sweep` (experiments over many runs), `planners` (what is
-//! available).
+//! hand), `sweep` and `bench` (experiments over many runs), `top` (a live
+//! view), `report`, `check` and `planners`.
 //!
-//! The binary is thin: it parses the command line and calls [`cli::main`];
-//! everything else lives in libraries (`mrsim-world`, `mrsim-agents`,
-//! `mrsim-transport`, `mrsim-scenario`, `mrsim-planners`), so each part can
-//! be tested without processes.
+//! It is thin: [`cli`] holds the clap types, each subcommand's file turns
+//! them into the runtime's requests, calls `mrsim-runtime` and prints what
+//! comes back. Everything a run does lives in the libraries, so each part
+//! can be tested without processes.
 #![warn(missing_docs)]
 
-pub mod baseline;
+pub mod agent;
 pub mod bench;
+pub mod check;
 pub mod cli;
-pub mod inproc;
-pub mod launch;
+pub mod exit;
+pub mod outcome;
+pub mod planners;
 pub mod progress;
-pub mod report_cmd;
-pub mod sched;
+pub mod report;
+pub mod run;
 pub mod sweep;
 pub mod table;
 pub mod top;
-pub mod usage;
 pub mod watch;
+pub mod world;

@@ -1,7 +1,21 @@
-//! `mrsim`: parse the command line and hand over to the library.
+//! `mrsim`: parse the command line, run the subcommand, exit with its status.
 use clap::Parser;
+use mrsim::cli::{Cli, Command};
 
 fn main() {
-    let cli = mrsim::cli::Cli::parse();
-    std::process::exit(mrsim::cli::main(cli));
+    let result = match Cli::parse()
+        .command
+        .unwrap_or(Command::Run(Default::default()))
+    {
+        Command::Run(args) => mrsim::run::main(&args),
+        Command::Bench(args) => mrsim::bench::main(&args),
+        Command::World(args) => mrsim::world::main(&args),
+        Command::Agent(args) => mrsim::agent::main(&args),
+        Command::Top { run, timeout } => mrsim::top::run(&run, timeout),
+        Command::Report { dir } => mrsim::report::main(&dir),
+        Command::Planners => mrsim::planners::main(),
+        Command::Sweep(args) => mrsim::sweep::main(&args),
+        Command::Check { scenario } => mrsim::check::main(&scenario),
+    };
+    std::process::exit(mrsim::exit::code(result));
 }

@@ -1,18 +1,21 @@
 //! The summary table printed after a run, from metrics.json.
 
-use serde_json::Value;
+use mrsim_runfolder::RunMetrics;
 use std::fmt::Write;
 
-fn num(v: &Value, digits: usize) -> String {
-    v.as_f64()
-        .map(|x| format!("{x:.digits$}"))
+fn num(v: Option<f64>, digits: usize) -> String {
+    v.map(|x| format!("{x:.digits$}"))
         .unwrap_or_else(|| "-".to_string())
+}
+
+fn text(s: &str) -> String {
+    if s.is_empty() { "-" } else { s }.to_string()
 }
 
 /// One row per robot (planner, reached goal, time to goal, path length,
 /// collisions, min clearance, latency p99, deadline misses), then the run's
 /// totals.
-pub fn summary(m: &Value) -> String {
+pub fn summary(m: &RunMetrics) -> String {
     let mut out = String::new();
     let header = [
         "robot",
@@ -26,25 +29,18 @@ pub fn summary(m: &Value) -> String {
         "misses",
     ];
     let mut rows: Vec<[String; 9]> = Vec::new();
-    if let Some(robots) = m["robots"].as_object() {
-        for (name, r) in robots {
-            rows.push([
-                name.clone(),
-                r["planner"].as_str().unwrap_or("-").to_string(),
-                if r["reached_goal"].as_bool() == Some(true) {
-                    "yes"
-                } else {
-                    "NO"
-                }
-                .to_string(),
-                num(&r["time_to_goal"], 2),
-                num(&r["path_length"], 2),
-                r["collisions"].as_u64().unwrap_or(0).to_string(),
-                num(&r["min_clearance"], 3),
-                num(&r["latency_us"]["p99"], 0),
-                r["deadline_misses"].as_u64().unwrap_or(0).to_string(),
-            ]);
-        }
+    for (name, r) in &m.robots {
+        rows.push([
+            name.clone(),
+            text(&r.planner),
+            if r.reached_goal { "yes" } else { "NO" }.to_string(),
+            num(r.time_to_goal, 2),
+            num(Some(r.path_length), 2),
+            r.collisions.to_string(),
+            num(r.min_clearance, 3),
+            num(Some(r.latency_us.p99), 0),
+            r.deadline_misses.to_string(),
+        ]);
     }
     let mut width = header.map(str::len);
     for r in &rows {
@@ -71,14 +67,14 @@ pub fn summary(m: &Value) -> String {
         out,
         "{} robots, success {:.0}%, collisions {}, {} ticks ({} s simulated, {} mode, {:.1}x real time), agents lost {}, commands rejected {}",
         rows.len(),
-        m["success_rate"].as_f64().unwrap_or(0.0) * 100.0,
-        m["collisions_total"].as_u64().unwrap_or(0),
-        m["ticks"].as_u64().unwrap_or(0),
-        num(&m["sim_time"], 1),
-        m["mode"].as_str().unwrap_or("-"),
-        m["realtime_factor"].as_f64().unwrap_or(0.0),
-        m["agents_lost"].as_u64().unwrap_or(0),
-        m["commands_rejected"].as_u64().unwrap_or(0),
+        m.success_rate * 100.0,
+        m.collisions_total,
+        m.ticks,
+        num(Some(m.sim_time), 1),
+        text(&m.mode),
+        m.realtime_factor,
+        m.agents_lost,
+        m.commands_rejected,
     );
     out
 }
@@ -96,6 +92,7 @@ mod tests {
                        "b": {"planner": "chung-1", "reached_goal": false}},
             "success_rate": 0.5, "collisions_total": 0, "ticks": 10, "sim_time": 1.0,
             "mode": "lockstep", "realtime_factor": 3.0, "agents_lost": 0, "commands_rejected": 0});
+        let m: RunMetrics = serde_json::from_value(m).expect("metrics.json's schema");
         let t = summary(&m);
         assert_eq!(t.lines().count(), 4, "{t}");
         assert!(

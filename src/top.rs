@@ -488,12 +488,11 @@ pub fn wait_for_setup(obs: &mut dyn ObserverTransport, timeout: Duration) -> Res
 /// `mrsim top`: attaches to run `run_id` and shows the dashboard until `q`,
 /// Ctrl-C, or the end of the run. Returns the exit status.
 pub fn run(run_id: &str, timeout: f64) -> Result<i32> {
-    let ns = Namespace::new(run_id)
-        .map_err(|e| anyhow::Error::new(crate::launch::Invalid(e.to_string())))?;
+    let ns = Namespace::new(run_id).map_err(|e| crate::exit::invalid(e.to_string()))?;
     if !std::io::stdout().is_terminal() {
-        return Err(anyhow::Error::new(crate::launch::Invalid(
-            "mrsim top draws on a terminal, and stdout is not one".to_string(),
-        )));
+        return Err(crate::exit::invalid(
+            "mrsim top draws on a terminal, and stdout is not one",
+        ));
     }
     let timeout = Duration::from_secs_f64(timeout.max(0.0));
     let node = format!("mrsim-top-{}", std::process::id());

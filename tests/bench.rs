@@ -4,8 +4,32 @@
 mod common;
 use common::*;
 
+/// `mrsim bench --baseline` runs the `mrsim-baseline` program next to
+/// `mrsim`. A workspace build has it (its package's own test makes cargo
+/// build it before any test runs); a build of this package alone does not,
+/// so it is built here, into the same target folder and profile.
+fn build_baseline() {
+    let mrsim = std::path::Path::new(env!("CARGO_BIN_EXE_mrsim"));
+    let profile_dir = mrsim.parent().expect("the binary's folder");
+    if profile_dir.join("mrsim-baseline").is_file() {
+        return;
+    }
+    let target = profile_dir.parent().expect("the target folder");
+    let mut cargo = std::process::Command::new(env!("CARGO"));
+    cargo
+        .args(["build", "-p", "mrsim-baseline"])
+        .env("CARGO_TARGET_DIR", target)
+        .current_dir(root());
+    if profile_dir.file_name().is_some_and(|n| n == "release") {
+        cargo.arg("--release");
+    }
+    let status = cargo.status().expect("start cargo");
+    assert!(status.success(), "cargo build -p mrsim-baseline: {status}");
+}
+
 #[test]
 fn a_tiny_bench_writes_one_row_per_combination_with_every_field_of_the_issue() {
+    build_baseline();
     let out = fresh_dir("bench");
     let o = mrsim()
         .args([

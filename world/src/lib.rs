@@ -35,6 +35,7 @@ pub mod histogram;
 pub mod live;
 pub mod metrics;
 pub mod motion;
+pub mod names;
 pub mod path_metrics;
 pub mod physics;
 pub mod record;

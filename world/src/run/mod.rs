@@ -331,7 +331,7 @@ impl<'a> Loop<'a> {
                     .into_iter()
                     .map(|i| self.recording.name(i))
                     .collect();
-                let missing = missing.join(", ");
+                let missing = crate::names::first_few(&missing, 5);
                 // Tell the agents that did join to stop.
                 let header = SnapshotHeader {
                     finished: 1,

@@ -46,7 +46,7 @@ pub enum RunError {
     /// Not every agent joined in time.
     #[error("agents for {missing} did not join within {secs:.0} s")]
     StartTimeout {
-        /// Comma-separated robot names.
+        /// The first few robot names, comma-separated, and how many more.
         missing: String,
         /// The timeout.
         secs: f64,

@@ -10,14 +10,14 @@ use mrsim_report::RenderError;
 use std::path::Path;
 
 /// Runs `mrsim report DIR`; returns the exit status.
-pub fn run(dir: &Path) -> Result<i32> {
+pub fn main(dir: &Path) -> Result<i32> {
     match mrsim_report::render_all(dir) {
         Ok(()) => {
-            if !dir.join(mrsim_report::METRICS_FILE).exists() {
+            if !dir.join(mrsim_runfolder::METRICS_FILE).exists() {
                 eprintln!(
                     "note: {} has no {}: the run was cut short; drew what was recorded",
                     dir.display(),
-                    mrsim_report::METRICS_FILE
+                    mrsim_runfolder::METRICS_FILE
                 );
             }
             println!(
@@ -31,10 +31,10 @@ pub fn run(dir: &Path) -> Result<i32> {
             | RenderError::Missing { .. }
             | RenderError::Parse { .. }
             | RenderError::Json { .. }),
-        ) => Err(anyhow::Error::new(crate::launch::Invalid(format!(
+        ) => Err(crate::exit::invalid(format!(
             "cannot report on {}: {e}",
             dir.display()
-        )))),
+        ))),
         Err(e) => Err(anyhow::anyhow!("cannot report on {}: {e}", dir.display())),
     }
 }

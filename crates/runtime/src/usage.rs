@@ -1,4 +1,4 @@
-//! CPU time and peak memory of the run's parts, for `mrsim bench`.
+//! CPU time and peak memory of the run's parts (usage.json, read by `mrsim bench`).
 //!
 //! Each part measures itself with getrusage (the same counters as
 //! /proc/PID/stat's utime + stime and /proc/PID/status's VmHWM, read by
@@ -8,40 +8,23 @@
 //! world (`timing.process_cpu_s` in metrics.json).
 
 use mrsim_proto::{BodyState, CommandMsg, JoinReply, JoinRequest, SnapshotHeader};
+use mrsim_runfolder::USAGE_FILE;
 use mrsim_transport::{AgentTransport, TransportError};
-use serde_json::json;
 use std::path::Path;
 use std::time::Duration;
 
 pub use mrsim_sys::usage::{Scope, rusage};
 
-/// What an agent used while the run ticked.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct AgentUsage {
-    /// CPU seconds from its first snapshot to the last.
-    pub cpu_s: f64,
-    /// Peak resident set size of its process, KiB.
-    pub maxrss_kb: u64,
+pub use mrsim_runfolder::usage::{AgentUsage, Usage};
+
+/// Writes what an agent used as its usage file (read by [`read_agent`]).
+pub fn write_agent(path: &Path, usage: &AgentUsage) -> std::io::Result<()> {
+    std::fs::write(path, serde_json::to_string(usage)?)
 }
 
-impl AgentUsage {
-    /// Writes this as a small JSON file (`{"cpu_s", "maxrss_kb"}`).
-    pub fn write(&self, path: &Path) -> std::io::Result<()> {
-        std::fs::write(
-            path,
-            json!({"cpu_s": self.cpu_s, "maxrss_kb": self.maxrss_kb}).to_string(),
-        )
-    }
-
-    /// Reads a file written by [`AgentUsage::write`].
-    pub fn read(path: &Path) -> Option<Self> {
-        let v: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(path).ok()?).ok()?;
-        Some(Self {
-            cpu_s: v["cpu_s"].as_f64()?,
-            maxrss_kb: v["maxrss_kb"].as_u64()?,
-        })
-    }
+/// Reads a file written by [`write_agent`].
+pub fn read_agent(path: &Path) -> Option<AgentUsage> {
+    serde_json::from_str(&std::fs::read_to_string(path).ok()?).ok()
 }
 
 /// An agent transport that notes the CPU time at the first snapshot and at
@@ -135,4 +118,20 @@ impl AgentTransport for Metered<'_> {
     fn joined(&mut self) {
         self.inner.joined()
     }
+}
+
+/// Writes `usage.json` into `dir`: what the agents used while the run
+/// ticked, over `transport` (`shm` or `inproc`).
+pub fn write_report(dir: &Path, transport: &str, usage: &[AgentUsage]) -> std::io::Result<()> {
+    let report = Usage {
+        transport: transport.to_string(),
+        agents_reported: usage.len(),
+        agents_cpu_s: usage.iter().map(|u| u.cpu_s).sum::<f64>(),
+        // In-process agents share the world's process: no RSS of their own.
+        agent_maxrss_kb: (transport == "shm")
+            .then(|| usage.iter().map(|u| u.maxrss_kb).max())
+            .flatten(),
+    };
+    let text = serde_json::to_string_pretty(&report)?;
+    std::fs::write(dir.join(USAGE_FILE), format!("{text}\n"))
 }

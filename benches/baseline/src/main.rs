@@ -1,4 +1,5 @@
-//! The raw iceoryx2 baseline of `mrsim bench --baseline`: the same fan-out
+//! `mrsim-baseline`: the raw iceoryx2 baseline of `mrsim bench --baseline`,
+//! a program of its own (not an `mrsim` command): the same fan-out
 //! as a run (one world process publishing a tick over iceoryx2 and waking
 //! every agent process with the run's doorbell, as a run does; each agent
 //! answering over iceoryx2 and counting its answer on the doorbell, the
@@ -11,7 +12,7 @@
 //! floor of mrsim's round trip.
 
 use anyhow::{Context, Result, anyhow};
-use clap::Args;
+use clap::{Args, Parser, Subcommand};
 use iceoryx2::prelude::*;
 use mrsim_proto::now_ns;
 use mrsim_transport::Namespace;
@@ -28,38 +29,65 @@ const STOP: u64 = u64::MAX;
 /// Tick value of an agent's hello (sent until the world has seen it).
 const HELLO: u64 = u64::MAX - 1;
 
-/// `mrsim baseline-world`.
-#[derive(Debug, Clone, Args)]
-pub struct WorldArgs {
-    /// Run id (iceoryx2 namespace).
-    #[arg(long)]
-    pub run: String,
-    /// Number of agent processes to start.
-    #[arg(long)]
-    pub agents: usize,
-    /// Ticks per second.
-    #[arg(long, default_value_t = 100.0)]
-    pub rate: f64,
-    /// Seconds to tick.
-    #[arg(long, default_value_t = 10.0)]
-    pub duration: f64,
-    /// Deadline as a fraction of the tick.
-    #[arg(long, default_value_t = 1.0)]
-    pub deadline: f64,
-    /// Where to write the result (JSON).
-    #[arg(long)]
-    pub out: PathBuf,
+/// The raw iceoryx2 fan-out baseline of `mrsim bench --baseline`.
+#[derive(Debug, Parser)]
+#[command(name = "mrsim-baseline", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Side,
 }
 
-/// `mrsim baseline-agent`.
+#[derive(Debug, Subcommand)]
+enum Side {
+    /// The world side: starts the agents, ticks, writes the result.
+    World(WorldArgs),
+    /// The agent side (started by `world`).
+    Agent(AgentArgs),
+}
+
+fn main() {
+    let result = match Cli::parse().command {
+        Side::World(args) => world(&args),
+        Side::Agent(args) => agent(&args),
+    };
+    if let Err(e) = result {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+/// `mrsim-baseline world`.
 #[derive(Debug, Clone, Args)]
-pub struct AgentArgs {
+struct WorldArgs {
+    /// Run id (iceoryx2 namespace).
+    #[arg(long)]
+    run: String,
+    /// Number of agent processes to start.
+    #[arg(long)]
+    agents: usize,
+    /// Ticks per second.
+    #[arg(long, default_value_t = 100.0)]
+    rate: f64,
+    /// Seconds to tick.
+    #[arg(long, default_value_t = 10.0)]
+    duration: f64,
+    /// Deadline as a fraction of the tick.
+    #[arg(long, default_value_t = 1.0)]
+    deadline: f64,
+    /// Where to write the result (JSON).
+    #[arg(long)]
+    out: PathBuf,
+}
+
+/// `mrsim-baseline agent`.
+#[derive(Debug, Clone, Args)]
+struct AgentArgs {
     /// Run id of the baseline world.
     #[arg(long)]
-    pub run: String,
+    run: String,
     /// This agent's index.
     #[arg(long)]
-    pub index: u64,
+    index: u64,
 }
 
 fn name(s: &str) -> Result<ServiceName> {
@@ -77,11 +105,11 @@ fn make_node(ns: &Namespace, node: &str) -> Result<Node<S>> {
 
 /// The world side: starts the agents, ticks, measures tick published -> last
 /// reply in.
-pub fn world(args: &WorldArgs) -> Result<i32> {
+fn world(args: &WorldArgs) -> Result<()> {
     let positive = |x: f64| x.is_finite() && x > 0.0;
     if args.agents == 0 || !positive(args.rate) || !positive(args.duration) {
         return Err(anyhow!(
-            "baseline-world: --agents, --rate and --duration must be positive"
+            "mrsim-baseline world: --agents, --rate and --duration must be positive"
         ));
     }
     let ns = Namespace::new(&args.run).map_err(|e| anyhow!("{e}"))?;
@@ -92,7 +120,7 @@ pub fn world(args: &WorldArgs) -> Result<i32> {
     result
 }
 
-fn world_inner(args: &WorldArgs, ns: &Namespace) -> Result<i32> {
+fn world_inner(args: &WorldArgs, ns: &Namespace) -> Result<()> {
     let n = args.agents;
     let node = make_node(ns, "base-world")?;
     // Before the services: an agent that finds them finds the doorbell.
@@ -134,12 +162,12 @@ fn world_inner(args: &WorldArgs, ns: &Namespace) -> Result<i32> {
         .create()
         .map_err(|e| anyhow!("wake listener: {e:?}"))?;
 
-    let exe = std::env::current_exe().context("cannot find the mrsim executable")?;
+    let exe = std::env::current_exe().context("cannot find the mrsim-baseline executable")?;
     let mut children: Vec<Child> = Vec::with_capacity(n);
     for i in 0..n {
         children.push(
             Command::new(&exe)
-                .args(["baseline-agent", "--run", &args.run, "--index"])
+                .args(["agent", "--run", &args.run, "--index"])
                 .arg(i.to_string())
                 .stdin(Stdio::null())
                 .spawn()
@@ -249,7 +277,7 @@ fn world_inner(args: &WorldArgs, ns: &Namespace) -> Result<i32> {
     });
     std::fs::write(&args.out, format!("{v:#}\n"))
         .with_context(|| format!("writing {}", args.out.display()))?;
-    Ok(0)
+    Ok(())
 }
 
 /// Waits for the next tick's time: on the listener (only hellos notify
@@ -270,7 +298,7 @@ fn wait_until(listener: &iceoryx2::port::listener::Listener<S>, until: Instant) 
 }
 
 /// The agent side: answers every tick at once.
-pub fn agent(args: &AgentArgs) -> Result<i32> {
+fn agent(args: &AgentArgs) -> Result<()> {
     let ns = Namespace::new(&args.run).map_err(|e| anyhow!("{e}"))?;
     let node = make_node(&ns, &format!("base-agent-{}", args.index))?;
     let tick_sub = node
@@ -315,7 +343,7 @@ pub fn agent(args: &AgentArgs) -> Result<i32> {
             latest = Some(*s.payload());
         }
         match latest {
-            Some(STOP) => return Ok(0),
+            Some(STOP) => return Ok(()),
             Some(t) => {
                 started = true;
                 last_heard = Instant::now();

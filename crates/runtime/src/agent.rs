@@ -1,0 +1,126 @@
+//! One robot's agent process (`mrsim agent`), over iceoryx2.
+
+use crate::error::{Invalid, Refusal};
+use crate::usage::{Metered, Scope};
+use mrsim_transport::shm::ShmAgent;
+use mrsim_transport::{Namespace, TransportError};
+use std::path::PathBuf;
+use std::time::Duration;
+
+/// Deliberate misbehaviour of an agent, for fault-injection tests.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Misbehave {
+    /// Put this robot id in every command.
+    pub impersonate: Option<u32>,
+    /// Misbehave this way.
+    pub fault: Option<mrsim_agents::fault::Fault>,
+    /// Announce this protocol version.
+    pub protocol_version: Option<u32>,
+}
+
+/// Which robot of which run, and how.
+#[derive(Debug, Clone, Default)]
+pub struct AgentRequest {
+    /// The robot's name in the scenario.
+    pub robot: String,
+    /// The run id of the world.
+    pub run_id: String,
+    /// How long to wait for the world and for the join.
+    pub timeout: Duration,
+    /// Fault injection.
+    pub misbehave: Misbehave,
+    /// Write what the agent used (CPU while the run ticked, peak RSS) here
+    /// at the end.
+    pub usage_out: Option<PathBuf>,
+}
+
+/// Why an agent failed.
+#[derive(Debug, thiserror::Error)]
+pub enum AgentError {
+    /// The run id is not a valid namespace.
+    #[error(transparent)]
+    Invalid(#[from] Invalid),
+    /// The world of the run was not found in time.
+    #[error("agent {robot}: cannot reach the world of run `{run_id}`")]
+    Connect {
+        /// The robot.
+        robot: String,
+        /// The run id.
+        run_id: String,
+        /// Why.
+        #[source]
+        source: TransportError,
+    },
+    /// The agent joined (or tried to) and failed: refused, the world gone,
+    /// a transport error.
+    #[error("agent {robot}: {error}")]
+    Run {
+        /// The robot.
+        robot: String,
+        /// Why.
+        error: mrsim_agents::AgentError,
+    },
+}
+
+impl Refusal for AgentError {
+    fn refused(&self) -> Option<&Invalid> {
+        match self {
+            AgentError::Invalid(i) => Some(i),
+            _ => None,
+        }
+    }
+}
+
+/// How an agent ended.
+#[derive(Debug)]
+pub struct AgentEnd {
+    /// Its run.
+    pub result: Result<(), AgentError>,
+    /// [`AgentRequest::usage_out`] could not be written (the run itself is
+    /// not affected).
+    pub usage_error: Option<std::io::Error>,
+}
+
+/// Connects to the world of the run, joins as the robot and drives it to
+/// the end.
+pub fn run(req: &AgentRequest) -> AgentEnd {
+    let fail = |e: AgentError| AgentEnd {
+        result: Err(e),
+        usage_error: None,
+    };
+    let ns = match Namespace::new(&req.run_id) {
+        Ok(ns) => ns,
+        Err(e) => return fail(Invalid(e.to_string()).into()),
+    };
+    let node_name = format!("mrsim-agent-{}", req.robot);
+    let mut link = match ShmAgent::connect(&ns, &node_name, req.timeout) {
+        Ok(l) => l,
+        Err(source) => {
+            return fail(AgentError::Connect {
+                robot: req.robot.clone(),
+                run_id: req.run_id.clone(),
+                source,
+            });
+        }
+    };
+    let mut opts = mrsim_agents::AgentOptions::new(&req.robot);
+    opts.join_timeout = req.timeout;
+    opts.impersonate = req.misbehave.impersonate;
+    opts.fault = req.misbehave.fault;
+    if let Some(v) = req.misbehave.protocol_version {
+        opts.protocol_version = v;
+    }
+    let mut metered = Metered::new(&mut link, Scope::Process);
+    let result = mrsim_agents::run(&mut metered, &opts);
+    let usage_error = req
+        .usage_out
+        .as_ref()
+        .and_then(|path| crate::usage::write_agent(path, &metered.usage()).err());
+    AgentEnd {
+        result: result.map(|_| ()).map_err(|error| AgentError::Run {
+            robot: req.robot.clone(),
+            error,
+        }),
+        usage_error,
+    }
+}

@@ -1,0 +1,416 @@
+//! A whole run (`mrsim run`): the world and one agent per robot, as
+//! processes over iceoryx2 or in this process ([`crate::inproc`]), then
+//! [`crate::finish`].
+//!
+//! [`prepare`] claims everything the run needs before anything starts (the
+//! output folder, the run id's namespace, the scheduling, the termination
+//! signals) so that a refusal comes before any process; [`Prepared::start`]
+//! runs it. The processes are this same executable's `world` and `agent`
+//! subcommands; a termination signal to the launcher is forwarded to the
+//! world, which writes what it has and tells its agents the run is over.
+
+use crate::error::{Invalid, Refusal};
+use crate::finish::{AgentFailure, Ending, FinishError, Outcome, WorldFailure};
+use crate::inproc::InprocError;
+use crate::sched::{Applied, Sched};
+use crate::usage::AgentUsage;
+use crate::validate::Validated;
+use mrsim_transport::Namespace;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+/// How often `--restart-agents` restarts one robot's agent at most.
+pub const MAX_RESTARTS: u32 = 10;
+
+/// The transport between the world and its agents.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum Transport {
+    /// iceoryx2 shared memory, one process per agent.
+    #[default]
+    Shm,
+    /// crossbeam channels, the agents in a pool of threads of one process.
+    Inproc,
+}
+
+impl Transport {
+    /// The name used on the command line and in metrics.json.
+    pub fn name(self) -> &'static str {
+        match self {
+            Transport::Shm => "shm",
+            Transport::Inproc => "inproc",
+        }
+    }
+}
+
+/// How to carry a run out, beyond its scenario.
+#[derive(Debug, Clone, Default)]
+pub struct RunRequest {
+    /// The run id (iceoryx2 namespace); `None`: a fresh one.
+    pub run_id: Option<String>,
+    /// The output folder; `None`: a fresh folder under `runs/`.
+    pub out: Option<PathBuf>,
+    /// The transport between world and agents.
+    pub transport: Transport,
+    /// CPU affinity and SCHED_FIFO.
+    pub sched: Sched,
+    /// Draw plot.svg/png and replay.html at the end.
+    pub render: bool,
+    /// Restart an agent process that dies while the world runs (at most
+    /// [`MAX_RESTARTS`] times per robot).
+    pub restart_agents: bool,
+}
+
+/// What happens while a run goes on, for a caller that shows it.
+#[derive(Debug)]
+pub enum Event<'a> {
+    /// The launcher is waiting for its world (about every 20 ms): a moment
+    /// to show progress.
+    Waiting,
+    /// The world process has ended.
+    WorldEnded,
+    /// An agent process died and was started again.
+    AgentRestarted {
+        /// Its robot.
+        robot: &'a str,
+        /// The process that died.
+        pid: u32,
+        /// How it ended.
+        how: String,
+        /// This robot's restarts so far, this one included.
+        restart: u32,
+    },
+}
+
+/// Why a run failed.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// Refused before anything started: the output folder, the run id, the
+    /// CPU list.
+    #[error(transparent)]
+    Invalid(#[from] Invalid),
+    /// The running executable (the world's and agents' program) is not
+    /// known.
+    #[error("cannot find the mrsim executable")]
+    Exe(#[source] std::io::Error),
+    /// The world process could not be started.
+    #[error("cannot start the world process")]
+    SpawnWorld(#[source] std::io::Error),
+    /// An agent process could not be started.
+    #[error("cannot start the agent process for {robot}")]
+    SpawnAgent {
+        /// Its robot.
+        robot: String,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// Waiting for the world process failed.
+    #[error("waiting for the world")]
+    Wait(#[source] std::io::Error),
+    /// The in-process run failed.
+    #[error(transparent)]
+    Inproc(#[from] InprocError),
+    /// The run ended but could not be finished.
+    #[error(transparent)]
+    Finish(#[from] FinishError),
+}
+
+impl Refusal for RunError {
+    fn refused(&self) -> Option<&Invalid> {
+        match self {
+            RunError::Invalid(i) => Some(i),
+            _ => None,
+        }
+    }
+}
+
+/// A run ready to start: its folder, namespace and scheduling are claimed.
+#[derive(Debug)]
+pub struct Prepared {
+    validated: Validated,
+    request: RunRequest,
+    dir: PathBuf,
+    ns: Namespace,
+    applied: Applied,
+}
+
+/// Claims what the run needs: the output folder (created, writable), the
+/// run id's namespace (what a crashed earlier run left is cleared; a live
+/// world's is refused), the scheduling of this process and its children,
+/// and the termination signals (from now on they stop the run instead of
+/// this process).
+pub fn prepare(validated: Validated, request: RunRequest) -> Result<Prepared, RunError> {
+    let dir = crate::out::prepare(request.out.as_deref(), &validated.scenario().name)?;
+    let run_id = request
+        .run_id
+        .clone()
+        .unwrap_or_else(Namespace::fresh_run_id);
+    let ns = Namespace::new(&run_id).map_err(|e| Invalid(e.to_string()))?;
+    claim_namespace(&ns)?;
+    let applied = crate::sched::apply(&request.sched)?;
+    mrsim_sys::signal::catch_termination();
+    Ok(Prepared {
+        validated,
+        request,
+        dir,
+        ns,
+        applied,
+    })
+}
+
+/// Clears what a crashed earlier run with this id left behind, unless a
+/// live world holds the run (then refuses: two worlds cannot share one).
+pub(crate) fn claim_namespace(ns: &Namespace) -> Result<(), Invalid> {
+    match mrsim_transport::shm::world_running(ns) {
+        Ok(true) => Err(Invalid(format!(
+            "run id `{}` is in use by a running world; choose another --run",
+            ns.run_id()
+        ))),
+        _ => {
+            ns.remove_leftovers();
+            Ok(())
+        }
+    }
+}
+
+/// How a child process ended, in words.
+pub fn describe(status: ExitStatus) -> String {
+    use std::os::unix::process::ExitStatusExt;
+    match (status.code(), status.signal()) {
+        (Some(c), _) => format!("exited with status {c}"),
+        (None, Some(s)) => format!("was killed by signal {s} ({})", mrsim_sys::signal::name(s)),
+        _ => "ended".to_string(),
+    }
+}
+
+impl Prepared {
+    /// The scenario to run.
+    pub fn validated(&self) -> &Validated {
+        &self.validated
+    }
+
+    /// The run folder.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// The run's namespace (where an observer finds its world).
+    pub fn namespace(&self) -> &Namespace {
+        &self.ns
+    }
+
+    /// What the scheduling request gave.
+    pub fn applied(&self) -> &Applied {
+        &self.applied
+    }
+
+    /// Runs to the end and finishes; `on_event` hears what happens on the
+    /// way.
+    pub fn start(self, on_event: &mut dyn FnMut(Event<'_>)) -> Result<Outcome, RunError> {
+        match self.request.transport {
+            Transport::Inproc => self.run_inproc(),
+            Transport::Shm => self.run_processes(on_event),
+        }
+    }
+
+    fn run_inproc(self) -> Result<Outcome, RunError> {
+        let Prepared {
+            validated,
+            request,
+            dir,
+            ns,
+            ..
+        } = self;
+        let (scenario, world) = validated.into_world();
+        let stop = Arc::new(AtomicBool::new(false));
+        let done = Arc::new(AtomicBool::new(false));
+        // A signal to the launcher stops the in-process run as SIGTERM stops
+        // a world process.
+        let watcher = {
+            let (stop, done) = (stop.clone(), done.clone());
+            std::thread::spawn(move || {
+                while !done.load(Ordering::SeqCst) {
+                    if mrsim_sys::signal::received().is_some() {
+                        stop.store(true, Ordering::SeqCst);
+                    }
+                    std::thread::sleep(Duration::from_millis(20));
+                }
+            })
+        };
+        let outcome = crate::inproc::run_scenario(&scenario, world, &dir, ns.run_id(), stop);
+        done.store(true, Ordering::SeqCst);
+        let _ = watcher.join();
+        let outcome = outcome?;
+        let agent_failures = scenario
+            .robots
+            .iter()
+            .zip(&outcome.agent_errors)
+            .filter_map(|(r, e)| {
+                e.as_ref().map(|e| AgentFailure {
+                    robot: r.name.clone(),
+                    what: format!("failed: {e}"),
+                })
+            })
+            .collect();
+        Ok(crate::finish::finish(Ending {
+            dir: &dir,
+            world_failure: None,
+            agent_failures,
+            usage: Some((Transport::Inproc.name(), &outcome.agent_usage)),
+            render: request.render,
+        })?)
+    }
+
+    fn run_processes(self, on_event: &mut dyn FnMut(Event<'_>)) -> Result<Outcome, RunError> {
+        let exe = std::env::current_exe().map_err(RunError::Exe)?;
+        // The world runs in its own process: this one's copy goes.
+        let (source, scenario) = self.validated.into_scenario();
+        let (dir, run_id) = (&self.dir, self.ns.run_id());
+        // Hundreds of agent processes starting on two cores take a while to
+        // join: the world and each agent wait a minute plus a second per
+        // robot.
+        let join_secs = format!("{}", 60.0 + scenario.robots.len() as f64);
+        let mut world = Command::new(&exe)
+            .arg("world")
+            .args(source.to_args())
+            .args([
+                "--run",
+                run_id,
+                "--start-timeout",
+                &join_secs,
+                "--launched",
+                "--out",
+            ])
+            .arg(dir)
+            .stdin(Stdio::null())
+            .spawn()
+            .map_err(RunError::SpawnWorld)?;
+        let spawn = |robot: &str| -> Result<Child, RunError> {
+            Command::new(&exe)
+                .args(["agent", "--robot", robot, "--run", run_id, "--usage-out"])
+                .arg(usage_file(dir, robot))
+                .args(["--timeout", &join_secs])
+                .stdin(Stdio::null())
+                .spawn()
+                .map_err(|source| RunError::SpawnAgent {
+                    robot: robot.to_string(),
+                    source,
+                })
+        };
+        let mut agents: Vec<(&str, Child)> = Vec::with_capacity(scenario.robots.len());
+        for r in &scenario.robots {
+            agents.push((&r.name, spawn(&r.name)?));
+        }
+        let mut restarts = vec![0u32; agents.len()];
+
+        // Wait for the world; forward a signal to everything we started.
+        let mut forwarded: Option<Instant> = None;
+        let world_status = loop {
+            if let Some(status) = world.try_wait().map_err(RunError::Wait)? {
+                break status;
+            }
+            on_event(Event::Waiting);
+            // Stop the world first: it writes what it has and tells the
+            // agents the run is over, so they end by themselves (the ones
+            // that do not are stopped below); a world that does not end in
+            // 5 s is killed.
+            if mrsim_sys::signal::received().is_some() && forwarded.is_none() {
+                mrsim_sys::process::kill(world.id(), mrsim_sys::signal::SIGTERM);
+                forwarded = Some(Instant::now());
+            }
+            if forwarded.is_some_and(|t| t.elapsed() > Duration::from_secs(5)) {
+                mrsim_sys::process::kill(world.id(), mrsim_sys::signal::SIGKILL);
+            }
+            for ((name, a), n) in agents.iter_mut().zip(restarts.iter_mut()) {
+                let Ok(Some(status)) = a.try_wait() else {
+                    continue;
+                };
+                if !self.request.restart_agents
+                    || forwarded.is_some()
+                    || status.success()
+                    || *n >= MAX_RESTARTS
+                {
+                    continue;
+                }
+                *n += 1;
+                on_event(Event::AgentRestarted {
+                    robot: name,
+                    pid: a.id(),
+                    how: describe(status),
+                    restart: *n,
+                });
+                *a = spawn(name)?;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        };
+        on_event(Event::WorldEnded);
+
+        let agent_failures = reap_agents(&mut agents, world_status);
+        self.ns.remove_leftovers();
+        // 130: the world was interrupted and wrote what it had (metrics.json).
+        let interrupted = world_status.code() == Some(130);
+        let world_failure = (!world_status.success() && !interrupted).then(|| WorldFailure {
+            pid: world.id(),
+            how: describe(world_status),
+        });
+        let usage: Vec<AgentUsage> = scenario
+            .robots
+            .iter()
+            .filter_map(|r| {
+                let f = usage_file(dir, &r.name);
+                let u = crate::usage::read_agent(&f);
+                let _ = std::fs::remove_file(&f);
+                u
+            })
+            .collect();
+        Ok(crate::finish::finish(Ending {
+            dir,
+            world_failure,
+            agent_failures,
+            usage: Some((Transport::Shm.name(), &usage)),
+            render: self.request.render,
+        })?)
+    }
+}
+
+/// Agents end on the world's last snapshot: gives them a moment, then stops
+/// them. Returns the ones that ended badly while the world did not.
+fn reap_agents(agents: &mut [(&str, Child)], world_status: ExitStatus) -> Vec<AgentFailure> {
+    let grace = Instant::now();
+    let mut failures = Vec::new();
+    for (name, a) in agents.iter_mut() {
+        let status = loop {
+            if let Ok(Some(s)) = a.try_wait() {
+                break s;
+            }
+            if grace.elapsed() > Duration::from_secs(3) {
+                mrsim_sys::process::kill(a.id(), mrsim_sys::signal::SIGTERM);
+                std::thread::sleep(Duration::from_millis(100));
+                if let Ok(Some(s)) = a.try_wait() {
+                    break s;
+                }
+                let _ = a.kill();
+                match a.wait() {
+                    Ok(s) => break s,
+                    Err(_) => break world_status,
+                }
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        };
+        if !status.success() && world_status.success() {
+            failures.push(AgentFailure {
+                robot: name.to_string(),
+                what: describe(status),
+            });
+        }
+    }
+    failures
+}
+
+/// Where the agent of `robot` writes what it used.
+fn usage_file(dir: &Path, robot: &str) -> PathBuf {
+    dir.join(mrsim_runfolder::agent_usage_file(robot))
+}

@@ -1,0 +1,219 @@
+//! Validation, once: a scenario file and its overrides become a
+//! [`Validated`] value (the resolved scenario, every planner built once to
+//! check its parameters, and the world built from it) that the launcher, the
+//! world and the in-process run take instead of checking again.
+
+use crate::error::Invalid;
+use mrsim_scenario::{Loaded, Mode, Scenario};
+use mrsim_world::World;
+use std::ffi::OsString;
+use std::path::PathBuf;
+
+/// Where a scenario comes from: a file (or the built-in demo) and the
+/// overrides applied to it.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ScenarioSource {
+    /// The scenario file; `None` for the built-in demo.
+    pub path: Option<PathBuf>,
+    /// Overrides the scenario's time mode.
+    pub mode: Option<Mode>,
+    /// Overrides as `KEY=VALUE`, KEY a dotted path (`world.dt`,
+    /// `robot.r0.max_speed`, `robot.*.params.alpha`, `planner`); a bare word
+    /// as VALUE is a string.
+    pub set: Vec<String>,
+}
+
+impl ScenarioSource {
+    /// The overrides as (key, TOML value) pairs.
+    fn overrides(&self) -> Result<Vec<(String, String)>, Invalid> {
+        let mut overrides = Vec::new();
+        for s in &self.set {
+            let (k, v) = s
+                .split_once('=')
+                .ok_or_else(|| Invalid(format!("--set {s}: expected KEY=VALUE")))?;
+            let v = v.trim();
+            // Bare words are strings: `--set planner=orca`.
+            let looks_like_toml = v.parse::<f64>().is_ok()
+                || v == "true"
+                || v == "false"
+                || v.starts_with(['[', '{', '"', '\'']);
+            let v = if looks_like_toml {
+                v.to_string()
+            } else {
+                format!("\"{v}\"")
+            };
+            overrides.push((k.trim().to_string(), v));
+        }
+        if let Some(mode) = self.mode {
+            overrides.push(("world.mode".to_string(), format!("\"{}\"", mode_name(mode))));
+        }
+        Ok(overrides)
+    }
+
+    /// Command-line arguments that give another `mrsim` process (`mrsim
+    /// world`) this same scenario: the file, each `--set`, `--mode`.
+    pub fn to_args(&self) -> Vec<OsString> {
+        let mut v: Vec<OsString> = Vec::new();
+        if let Some(p) = &self.path {
+            v.push(p.clone().into());
+        }
+        for s in &self.set {
+            v.push("--set".into());
+            v.push(s.into());
+        }
+        if let Some(m) = self.mode {
+            v.push("--mode".into());
+            v.push(mode_name(m).into());
+        }
+        v
+    }
+}
+
+/// The name of a time mode in a scenario file and on the command line.
+pub fn mode_name(mode: Mode) -> &'static str {
+    match mode {
+        Mode::Lockstep => "lockstep",
+        Mode::Realtime => "realtime",
+    }
+}
+
+/// A scenario that passed every check: the file and its overrides, every
+/// robot's planner and parameters, and whether the world can run it (the
+/// obstacles' motion models). Built once per process; the world built while
+/// checking is kept for the run.
+pub struct Validated {
+    source: ScenarioSource,
+    loaded: Loaded,
+    world: World,
+}
+
+impl std::fmt::Debug for Validated {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Validated")
+            .field("source", &self.source)
+            .field("origin", &self.loaded.origin())
+            .finish_non_exhaustive()
+    }
+}
+
+impl Validated {
+    /// Loads the scenario of `source` and checks it fully. A refusal names
+    /// the file, line and key where it can.
+    pub fn new(source: ScenarioSource) -> Result<Self, Invalid> {
+        let overrides = source.overrides()?;
+        let loaded = match &source.path {
+            Some(path) => mrsim_scenario::load_with_overrides(path, &overrides),
+            None if overrides.is_empty() => Ok(mrsim_scenario::demo()),
+            None => {
+                let demo = mrsim_scenario::demo();
+                mrsim_scenario::parse_with_overrides(demo.source(), demo.origin(), &overrides)
+            }
+        }
+        .map_err(|e| Invalid(e.to_string()))?;
+        for r in &loaded.scenario.robots {
+            if let Err(e) = mrsim_agents::build_planner(r) {
+                let key = match &e {
+                    mrsim_planners::BuildError::UnknownPlanner { .. } => {
+                        format!("robot.{}.planner", r.name)
+                    }
+                    mrsim_planners::BuildError::Param(p) => {
+                        format!("robot.{}.params.{}", r.name, p.key())
+                    }
+                };
+                return Err(Invalid(loaded.error_at(&key, e.to_string()).to_string()));
+            }
+        }
+        let world = match World::new(&loaded.scenario) {
+            Ok(w) => w,
+            Err(e) => {
+                let key = match &e {
+                    mrsim_world::WorldError::Motion { name, .. } => {
+                        format!("obstacle.{name}.motion")
+                    }
+                };
+                return Err(Invalid(loaded.error_at(&key, e.to_string()).to_string()));
+            }
+        };
+        Ok(Self {
+            source,
+            loaded,
+            world,
+        })
+    }
+
+    /// The resolved scenario (defaults applied, generated robots expanded).
+    pub fn scenario(&self) -> &Scenario {
+        &self.loaded.scenario
+    }
+
+    /// Where the scenario came from, as it names it in errors (the file, or
+    /// the built-in demo).
+    pub fn origin(&self) -> &str {
+        self.loaded.origin()
+    }
+
+    /// The file and overrides it was loaded from.
+    pub fn source(&self) -> &ScenarioSource {
+        &self.source
+    }
+
+    /// The world built from the scenario, ready to run.
+    pub fn into_world(self) -> (Scenario, World) {
+        (self.loaded.scenario, self.world)
+    }
+
+    /// Where the scenario came from and the scenario itself, without the
+    /// world (for a process that starts the world elsewhere).
+    pub fn into_scenario(self) -> (ScenarioSource, Scenario) {
+        (self.source, self.loaded.scenario)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_demo_is_valid_and_its_overrides_are_applied() {
+        let v = Validated::new(ScenarioSource {
+            set: vec!["world.dt=0.05".into()],
+            mode: Some(Mode::Lockstep),
+            ..Default::default()
+        })
+        .expect("the demo with overrides");
+        assert_eq!(v.scenario().world.dt, 0.05);
+        assert_eq!(v.scenario().world.mode, Mode::Lockstep);
+    }
+
+    #[test]
+    fn an_override_without_a_value_or_an_unknown_planner_is_refused() {
+        let refused = |set: &str| {
+            Validated::new(ScenarioSource {
+                set: vec![set.into()],
+                ..Default::default()
+            })
+            .expect_err(set)
+            .to_string()
+        };
+        assert!(refused("world.dt").contains("expected KEY=VALUE"));
+        assert!(refused("planner=nope").contains("nope"));
+    }
+
+    #[test]
+    fn another_process_gets_the_same_scenario_from_the_arguments() {
+        let s = ScenarioSource {
+            path: Some("a.toml".into()),
+            mode: Some(Mode::Realtime),
+            set: vec!["world.dt=0.1".into()],
+        };
+        let args: Vec<String> = s
+            .to_args()
+            .into_iter()
+            .map(|a| a.to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(
+            args,
+            ["a.toml", "--set", "world.dt=0.1", "--mode", "realtime"]
+        );
+    }
+}

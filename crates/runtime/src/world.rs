@@ -1,0 +1,156 @@
+//! The world process (`mrsim world`): started by the launcher, or by hand
+//! with agents joining from other terminals.
+
+use crate::error::{Invalid, Refusal};
+use crate::finish::{Ending, FinishError, Outcome};
+use crate::validate::Validated;
+use mrsim_scenario::Scenario;
+use mrsim_transport::shm::ShmWorld;
+use mrsim_transport::{Capacity, Namespace, TransportError};
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+/// How to run a world, beyond its scenario.
+#[derive(Debug, Clone, Default)]
+pub struct WorldRequest {
+    /// The run id agents use to find this world.
+    pub run_id: String,
+    /// The output folder; `None`: a fresh folder under `runs/`.
+    pub out: Option<PathBuf>,
+    /// Give up if not every agent has joined after this long (`None`: wait
+    /// forever).
+    pub start_timeout: Option<Duration>,
+    /// Started by the launcher, which claims the namespace and finishes the
+    /// run; a world started by hand does both itself.
+    pub launched: bool,
+}
+
+/// Why a world failed.
+#[derive(Debug, thiserror::Error)]
+pub enum WorldError {
+    /// Refused before it started: the output folder, the run id, a run id
+    /// in use.
+    #[error(transparent)]
+    Invalid(#[from] Invalid),
+    /// The run's channels could not be created.
+    #[error("cannot create run `{run_id}` (is another world using this run id?)")]
+    Create {
+        /// The run id.
+        run_id: String,
+        /// Why.
+        #[source]
+        source: TransportError,
+    },
+    /// The tick loop failed.
+    #[error("world: {0}")]
+    Run(mrsim_world::run::RunError),
+    /// The run ended but could not be finished.
+    #[error(transparent)]
+    Finish(#[from] FinishError),
+}
+
+impl Refusal for WorldError {
+    fn refused(&self) -> Option<&Invalid> {
+        match self {
+            WorldError::Invalid(i) => Some(i),
+            _ => None,
+        }
+    }
+}
+
+/// How a world ended.
+#[derive(Debug)]
+pub struct WorldOutcome {
+    /// Stopped by a signal before its end (it wrote what it had).
+    pub interrupted: bool,
+    /// A world started by hand finishes its run itself (after waiting up
+    /// to 3 s for its agents to exit): what that gave.
+    pub finished: Option<Outcome>,
+}
+
+/// Runs a world over iceoryx2 until its end. A world started by hand calls
+/// `on_open` with its run id and scenario once its channels are open (the
+/// moment to tell the user how to start the agents).
+pub fn serve(
+    validated: Validated,
+    req: &WorldRequest,
+    on_open: &mut dyn FnMut(&str, &Scenario),
+) -> Result<WorldOutcome, WorldError> {
+    let dir = crate::out::prepare(req.out.as_deref(), &validated.scenario().name)?;
+    // Absolute: the setup tells agents where to write their diagnostics.
+    let dir = std::fs::canonicalize(&dir).unwrap_or(dir);
+    let run_id = req.run_id.as_str();
+    let ns = Namespace::new(run_id).map_err(|e| Invalid(e.to_string()))?;
+    if !req.launched {
+        // A world started by hand owns its namespace: clear what a crashed
+        // earlier world of the same run id left behind.
+        crate::launch::claim_namespace(&ns)?;
+    }
+    let (scenario, world) = validated.into_world();
+    let setup_len = serde_json::to_vec(&serde_json::json!({
+        "run_id": run_id, "out_dir": dir, "scenario": scenario
+    }))
+    .map(|v| v.len())
+    .unwrap_or(1 << 16);
+    let bodies = scenario.robots.len() + scenario.obstacles.len();
+    let mut link = ShmWorld::create(
+        &ns,
+        Capacity {
+            robots: scenario.robots.len(),
+        },
+        bodies,
+        setup_len,
+    )
+    .map_err(|source| WorldError::Create {
+        run_id: run_id.to_string(),
+        source,
+    })?;
+    if !req.launched {
+        on_open(run_id, &scenario);
+    }
+    let opts = mrsim_world::RunOptions {
+        out_dir: dir.clone(),
+        run_id: run_id.to_string(),
+        transport: "shm".to_string(),
+        start_timeout: req.start_timeout,
+        verbose: !req.launched || std::env::var_os("MRSIM_VERBOSE").is_some(),
+    };
+    let outcome = mrsim_world::run(world, &mut link, opts);
+    drop(link);
+    let outcome = outcome.map_err(WorldError::Run)?;
+    let interrupted = outcome.metrics.interrupted;
+    if req.launched {
+        return Ok(WorldOutcome {
+            interrupted,
+            finished: None,
+        });
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    ns.remove_leftovers();
+    wait_for_agents(&outcome.metrics, Duration::from_secs(3));
+    let finished = crate::finish::finish(Ending {
+        dir: &dir,
+        world_failure: None,
+        agent_failures: Vec::new(),
+        usage: None,
+        render: true,
+    })?;
+    Ok(WorldOutcome {
+        interrupted,
+        finished: Some(finished),
+    })
+}
+
+/// Waits (at most `limit`) until the agent processes of a hand-started run
+/// have ended, so that their diagnostics are complete.
+fn wait_for_agents(metrics: &mrsim_world::metrics::RunMetrics, limit: Duration) {
+    let start = Instant::now();
+    let pids: Vec<u32> = metrics
+        .robots
+        .values()
+        .filter_map(|r| r.agent_pid)
+        .collect();
+    while start.elapsed() < limit && pids.iter().any(|&p| mrsim_world::run::pid_alive(p)) {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}

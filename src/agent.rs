@@ -1,0 +1,31 @@
+//! `mrsim agent`: one robot's agent process.
+
+use crate::cli::AgentArgs;
+use crate::exit::fail;
+use anyhow::Result;
+use mrsim_runtime::agent::{AgentRequest, Misbehave};
+use std::time::Duration;
+
+/// Runs `mrsim agent`; returns the exit status.
+pub fn main(args: &AgentArgs) -> Result<i32> {
+    let end = mrsim_runtime::agent::run(&AgentRequest {
+        robot: args.robot.clone(),
+        run_id: args.run.clone(),
+        timeout: Duration::from_secs_f64(args.timeout),
+        misbehave: Misbehave {
+            impersonate: args.impersonate,
+            fault: args.fault,
+            protocol_version: args.protocol_version,
+        },
+        usage_out: args.usage_out.clone(),
+    });
+    if let (Some(e), Some(path)) = (&end.usage_error, &args.usage_out) {
+        eprintln!(
+            "warning: agent {}: cannot write {}: {e}",
+            args.robot,
+            path.display()
+        );
+    }
+    end.result.map_err(fail)?;
+    Ok(0)
+}

@@ -1,0 +1,53 @@
+//! `mrsim run`: a whole run, with its progress on stderr and its summary
+//! on stdout.
+
+use crate::cli::RunArgs;
+use crate::exit::fail;
+use crate::watch::RunWatch;
+use anyhow::Result;
+use mrsim_runtime::Validated;
+use mrsim_runtime::launch::{Event, MAX_RESTARTS, RunRequest};
+
+/// Runs `mrsim run`; returns the exit status.
+pub fn main(args: &RunArgs) -> Result<i32> {
+    let validated = Validated::new(args.scenario.source()).map_err(fail)?;
+    let max_ticks = validated.scenario().max_ticks();
+    let prepared = mrsim_runtime::launch::prepare(
+        validated,
+        RunRequest {
+            run_id: args.run.clone(),
+            out: args.scenario.out.clone(),
+            transport: args.transport.into(),
+            sched: (&args.sched).into(),
+            render: !args.no_report,
+            restart_agents: args.restart_agents,
+        },
+    )
+    .map_err(fail)?;
+    if let Some(why) = &prepared.applied().rt_refused {
+        eprintln!("warning: {why}");
+    }
+    let ns = prepared.namespace().clone();
+    let mut watch = None;
+    let outcome = prepared
+        .start(&mut |event| match event {
+            Event::Waiting => watch
+                .get_or_insert_with(|| RunWatch::new(&ns, max_ticks))
+                .update(),
+            Event::WorldEnded => {
+                if let Some(w) = watch.take() {
+                    w.finish();
+                }
+            }
+            Event::AgentRestarted {
+                robot,
+                pid,
+                how,
+                restart,
+            } => eprintln!(
+                "launcher: the agent for {robot} (pid {pid}) {how}; restarting it ({restart} of at most {MAX_RESTARTS})"
+            ),
+        })
+        .map_err(fail)?;
+    Ok(crate::outcome::print(&outcome, args.quiet))
+}
