@@ -32,7 +32,7 @@
 
 use crate::error::Fail;
 use crate::raw::{P, RawGenerate, S};
-use crate::resolve::{Rule, check, point};
+use crate::resolve::checks::{Rule, check, point};
 use crate::rng::Rng;
 use crate::types::{Arena, ObstacleSpec, RobotSpec, WorldConfig};
 use std::f64::consts::PI;

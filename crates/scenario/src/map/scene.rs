@@ -5,7 +5,8 @@
 use super::OccupancyMap;
 use crate::error::Fail;
 use crate::raw::{RawMap, S};
-use crate::resolve::{RobotSpans, dist_to_segment};
+use crate::resolve::robots::RobotSpans;
+use crate::resolve::scene::dist_to_segment;
 use crate::types::{MapInfo, Scenario, WallSpec};
 use std::ops::Range;
 use std::path::Path;

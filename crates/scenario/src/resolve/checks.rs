@@ -1,0 +1,103 @@
+//! The checks every part of resolving shares: the built-in robot defaults,
+//! number and point checks that point their errors at the offending value,
+//! and the TOML error conversion. A leaf: it uses no other resolve module, so
+//! `generate` and every sibling can use it without a cycle.
+
+use crate::error::Fail;
+use crate::raw::{P, Pt, S};
+
+/// Built-in robot defaults (metres).
+pub(crate) mod builtin {
+    pub const RADIUS: f64 = 0.25;
+    pub const MASS: f64 = 1.0;
+    pub const DAMPING: f64 = 0.5;
+    pub const MAX_SPEED: f64 = 1.0;
+    pub const MAX_ACCEL: f64 = 2.0;
+    pub const VELOCITY_LAG: f64 = 0.0;
+    pub const SENSING_RANGE: f64 = 1e9;
+    pub const FIELD_OF_VIEW_DEG: f64 = 360.0;
+    pub const GOAL_TOLERANCE: f64 = 0.1;
+    pub const GOAL_HOLD_TICKS: u32 = 3;
+    pub const POSITION_NOISE: f64 = 0.0;
+    pub const PLANNER: &str = "homing";
+    pub const OBSTACLE_RADIUS: f64 = 0.25;
+}
+
+/// A check on a number.
+#[derive(Clone, Copy)]
+pub(crate) enum Rule {
+    /// Any finite number.
+    Finite,
+    /// >= 0.
+    NonNeg,
+    /// > 0.
+    Pos,
+    /// In (0, 1].
+    Fraction,
+    /// In (0, 360].
+    Degrees,
+}
+
+/// Checks a number; the error points at it.
+pub(crate) fn check(v: &S<f64>, key: &str, rule: Rule, what: &str) -> Result<f64, Fail> {
+    let x = *v.get_ref();
+    let bad = |reason: String| Err(Fail::new(Some(v.span()), what, reason));
+    if !x.is_finite() {
+        return bad(format!("{key} must be a finite number, got {x}"));
+    }
+    match rule {
+        Rule::Finite => Ok(x),
+        Rule::NonNeg if x < 0.0 => bad(format!("{key} must be >= 0, got {x}")),
+        Rule::Pos if x <= 0.0 => bad(format!("{key} must be > 0, got {x}")),
+        Rule::Fraction if !(x > 0.0 && x <= 1.0) => {
+            bad(format!("{key} must be in (0, 1], got {x}"))
+        }
+        Rule::Degrees if !(x > 0.0 && x <= 360.0) => {
+            bad(format!("{key} must be in (0, 360], got {x}"))
+        }
+        _ => Ok(x),
+    }
+}
+
+pub(super) fn opt(
+    v: &Option<S<f64>>,
+    key: &str,
+    rule: Rule,
+    what: &str,
+    default: f64,
+) -> Result<f64, Fail> {
+    v.as_ref()
+        .map_or(Ok(default), |v| check(v, key, rule, what))
+}
+
+/// Checks that a point is finite.
+pub(crate) fn point(v: &S<Pt>, key: &str, what: &str) -> Result<P, Fail> {
+    let p = v.get_ref().0;
+    if p.iter().all(|x| x.is_finite()) {
+        Ok(p)
+    } else {
+        Err(Fail::new(
+            Some(v.span()),
+            what,
+            format!("{key} must be finite numbers, got [{}, {}]", p[0], p[1]),
+        ))
+    }
+}
+
+pub(super) fn points(v: &S<Vec<Pt>>, key: &str, what: &str) -> Result<Vec<P>, Fail> {
+    for Pt(p) in v.get_ref() {
+        if !p.iter().all(|x| x.is_finite()) {
+            return Err(Fail::new(
+                Some(v.span()),
+                what,
+                format!("{key} must be finite numbers, got [{}, {}]", p[0], p[1]),
+            ));
+        }
+    }
+    Ok(v.get_ref().iter().map(|p| p.0).collect())
+}
+
+/// Turns a TOML deserialization error into a `Fail`.
+pub(crate) fn de_fail(e: toml::de::Error, what: &str) -> Fail {
+    Fail::new(e.span(), what, e.message().to_string())
+}

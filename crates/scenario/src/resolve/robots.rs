@@ -1,0 +1,269 @@
+//! One robot from its layers of settings (its own keys, the overrides that
+//! select it, `[generate]`, `[defaults]`, the built-in defaults): pick each
+//! field from the highest layer that has it, check it in every layer.
+
+use super::checks::{Rule, builtin, check, de_fail, point, points};
+use crate::error::{Fail, Spans};
+use crate::overrides::{RobotPatch, set_path};
+use crate::raw::{P, RawParams, RawRobot, S};
+use crate::types::*;
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::ops::Range;
+use toml::Spanned;
+use toml::de::{DeTable, DeValue};
+
+/// One layer of robot settings, highest precedence first.
+pub(super) struct Layer<'a> {
+    pub raw: &'a RawRobot,
+    pub what: String,
+}
+
+/// Where a robot's errors point.
+#[derive(Debug, Clone)]
+pub(crate) struct RobotSpans {
+    pub table: Option<Range<usize>>,
+    pub start: Option<Range<usize>>,
+    pub goal: Option<Range<usize>>,
+}
+
+/// Picks a field from the first layer that has it, checking it in every
+/// layer that has it.
+fn pick_num(
+    layers: &[Layer],
+    f: impl Fn(&RawRobot) -> &Option<S<f64>>,
+    key: &str,
+    rule: Rule,
+    default: f64,
+) -> Result<f64, Fail> {
+    let mut chosen = None;
+    for l in layers {
+        if let Some(v) = f(l.raw) {
+            let x = check(v, key, rule, &l.what)?;
+            chosen.get_or_insert(x);
+        }
+    }
+    Ok(chosen.unwrap_or(default))
+}
+
+fn pick<'a, T>(
+    layers: &'a [Layer],
+    f: impl Fn(&'a RawRobot) -> &'a Option<S<T>>,
+) -> Option<(&'a S<T>, &'a str)> {
+    layers
+        .iter()
+        .find_map(|l| f(l.raw).as_ref().map(|v| (v, l.what.as_str())))
+}
+
+fn check_params(params: &S<RawParams>, what: &str) -> Result<(), Fail> {
+    for (k, v) in params.get_ref() {
+        let finite = match v.get_ref() {
+            ParamValue::Number(x) => x.is_finite(),
+            ParamValue::Numbers(xs) => xs.iter().all(|x| x.is_finite()),
+            ParamValue::Points(ps) => ps.iter().flatten().all(|x| x.is_finite()),
+            ParamValue::Bool(_) | ParamValue::Text(_) => true,
+        };
+        if !finite {
+            return Err(Fail::new(
+                Some(v.span()),
+                what,
+                format!("parameter `{k}` must be finite numbers"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Resolves one robot from its layers. `given` is the name, start and goal
+/// of a generated robot (used where no layer has them). Returns the spec and
+/// whether start and goal were given by a layer.
+pub(super) fn resolve_robot(
+    layers: &[Layer],
+    given: Option<(String, P, P)>,
+    index: usize,
+    table: Option<Range<usize>>,
+) -> Result<(RobotSpec, RobotSpans, bool), Fail> {
+    let anon = format!("robot #{}", index + 1);
+    let missing = |key: &str| {
+        Fail::new(
+            table.clone(),
+            anon.as_str(),
+            format!("missing `{key}` (every [[robot]] needs name, start and goal)"),
+        )
+    };
+    let name = match (pick(layers, |r| &r.name), &given) {
+        (Some((n, what)), _) => {
+            if n.get_ref().trim().is_empty() {
+                return Err(Fail::new(Some(n.span()), what, "name must not be empty"));
+            }
+            n.get_ref().clone()
+        }
+        (None, Some((n, _, _))) => n.clone(),
+        (None, None) => return Err(missing("name")),
+    };
+    let start_raw = pick(layers, |r| &r.start);
+    let goal_raw = pick(layers, |r| &r.goal);
+    let placed = start_raw.is_some() || goal_raw.is_some();
+    let (start, start_span) = match (start_raw, &given) {
+        (Some((v, what)), _) => (point(v, "start", what)?, Some(v.span())),
+        (None, Some((_, s, _))) => (*s, table.clone()),
+        (None, None) => return Err(missing("start")),
+    };
+    let (goal, goal_span) = match (goal_raw, &given) {
+        (Some((v, what)), _) => (point(v, "goal", what)?, Some(v.span())),
+        (None, Some((_, _, g))) => (*g, table.clone()),
+        (None, None) => return Err(missing("goal")),
+    };
+
+    let mut params = BTreeMap::new();
+    for l in layers.iter().rev() {
+        if let Some(p) = &l.raw.params {
+            check_params(p, &l.what)?;
+            for (k, v) in p.get_ref() {
+                params.insert(k.clone(), v.get_ref().clone());
+            }
+        }
+    }
+    let mut path = Vec::new();
+    if let Some((p, what)) = pick(layers, |r| &r.path) {
+        path = points(p, "path", what)?;
+        if path.len() < 2 {
+            return Err(Fail::new(
+                Some(p.span()),
+                what,
+                format!("path needs at least 2 points, got {}", path.len()),
+            ));
+        }
+    }
+    let boundary = match pick(layers, |r| &r.boundary) {
+        Some((b, what)) => {
+            let x = check(b, "boundary", Rule::Pos, what)?;
+            if path.is_empty() {
+                return Err(Fail::new(
+                    Some(b.span()),
+                    what,
+                    "boundary needs a path (the corridor is around the designated path)",
+                ));
+            }
+            Some(x)
+        }
+        None => None,
+    };
+    let goal_hold_ticks = match pick(layers, |r| &r.goal_hold_ticks) {
+        Some((v, what)) if *v.get_ref() == 0 => {
+            return Err(Fail::new(
+                Some(v.span()),
+                what,
+                "goal_hold_ticks must be >= 1, got 0",
+            ));
+        }
+        Some((v, _)) => *v.get_ref(),
+        None => builtin::GOAL_HOLD_TICKS,
+    };
+    let spec = RobotSpec {
+        name,
+        start,
+        goal,
+        planner: pick(layers, |r| &r.planner)
+            .map_or(builtin::PLANNER.to_string(), |(p, _)| p.get_ref().clone()),
+        params,
+        radius: pick_num(
+            layers,
+            |r| &r.radius,
+            "radius",
+            Rule::NonNeg,
+            builtin::RADIUS,
+        )?,
+        mass: pick_num(layers, |r| &r.mass, "mass", Rule::Pos, builtin::MASS)?,
+        damping: pick_num(
+            layers,
+            |r| &r.damping,
+            "damping",
+            Rule::NonNeg,
+            builtin::DAMPING,
+        )?,
+        max_speed: pick_num(
+            layers,
+            |r| &r.max_speed,
+            "max_speed",
+            Rule::Pos,
+            builtin::MAX_SPEED,
+        )?,
+        max_accel: pick_num(
+            layers,
+            |r| &r.max_accel,
+            "max_accel",
+            Rule::Pos,
+            builtin::MAX_ACCEL,
+        )?,
+        velocity_lag: pick_num(
+            layers,
+            |r| &r.velocity_lag,
+            "velocity_lag",
+            Rule::NonNeg,
+            builtin::VELOCITY_LAG,
+        )?,
+        sensing_range: pick_num(
+            layers,
+            |r| &r.sensing_range,
+            "sensing_range",
+            Rule::Pos,
+            builtin::SENSING_RANGE,
+        )?,
+        field_of_view_deg: pick_num(
+            layers,
+            |r| &r.field_of_view_deg,
+            "field_of_view_deg",
+            Rule::Degrees,
+            builtin::FIELD_OF_VIEW_DEG,
+        )?,
+        goal_tolerance: pick_num(
+            layers,
+            |r| &r.goal_tolerance,
+            "goal_tolerance",
+            Rule::Pos,
+            builtin::GOAL_TOLERANCE,
+        )?,
+        goal_hold_ticks,
+        velocity_source: pick(layers, |r| &r.velocity_source)
+            .map_or(VelocitySource::Truth, |(v, _)| *v.get_ref()),
+        position_noise: pick_num(
+            layers,
+            |r| &r.position_noise,
+            "position_noise",
+            Rule::NonNeg,
+            builtin::POSITION_NOISE,
+        )?,
+        path,
+        boundary,
+    };
+    let spans = RobotSpans {
+        table,
+        start: start_span,
+        goal: goal_span,
+    };
+    Ok((spec, spans, placed))
+}
+
+/// The overrides that select a generated robot, as a robot table.
+pub(super) fn robot_patch(
+    patches: &[RobotPatch],
+    name: &str,
+    spans: &Spans,
+) -> Result<Option<RawRobot>, Fail> {
+    let mut table = DeTable::new();
+    let mut first = None;
+    for p in patches.iter().filter(|p| p.selects(name)) {
+        let span = spans.sentinel(p.index);
+        first.get_or_insert(span.clone());
+        set_path(&mut table, &p.rest, p.value.clone(), &span)
+            .map_err(|reason| Fail::new(Some(span), format!("robot `{name}`"), reason))?;
+    }
+    let Some(span) = first else {
+        return Ok(None);
+    };
+    let de = toml::de::ValueDeserializer::from(Spanned::new(span, DeValue::Table(table)));
+    RawRobot::deserialize(de)
+        .map(Some)
+        .map_err(|e| de_fail(e, &format!("robot `{name}`")))
+}
