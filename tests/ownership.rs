@@ -167,3 +167,37 @@ fn a_stranger_is_refused_with_a_clear_message_and_the_run_is_unaffected() {
     assert_eq!(b_joins, 1);
     assert_clean(&id);
 }
+
+#[test]
+fn a_hand_started_world_that_times_out_waiting_names_the_missing_robot_and_leaves_nothing_behind() {
+    let dir = fresh_dir("own-timeout");
+    let file = dir.join("two.toml");
+    std::fs::write(&file, TWO).expect("write");
+    let id = run_id("owntimeout");
+    // Only `b` gets an agent: the world gives up on `a` after its
+    // --start-timeout and must still clear the run's shared memory.
+    let mut world = mrsim()
+        .arg("world")
+        .arg(&file)
+        .args(["--run", &id, "--start-timeout", "3", "--out"])
+        .arg(dir.join("out"))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("world");
+    let mut honest = mrsim()
+        .args(["agent", "--robot", "b", "--run", &id])
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("agent");
+    let ws = wait_timeout(&mut world, 60).expect("world ended");
+    assert!(!ws.success(), "a world whose robots did not all join fails");
+    wait_timeout(&mut honest, 30);
+    let mut err = String::new();
+    use std::io::Read;
+    if let Some(mut e) = world.stderr.take() {
+        let _ = e.read_to_string(&mut err);
+    }
+    assert!(err.contains("agents for a did not join"), "{err}");
+    assert_clean(&id);
+}

@@ -117,7 +117,20 @@ pub fn serve(
     };
     let outcome = mrsim_world::run(world, &mut link, opts);
     drop(link);
-    let outcome = outcome.map_err(WorldError::Run)?;
+    let outcome = match outcome {
+        Ok(outcome) => outcome,
+        Err(e) => {
+            if !req.launched {
+                // A world started by hand cleans its namespace whatever the
+                // ending (a launcher cleans its own world's): the agents
+                // that joined were told the run is over, and nothing of it
+                // may block the next world of this run id.
+                std::thread::sleep(Duration::from_millis(300));
+                ns.remove_leftovers();
+            }
+            return Err(WorldError::Run(e));
+        }
+    };
     let interrupted = outcome.metrics.interrupted;
     if req.launched {
         return Ok(WorldOutcome {
