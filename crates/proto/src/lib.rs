@@ -10,15 +10,15 @@
 use iceoryx2::prelude::ZeroCopySend;
 
 /// Bumped whenever a wire type changes shape or meaning. An agent whose
-/// version differs from the world's is refused at join time. Version 3:
-/// snapshots ring the run's doorbell (a futex word in shared memory)
-/// instead of the tick event. Version 4: an agent says ready a second
-/// time once it has taken up the tick's channels (on each wake-up without
-/// a snapshot before its first), and the world starts the clock when all
-/// have. Version 5: an agent counts its answer to a tick on the doorbell
-/// page instead of notifying the world, and the last answer wakes it.
-/// Version 6: the doorbell names the world that made it (process id and
-/// start time), and an agent goes on only if that world is running.
+/// version differs from the world's is refused at join time. What version 6
+/// is: each snapshot rings the run's doorbell (a futex word in shared
+/// memory); an agent says ready once it has read the setup and again once it
+/// has taken up the tick's channels, and the world starts the clock when all
+/// have; an agent counts its answer to a tick on the doorbell page and the
+/// last answer wakes the world; the doorbell names the world that made it
+/// (process id and start time) and an agent goes on only if that world is
+/// running (ARCHITECTURE.md, "Channels" and "Ownership"; how each came
+/// about is in the git log).
 pub const PROTOCOL_VERSION: u32 = 6;
 
 /// Longest robot name, in bytes, that fits a [`JoinRequest`].
@@ -195,8 +195,8 @@ pub struct JoinReply {
 
 /// Event ids on the world's tick event service.
 pub mod events {
-    /// A new snapshot is published (protocol 2; since protocol 3 a
-    /// snapshot rings the doorbell instead and this id is not sent).
+    /// Not sent: a snapshot rings the run's doorbell instead. The id is
+    /// kept so the others keep their values.
     pub const SNAPSHOT: usize = 1;
     /// A join reply is published.
     pub const JOIN_REPLY: usize = 2;
