@@ -293,25 +293,29 @@ impl<'a> Loop<'a> {
     /// Publishes the live statistics for observers when due (or now, with
     /// `force`).
     fn publish_stats(&mut self, phase: u32, force: bool) {
-        let wall = self.clock_start.map_or(0.0, |t| {
-            self.clock.now().saturating_duration_since(t).as_secs_f64()
-        });
-        let time = self.world.time();
-        let header = StatsHeader {
-            tick: self.window.tick,
-            max_ticks: self.world.scenario.max_ticks(),
-            sim_time: time,
-            realtime_factor: if wall > 0.0 { time / wall } else { 0.0 },
-            published_ns: now_ns(),
-            collisions_total: 0,
-            agents_lost: 0,
-            phase,
-            realtime: u32::from(self.world.scenario.world.mode == Mode::Realtime),
-            robot_count: self.admission.agents().len() as u32,
-            world_pid: std::process::id(),
+        let (world, clock, clock_start) = (&self.world, self.clock, self.clock_start);
+        let (tick, agents) = (self.window.tick, self.admission.agents());
+        let header = || {
+            let wall = clock_start.map_or(0.0, |t| {
+                clock.now().saturating_duration_since(t).as_secs_f64()
+            });
+            let time = world.time();
+            StatsHeader {
+                tick,
+                max_ticks: world.scenario.max_ticks(),
+                sim_time: time,
+                realtime_factor: if wall > 0.0 { time / wall } else { 0.0 },
+                published_ns: now_ns(),
+                collisions_total: 0,
+                agents_lost: 0,
+                phase,
+                realtime: u32::from(world.scenario.world.mode == Mode::Realtime),
+                robot_count: agents.len() as u32,
+                world_pid: std::process::id(),
+            }
         };
         self.recording
-            .publish_stats(&mut *self.link, self.admission.agents(), header, force);
+            .publish_stats(&mut *self.link, agents, header, force);
     }
 
     /// Waits until every robot has an agent and every agent is ready (or
