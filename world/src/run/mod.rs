@@ -80,13 +80,9 @@ impl<'a> Loop<'a> {
         timings: TimingRecorder,
     ) -> Self {
         let scenario = &world.scenario;
-        let robots: Vec<String> = scenario.robots.iter().map(|r| r.name.clone()).collect();
-        let names: Vec<String> = robots
-            .iter()
-            .cloned()
-            .chain(scenario.obstacles.iter().map(|o| o.name.clone()))
-            .collect();
-        let n = robots.len();
+        let names = body_names(scenario);
+        let n = scenario.robots.len();
+        let robots = names[..n].to_vec();
         let schedule = Schedule::new(scenario);
         Self {
             admission: Admission::new(robots, std::process::id()),
@@ -533,6 +529,14 @@ impl<'a> Loop<'a> {
     }
 }
 
+/// Every body's name: the robots, then the obstacles.
+fn body_names(scenario: &mrsim_scenario::Scenario) -> Vec<String> {
+    let robots = scenario.robots.iter().map(|r| r.name.clone());
+    robots
+        .chain(scenario.obstacles.iter().map(|o| o.name.clone()))
+        .collect()
+}
+
 /// Runs `world` to the end over `link`, writing the outputs into
 /// `opts.out_dir`.
 pub fn run(
@@ -564,14 +568,9 @@ fn run_with_clock(
         &json!({"run_id": opts.run_id, "out_dir": out_dir, "scenario": scenario}),
     )
     .map_err(|e| out_err("setup")(e.into()))?;
-    let names: Vec<String> = scenario
-        .robots
-        .iter()
-        .map(|r| r.name.clone())
-        .chain(scenario.obstacles.iter().map(|o| o.name.clone()))
-        .collect();
     let tracker = Tracker::new(&scenario, world.walls());
-    let rec = Recorder::start(&dir, names, tracker).map_err(out_err(TRAJECTORY_FILE))?;
+    let rec =
+        Recorder::start(&dir, body_names(&scenario), tracker).map_err(out_err(TRAJECTORY_FILE))?;
     link.publish_setup(&setup)?;
     let timings = TimingRecorder::start(n).map_err(out_err(METRICS_FILE))?;
     let mut lp = Loop::new(world, link, clock, opts, rec, timings);
