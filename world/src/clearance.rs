@@ -2,7 +2,7 @@
 //! robot's smallest surface distance to any other body per tick, on the
 //! grids of [`mrsim_spatial`].
 
-use mrsim_spatial::{BoundedGrid as Cells, Buckets, HashedGrid as Fine};
+use mrsim_spatial::{BoundedGrid as Cells, Buckets, Disc, HashedGrid as Fine, bounds};
 
 /// `p` minus the point of segment `w` nearest to it.
 fn segment_offset(w: [[f64; 2]; 2], p: [f64; 2]) -> [f64; 2] {
@@ -66,6 +66,11 @@ pub fn clearly_beyond(d2: f64, reach: f64) -> bool {
     reach >= 0.0 && d2 > reach * reach * (1.0 + 1e-9) + 1e-300
 }
 
+/// A body as a disc: centre and radius.
+fn disc(q: &mrsim_proto::BodyState) -> Disc {
+    [q.position[0], q.position[1], q.radius]
+}
+
 /// Sorts `states` into `buckets` buckets by `keys` (one per body).
 fn sort_states(
     into: &mut Buckets,
@@ -73,11 +78,7 @@ fn sort_states(
     buckets: usize,
     keys: impl Iterator<Item = usize>,
 ) {
-    into.sort(
-        buckets,
-        keys.zip(states)
-            .map(|(c, q)| (c, [q.position[0], q.position[1], q.radius])),
-    );
+    into.sort(buckets, keys.zip(states.iter().map(disc)));
 }
 
 /// The clearance searches over one [`Buckets`].
@@ -183,21 +184,13 @@ impl ClearanceGrid {
         if n < 2 {
             return;
         }
-        let (mut lo, mut hi, mut rmax) = ([f64::MAX; 2], [f64::MIN; 2], 0.0f64);
-        for s in states {
-            for k in 0..2 {
-                lo[k] = lo[k].min(s.position[k]);
-                hi[k] = hi[k].max(s.position[k]);
-            }
-            rmax = rmax.max(s.radius);
-        }
-        if !(lo[0].is_finite() && lo[1].is_finite() && hi[0].is_finite() && hi[1].is_finite()) {
+        let Some((lo, hi, rmax)) = bounds(states.iter().map(disc)) else {
             // Non-finite positions: fall back to all pairs.
             for (i, o) in out.iter_mut().enumerate() {
                 *o = brute(states, i);
             }
             return;
-        }
+        };
         // Each robot's search reach: every body nearer than its bound has
         // its centre within this distance of the robot's.
         let reach_of = |i: usize| bound(i) + states[i].radius + rmax;
@@ -225,10 +218,10 @@ impl ClearanceGrid {
                 sort_states(
                     &mut self.coarse,
                     states,
-                    g.nx * g.ny,
+                    g.buckets(),
                     states
                         .iter()
-                        .map(|s| g.at(s.position[1], 1) * g.nx + g.at(s.position[0], 0)),
+                        .map(|s| g.bucket_at(s.position[0], s.position[1])),
                 );
                 g
             });
@@ -238,7 +231,7 @@ impl ClearanceGrid {
                     i,
                     reach,
                     |v, k| g.at(v, k) as i64,
-                    |x, y| y as usize * g.nx + x as usize,
+                    |x, y| g.bucket(x as usize, y as usize),
                 );
                 continue;
             }
@@ -312,9 +305,12 @@ impl ClearanceGrid {
                 while dx <= ring {
                     let x = cx + dx;
                     if x >= 0 && x < g.nx as isize {
-                        best =
-                            self.coarse
-                                .nearest_in(states, i, y as usize * g.nx + x as usize, best);
+                        best = self.coarse.nearest_in(
+                            states,
+                            i,
+                            g.bucket(x as usize, y as usize),
+                            best,
+                        );
                     }
                     dx += step;
                 }

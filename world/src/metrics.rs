@@ -1,10 +1,9 @@
 //! The run's metrics: the schema of metrics.json (owned by
 //! [`mrsim_runfolder`]), re-exported here under its old paths with the
-//! histograms and the clearance grid, and what the tick loop accumulates
-//! per robot on its way to it.
+//! duration histogram, and what the tick loop accumulates per robot on
+//! its way to it.
 
-pub use crate::clearance::ClearanceGrid;
-pub use crate::histogram::{DurationHistogram, RobotTimings};
+pub use crate::histogram::DurationHistogram;
 pub use mrsim_runfolder::metrics::{
     PathDeviation, Percentiles, RobotMetrics, RunMetrics, TimingMetrics,
 };

@@ -235,7 +235,11 @@ impl NeighbourGrid {
     /// Buckets `discs` for searches of up to `reach` (surface to centre);
     /// false (no grid) when `reach` is not finite, a centre is not finite,
     /// or the discs span too many cells.
-    pub fn build(&mut self, discs: impl Iterator<Item = Disc> + Clone, reach: f64) -> bool {
+    pub fn build(
+        &mut self,
+        discs: impl ExactSizeIterator<Item = Disc> + Clone,
+        reach: f64,
+    ) -> bool {
         self.grid = None;
         self.cells.clear();
         let Some((lo, hi, rmax)) = bounds(discs.clone()) else {
@@ -243,7 +247,7 @@ impl NeighbourGrid {
         };
         let cell = (reach + rmax) * (1.0 + 1e-9) + 1e-9;
         let span = (hi[0] - lo[0]).max(hi[1] - lo[1]);
-        let Some(g) = HashedGrid::new(lo, cell, discs.clone().count(), span) else {
+        let Some(g) = HashedGrid::new(lo, cell, discs.len(), span) else {
             return false;
         };
         self.buckets.sort(

@@ -87,12 +87,9 @@ impl FakeTransport {
 
     /// Queues a join request for `robot` from process `pid`.
     pub fn join(&self, robot: &str, pid: u32, nonce: u64) {
-        self.state().joins.push_back(JoinRequest {
-            protocol_version: PROTOCOL_VERSION,
-            pid,
-            nonce,
-            robot: FixedStr::new(robot),
-        });
+        self.state()
+            .joins
+            .push_back(join_request(robot, pid, nonce));
     }
 
     /// The reply to the request with `nonce`.
@@ -108,6 +105,16 @@ impl FakeTransport {
     /// Queues a command, received when it was sent.
     pub fn send(&self, cmd: CommandMsg) {
         self.state().commands.push_back((cmd, cmd.sent_ns));
+    }
+}
+
+/// A join request of this protocol for `robot` from process `pid`.
+pub fn join_request(robot: &str, pid: u32, nonce: u64) -> JoinRequest {
+    JoinRequest {
+        protocol_version: PROTOCOL_VERSION,
+        pid,
+        nonce,
+        robot: FixedStr::new(robot),
     }
 }
 

@@ -80,13 +80,9 @@ impl<'a> Loop<'a> {
         timings: TimingRecorder,
     ) -> Self {
         let scenario = &world.scenario;
-        let robots: Vec<String> = scenario.robots.iter().map(|r| r.name.clone()).collect();
-        let names: Vec<String> = robots
-            .iter()
-            .cloned()
-            .chain(scenario.obstacles.iter().map(|o| o.name.clone()))
-            .collect();
-        let n = robots.len();
+        let names = body_names(scenario);
+        let n = scenario.robots.len();
+        let robots = names[..n].to_vec();
         let schedule = Schedule::new(scenario);
         Self {
             admission: Admission::new(robots, std::process::id()),
@@ -293,25 +289,29 @@ impl<'a> Loop<'a> {
     /// Publishes the live statistics for observers when due (or now, with
     /// `force`).
     fn publish_stats(&mut self, phase: u32, force: bool) {
-        let wall = self.clock_start.map_or(0.0, |t| {
-            self.clock.now().saturating_duration_since(t).as_secs_f64()
-        });
-        let time = self.world.time();
-        let header = StatsHeader {
-            tick: self.window.tick,
-            max_ticks: self.world.scenario.max_ticks(),
-            sim_time: time,
-            realtime_factor: if wall > 0.0 { time / wall } else { 0.0 },
-            published_ns: now_ns(),
-            collisions_total: 0,
-            agents_lost: 0,
-            phase,
-            realtime: u32::from(self.world.scenario.world.mode == Mode::Realtime),
-            robot_count: self.admission.agents().len() as u32,
-            world_pid: std::process::id(),
+        let (world, clock, clock_start) = (&self.world, self.clock, self.clock_start);
+        let (tick, agents) = (self.window.tick, self.admission.agents());
+        let header = || {
+            let wall = clock_start.map_or(0.0, |t| {
+                clock.now().saturating_duration_since(t).as_secs_f64()
+            });
+            let time = world.time();
+            StatsHeader {
+                tick,
+                max_ticks: world.scenario.max_ticks(),
+                sim_time: time,
+                realtime_factor: if wall > 0.0 { time / wall } else { 0.0 },
+                published_ns: now_ns(),
+                collisions_total: 0,
+                agents_lost: 0,
+                phase,
+                realtime: u32::from(world.scenario.world.mode == Mode::Realtime),
+                robot_count: agents.len() as u32,
+                world_pid: std::process::id(),
+            }
         };
         self.recording
-            .publish_stats(&mut *self.link, self.admission.agents(), header, force);
+            .publish_stats(&mut *self.link, agents, header, force);
     }
 
     /// Waits until every robot has an agent and every agent is ready (or
@@ -529,6 +529,14 @@ impl<'a> Loop<'a> {
     }
 }
 
+/// Every body's name: the robots, then the obstacles.
+fn body_names(scenario: &mrsim_scenario::Scenario) -> Vec<String> {
+    let robots = scenario.robots.iter().map(|r| r.name.clone());
+    robots
+        .chain(scenario.obstacles.iter().map(|o| o.name.clone()))
+        .collect()
+}
+
 /// Runs `world` to the end over `link`, writing the outputs into
 /// `opts.out_dir`.
 pub fn run(
@@ -560,14 +568,9 @@ fn run_with_clock(
         &json!({"run_id": opts.run_id, "out_dir": out_dir, "scenario": scenario}),
     )
     .map_err(|e| out_err("setup")(e.into()))?;
-    let names: Vec<String> = scenario
-        .robots
-        .iter()
-        .map(|r| r.name.clone())
-        .chain(scenario.obstacles.iter().map(|o| o.name.clone()))
-        .collect();
     let tracker = Tracker::new(&scenario, world.walls());
-    let rec = Recorder::start(&dir, names, tracker).map_err(out_err(TRAJECTORY_FILE))?;
+    let rec =
+        Recorder::start(&dir, body_names(&scenario), tracker).map_err(out_err(TRAJECTORY_FILE))?;
     link.publish_setup(&setup)?;
     let timings = TimingRecorder::start(n).map_err(out_err(METRICS_FILE))?;
     let mut lp = Loop::new(world, link, clock, opts, rec, timings);

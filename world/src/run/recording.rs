@@ -259,18 +259,20 @@ impl Recording {
 
     /// Publishes the live statistics for observers when due (or now, with
     /// `force`): no allocation, and a failure never stops the run.
-    /// `header` has everything but the counts, which this fills in.
+    /// `header` gives everything but the counts, which this fills in; it
+    /// is asked only when the statistics are due.
     pub fn publish_stats(
         &mut self,
         link: &mut dyn WorldTransport,
         agents: &[Agent],
-        mut header: StatsHeader,
+        header: impl FnOnce() -> StatsHeader,
         force: bool,
     ) {
         let now = Instant::now();
         if !force && !self.live.due(now) {
             return;
         }
+        let mut header = header();
         let (acc, rows) = (&self.acc, self.live.robots_mut());
         self.timings.live(|latency| {
             for (i, row) in rows.iter_mut().enumerate() {

@@ -1,10 +1,10 @@
 //! The tick loop's roles over the in-memory transport and its clock.
 
 use super::admission::{Admission, Agent, Event, TickWindow, Verdict};
-use super::fake::{FakeClock, FakeTransport, Responder, velocity};
+use super::fake::{FakeClock, FakeTransport, Responder, join_request, velocity};
 use super::*;
+use mrsim_proto::FixedStr;
 use mrsim_proto::flags;
-use mrsim_proto::{FixedStr, JoinRequest};
 
 fn scenario(mode: &str) -> mrsim_scenario::Scenario {
     let src = format!(
@@ -77,6 +77,15 @@ fn join_both(lp: &mut Loop<'_>, fake: &FakeTransport) -> [u64; 2] {
     })
 }
 
+/// Robot `robot`'s agent, answering every tick with `token`.
+fn answering(robot: u32, token: u64) -> Responder {
+    Responder {
+        robot,
+        token,
+        value: [0.5, 0.0],
+    }
+}
+
 #[test]
 fn a_join_is_accepted_with_a_token_and_the_same_process_asking_again_gets_the_same_one() {
     with_loop("lockstep", |lp, fake| {
@@ -113,12 +122,7 @@ fn a_second_join_for_a_driven_robot_is_refused_with_a_reason() {
 #[test]
 fn joins_for_unknown_robots_or_other_protocols_are_refused_and_say_why() {
     let mut a = Admission::new(vec!["r0".into(), "r1".into()], 42);
-    let mut req = JoinRequest {
-        protocol_version: mrsim_proto::PROTOCOL_VERSION,
-        pid: 7,
-        nonce: 1,
-        robot: FixedStr::new("nobody"),
-    };
+    let mut req = join_request("nobody", 7, 1);
     let (reply, events) = a.join(&req, 5, |_| true);
     assert_eq!(reply.accepted, 0);
     assert_eq!(reply.world_pid, 42);
@@ -135,12 +139,7 @@ fn joins_for_unknown_robots_or_other_protocols_are_refused_and_say_why() {
 #[test]
 fn a_new_process_for_a_robot_whose_agent_died_records_the_loss_then_the_rejoin() {
     let mut a = Admission::new(vec!["r0".into()], 42);
-    let req = |pid, nonce| JoinRequest {
-        protocol_version: mrsim_proto::PROTOCOL_VERSION,
-        pid,
-        nonce,
-        robot: FixedStr::new("r0"),
-    };
+    let req = |pid, nonce| join_request("r0", pid, nonce);
     let (first, events) = a.join(&req(10, 1), 5, |_| true);
     assert_eq!(events, [Event::Joined { robot: 0, pid: 10 }]);
     // Process 10 is gone: process 11 takes the robot over.
@@ -193,16 +192,7 @@ fn a_command_with_the_wrong_token_or_tick_is_rejected_and_counted() {
 #[test]
 fn garbage_is_rejected_but_counts_as_an_answer_and_the_robot_brakes() {
     let mut a = Admission::new(vec!["r0".into()], 42);
-    let (reply, _) = a.join(
-        &JoinRequest {
-            protocol_version: mrsim_proto::PROTOCOL_VERSION,
-            pid: 10,
-            nonce: 1,
-            robot: FixedStr::new("r0"),
-        },
-        5,
-        |_| true,
-    );
+    let (reply, _) = a.join(&join_request("r0", 10, 1), 5, |_| true);
     let now = TickWindow {
         tick: 0,
         published_ns: 0,
@@ -224,18 +214,7 @@ fn garbage_is_rejected_but_counts_as_an_answer_and_the_robot_brakes() {
 fn lockstep_waits_for_every_live_agent_and_not_at_all_when_all_have_answered() {
     with_loop("lockstep", |lp, fake| {
         let [t0, t1] = join_both(lp, fake);
-        fake.state().responders = vec![
-            Responder {
-                robot: 0,
-                token: t0,
-                value: [0.5, 0.0],
-            },
-            Responder {
-                robot: 1,
-                token: t1,
-                value: [0.5, 0.0],
-            },
-        ];
+        fake.state().responders = vec![answering(0, t0), answering(1, t1)];
         let start = lp.clock.now();
         let mut contacts = Vec::new();
         for _ in 0..3 {
@@ -257,11 +236,7 @@ fn lockstep_waits_for_every_live_agent_and_not_at_all_when_all_have_answered() {
 fn a_stalled_agent_is_lost_after_the_stall_timeout_and_rejoins_when_it_answers_again() {
     with_loop("lockstep", |lp, fake| {
         let [t0, t1] = join_both(lp, fake);
-        fake.state().responders = vec![Responder {
-            robot: 0,
-            token: t0,
-            value: [0.5, 0.0],
-        }];
+        fake.state().responders = vec![answering(0, t0)];
         let start = lp.clock.now();
         let mut contacts = Vec::new();
         lp.tick(start, false, &mut contacts).expect("tick");
@@ -277,11 +252,7 @@ fn a_stalled_agent_is_lost_after_the_stall_timeout_and_rejoins_when_it_answers_a
         lp.tick(start, false, &mut contacts).expect("tick");
         assert_eq!(fake.waited(), waited);
         // It answers again: live, unflagged, driving.
-        fake.state().responders.push(Responder {
-            robot: 1,
-            token: t1,
-            value: [0.5, 0.0],
-        });
+        fake.state().responders.push(answering(1, t1));
         lp.tick(start, false, &mut contacts).expect("tick");
         assert!(matches!(lp.admission.agents()[1], Agent::Live { .. }));
         assert_eq!(lp.world.states()[1].flags & flags::LOST, 0);
@@ -292,16 +263,7 @@ fn a_stalled_agent_is_lost_after_the_stall_timeout_and_rejoins_when_it_answers_a
 #[test]
 fn realtime_late_commands_are_misses_not_rejections() {
     let mut a = Admission::new(vec!["r0".into()], 42);
-    let (reply, _) = a.join(
-        &JoinRequest {
-            protocol_version: mrsim_proto::PROTOCOL_VERSION,
-            pid: 10,
-            nonce: 1,
-            robot: FixedStr::new("r0"),
-        },
-        5,
-        |_| true,
-    );
+    let (reply, _) = a.join(&join_request("r0", 10, 1), 5, |_| true);
     let now = TickWindow {
         tick: 5,
         published_ns: 1_000,
@@ -342,11 +304,7 @@ fn realtime_late_commands_are_misses_not_rejections() {
 fn realtime_counts_a_silent_agent_as_a_miss_at_the_deadline_and_keeps_it() {
     with_loop("realtime", |lp, fake| {
         let [t0, _] = join_both(lp, fake);
-        fake.state().responders = vec![Responder {
-            robot: 0,
-            token: t0,
-            value: [0.5, 0.0],
-        }];
+        fake.state().responders = vec![answering(0, t0)];
         let start = lp.clock.now();
         let mut contacts = Vec::new();
         lp.tick(start, false, &mut contacts).expect("tick");
