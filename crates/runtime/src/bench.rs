@@ -322,7 +322,7 @@ pub fn prepare(plan: &BenchPlan) -> Result<PreparedBench, BenchError> {
     }
     let mut sched = plan.sched.clone();
     if sched.cpus.is_none() {
-        let n = crate::sched::online_cpus().min(2);
+        let n = mrsim_sys::sched::online_cpus().min(2);
         sched.cpus = Some(if n > 1 {
             format!("0-{}", n - 1)
         } else {
