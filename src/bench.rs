@@ -4,6 +4,7 @@
 
 use crate::cli::BenchArgs;
 use crate::exit::fail;
+use crate::table::{num, text};
 use anyhow::Result;
 use mrsim_runfolder::bench::BenchRow;
 use mrsim_runtime::bench::{BenchPlan, BenchStep};
@@ -48,15 +49,6 @@ impl Progress {
     }
 }
 
-fn f(v: Option<f64>, digits: usize) -> String {
-    v.map(|x| format!("{x:.digits$}"))
-        .unwrap_or_else(|| "-".to_string())
-}
-
-fn text(s: &str) -> String {
-    if s.is_empty() { "-" } else { s }.to_string()
-}
-
 /// The table printed at the end: one row per combination.
 pub fn table(rows: &[BenchRow]) -> String {
     let header = [
@@ -84,21 +76,21 @@ pub fn table(rows: &[BenchRow]) -> String {
             vec![
                 r.agents.to_string(),
                 text(&r.transport),
-                f(r.roundtrip_us.p50, 0),
-                f(r.roundtrip_us.p99, 0),
-                f(r.roundtrip_us.p999, 0),
-                f(r.roundtrip_us.max, 0),
+                num(r.roundtrip_us.p50, 0),
+                num(r.roundtrip_us.p99, 0),
+                num(r.roundtrip_us.p999, 0),
+                num(r.roundtrip_us.max, 0),
                 format!("{:.3}", 100.0 * r.miss_rate),
-                f(Some(r.realtime_factor), 2),
-                f(r.jitter_us_p99, 0),
-                f(r.allin_us.p99, 0),
-                f(r.baseline_allin_us.and_then(|b| b.p99), 0),
-                f(r.baseline_roundtrip_us.and_then(|b| b.p99), 0),
-                f(Some(r.world_cpu_pct), 1),
-                f(Some(r.agents_cpu_pct), 1),
-                f(r.steal_pct, 1),
-                f(r.world_rss_mb, 1),
-                f(r.agent_rss_mb, 1),
+                num(Some(r.realtime_factor), 2),
+                num(r.jitter_us_p99, 0),
+                num(r.allin_us.p99, 0),
+                num(r.baseline_allin_us.and_then(|b| b.p99), 0),
+                num(r.baseline_roundtrip_us.and_then(|b| b.p99), 0),
+                num(Some(r.world_cpu_pct), 1),
+                num(Some(r.agents_cpu_pct), 1),
+                num(r.steal_pct, 1),
+                num(r.world_rss_mb, 1),
+                num(r.agent_rss_mb, 1),
             ]
         })
         .collect();

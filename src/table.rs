@@ -3,12 +3,14 @@
 use mrsim_runfolder::RunMetrics;
 use std::fmt::Write;
 
-fn num(v: Option<f64>, digits: usize) -> String {
+/// `v` with `digits` decimals, `-` if there is none.
+pub(crate) fn num(v: Option<f64>, digits: usize) -> String {
     v.map(|x| format!("{x:.digits$}"))
         .unwrap_or_else(|| "-".to_string())
 }
 
-fn text(s: &str) -> String {
+/// `s`, or `-` if it is empty.
+pub(crate) fn text(s: &str) -> String {
     if s.is_empty() { "-" } else { s }.to_string()
 }
 

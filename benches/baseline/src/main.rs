@@ -16,7 +16,7 @@ use clap::{Args, Parser, Subcommand};
 use iceoryx2::prelude::*;
 use mrsim_proto::now_ns;
 use mrsim_transport::Namespace;
-use mrsim_transport::doorbell::Doorbell;
+use mrsim_transport::shm::doorbell::Doorbell;
 use mrsim_world::metrics::DurationHistogram;
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};

@@ -153,7 +153,7 @@ const HEAD_DISTANCE: f64 = 3.0;
 /// The generated scene for `agents` robots: two crossing streams in a walled
 /// arena large enough for both queues and their mirrored goals, realtime at
 /// `rate` Hz for `duration` s, one physics substep per tick.
-pub fn scene_toml(agents: usize, rate: f64, duration: f64, planner: &str, deadline: f64) -> String {
+fn scene_toml(agents: usize, rate: f64, duration: f64, planner: &str, deadline: f64) -> String {
     // Queue spacing of [generate] crossing: three robot radii.
     let queue = agents.div_ceil(2) as f64 * 3.0 * ROBOT_RADIUS;
     let half = (HEAD_DISTANCE + queue + 2.0).ceil();
@@ -213,7 +213,7 @@ fn median_p99(p: &Percentiles) -> MedianP99 {
 /// One row of bench.json from a run folder's metrics.json and usage.json
 /// (the bench's own fields, `cpus`, `rt`, `planner`, `run_dir`, left
 /// empty).
-pub fn row_from_run(
+fn row_from_run(
     agents: usize,
     transport: Transport,
     rate: f64,
@@ -322,7 +322,7 @@ pub fn prepare(plan: &BenchPlan) -> Result<PreparedBench, BenchError> {
     }
     let mut sched = plan.sched.clone();
     if sched.cpus.is_none() {
-        let n = crate::sched::online_cpus().min(2);
+        let n = mrsim_sys::sched::online_cpus().min(2);
         sched.cpus = Some(if n > 1 {
             format!("0-{}", n - 1)
         } else {
@@ -529,7 +529,7 @@ struct BaselineResult {
 }
 
 /// bench.csv: the rows flattened (nested percentiles as `field_p50` ...).
-pub fn csv(rows: &[Value]) -> String {
+fn csv(rows: &[Value]) -> String {
     let mut cols: Vec<String> = Vec::new();
     let flat: Vec<Vec<(String, String)>> = rows
         .iter()

@@ -7,7 +7,7 @@
 
 use crate::error::Invalid;
 
-pub use mrsim_sys::sched::{RT_PRIORITY, online_cpus, parse_cpus, set_affinity, set_fifo};
+use mrsim_sys::sched::{RT_PRIORITY, parse_cpus, set_affinity, set_fifo};
 
 /// How to schedule a run.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
@@ -55,26 +55,4 @@ pub fn apply(sched: &Sched) -> Result<Applied, Invalid> {
         }
     }
     Ok(applied)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn cpu_lists_with_numbers_and_ranges_parse_sorted_and_deduplicated() {
-        assert_eq!(parse_cpus("0"), Ok(vec![0]));
-        if online_cpus() >= 2 {
-            assert_eq!(parse_cpus("1,0-1"), Ok(vec![0, 1]));
-        }
-    }
-
-    #[test]
-    fn bad_cpu_lists_are_refused_with_the_entry_named() {
-        for bad in ["", "a", "1-0", "0,,1", "99999"] {
-            assert!(parse_cpus(bad).is_err(), "{bad}");
-        }
-        let e = parse_cpus("4096").unwrap_err();
-        assert!(e.contains("4096"), "{e}");
-    }
 }

@@ -64,7 +64,7 @@ impl Refusal for SweepError {
 }
 
 /// Splits `text` at commas outside brackets, braces and quotes.
-pub fn split_values(text: &str) -> Vec<String> {
+fn split_values(text: &str) -> Vec<String> {
     let mut out = Vec::new();
     let mut depth = 0i32;
     let mut quote: Option<char> = None;
@@ -90,7 +90,7 @@ pub fn split_values(text: &str) -> Vec<String> {
 }
 
 /// The varied keys and their values, parsed from the `--set` options.
-pub fn parse_axes(set: &[String]) -> Result<Vec<(String, Vec<String>)>, Invalid> {
+fn parse_axes(set: &[String]) -> Result<Vec<(String, Vec<String>)>, Invalid> {
     let mut axes: Vec<(String, Vec<String>)> = Vec::new();
     for s in set {
         let (k, v) = s
@@ -118,7 +118,7 @@ pub fn parse_axes(set: &[String]) -> Result<Vec<(String, Vec<String>)>, Invalid>
 }
 
 /// Every combination of the axes' values, first axis slowest.
-pub fn combinations(axes: &[(String, Vec<String>)]) -> Vec<Vec<String>> {
+fn combinations(axes: &[(String, Vec<String>)]) -> Vec<Vec<String>> {
     let mut out = vec![Vec::new()];
     for (_, values) in axes {
         out = out
@@ -138,7 +138,7 @@ pub fn combinations(axes: &[(String, Vec<String>)]) -> Vec<Vec<String>> {
 /// A folder-name-safe label of a combination: its index (which makes it
 /// unique), then `key=value` pairs (last part of each key, values cleaned
 /// and cut to 24 characters).
-pub fn label(index: usize, axes: &[(String, Vec<String>)], combo: &[String]) -> String {
+fn label(index: usize, axes: &[(String, Vec<String>)], combo: &[String]) -> String {
     let clean = |s: &str| {
         let mut out = String::new();
         for c in s.chars() {
@@ -219,7 +219,7 @@ fn file_error(e: mrsim_runfolder::FileError) -> String {
 
 /// Reads a run folder's metrics.json and scenario.json (with the run
 /// folder's schema and the scenario's own type).
-pub fn read_run(dir: &Path) -> Result<RunMetrics, String> {
+fn read_run(dir: &Path) -> Result<RunMetrics, String> {
     let m = mrsim_runfolder::read_metrics(dir).map_err(file_error)?;
     let sc: mrsim_scenario::Scenario =
         mrsim_runfolder::read_json(dir, mrsim_runfolder::SCENARIO_FILE).map_err(file_error)?;
@@ -263,7 +263,7 @@ pub fn read_run(dir: &Path) -> Result<RunMetrics, String> {
 
 /// The 0.975 quantile of Student's t with `df` degrees of freedom (exact
 /// to 3 decimals from a table up to 30, Cornish-Fisher expansion beyond).
-pub fn t975(df: usize) -> f64 {
+fn t975(df: usize) -> f64 {
     const TABLE: [f64; 30] = [
         12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160,
         2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056,

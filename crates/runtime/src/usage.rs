@@ -15,7 +15,8 @@ use std::time::Duration;
 
 pub use mrsim_sys::usage::{Scope, rusage};
 
-pub use mrsim_runfolder::usage::{AgentUsage, Usage};
+pub use mrsim_runfolder::usage::AgentUsage;
+use mrsim_runfolder::usage::Usage;
 
 /// Writes what an agent used as its usage file (read by [`read_agent`]).
 pub fn write_agent(path: &Path, usage: &AgentUsage) -> std::io::Result<()> {

@@ -163,7 +163,7 @@ fn wait_for_agents(metrics: &mrsim_world::metrics::RunMetrics, limit: Duration) 
         .values()
         .filter_map(|r| r.agent_pid)
         .collect();
-    while start.elapsed() < limit && pids.iter().any(|&p| mrsim_world::run::pid_alive(p)) {
+    while start.elapsed() < limit && pids.iter().any(|&p| mrsim_sys::process::pid_alive(p)) {
         std::thread::sleep(Duration::from_millis(20));
     }
 }

@@ -190,6 +190,23 @@ mod tests {
     }
 
     #[test]
+    fn cpu_lists_with_numbers_and_ranges_parse_sorted_and_deduplicated() {
+        assert_eq!(parse_cpus("0"), Ok(vec![0]));
+        if online_cpus() >= 2 {
+            assert_eq!(parse_cpus("1,0-1"), Ok(vec![0, 1]));
+        }
+    }
+
+    #[test]
+    fn bad_cpu_lists_are_refused_with_the_entry_named() {
+        for bad in ["", "a", "1-0", "0,,1", "99999"] {
+            assert!(parse_cpus(bad).is_err(), "{bad}");
+        }
+        let e = parse_cpus("4096").unwrap_err();
+        assert!(e.contains("4096"), "{e}");
+    }
+
+    #[test]
     fn the_world_ticks_one_fifo_level_below_its_agents_and_goes_back_after() {
         // Not under SCHED_FIFO: nothing moves.
         assert_eq!(fifo_priority(), None);

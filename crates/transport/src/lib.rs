@@ -18,7 +18,7 @@
 //!   ([`shm::ShmAgent`]), `shm::observer` ([`shm::ShmObserver`]), and what
 //!   they share: the run's services and nodes (`shm::service`), the watch
 //!   on the world process (`shm::watch`) and the futex page that rings
-//!   each tick ([`shm::doorbell`], also re-exported as [`doorbell`]).
+//!   each tick ([`shm::doorbell`]).
 //! - [`inproc`]: crossbeam channels between threads of one process, the
 //!   fast path for large headless runs and the lower bound for the IPC
 //!   cost. `inproc::world`, `inproc::agent`, and the pool's
@@ -65,7 +65,6 @@ pub mod shm;
 mod test_support;
 
 pub use namespace::{Namespace, NamespaceError};
-pub use shm::doorbell;
 
 /// What went wrong in a transport operation.
 #[derive(Debug, thiserror::Error)]
