@@ -177,21 +177,9 @@ mod tests {
     use super::*;
 
     #[test]
-    fn cpu_lists_take_numbers_and_ranges_and_refuse_the_rest() {
-        assert_eq!(parse_cpus("0"), Ok(vec![0]));
-        assert_eq!(parse_cpus("0,0"), Ok(vec![0]));
-        for bad in ["", "a", "1-0", "0,,1", "-1"] {
-            let e = parse_cpus(bad).expect_err(bad);
-            assert!(e.contains("--cpus"), "{bad}: {e}");
-        }
-        let too_many = format!("{}", online_cpus());
-        let e = parse_cpus(&too_many).expect_err("beyond the machine");
-        assert!(e.contains("does not exist"), "{e}");
-    }
-
-    #[test]
     fn cpu_lists_with_numbers_and_ranges_parse_sorted_and_deduplicated() {
         assert_eq!(parse_cpus("0"), Ok(vec![0]));
+        assert_eq!(parse_cpus("0,0"), Ok(vec![0]));
         if online_cpus() >= 2 {
             assert_eq!(parse_cpus("1,0-1"), Ok(vec![0, 1]));
         }
@@ -199,11 +187,15 @@ mod tests {
 
     #[test]
     fn bad_cpu_lists_are_refused_with_the_entry_named() {
-        for bad in ["", "a", "1-0", "0,,1", "99999"] {
-            assert!(parse_cpus(bad).is_err(), "{bad}");
+        for bad in ["", "a", "1-0", "0,,1", "-1", "99999"] {
+            let e = parse_cpus(bad).expect_err(bad);
+            assert!(e.contains("--cpus"), "{bad}: {e}");
         }
         let e = parse_cpus("4096").unwrap_err();
         assert!(e.contains("4096"), "{e}");
+        let beyond = format!("{}", online_cpus());
+        let e = parse_cpus(&beyond).expect_err("beyond the machine");
+        assert!(e.contains("does not exist"), "{e}");
     }
 
     #[test]

@@ -44,7 +44,7 @@ use serde_json::json;
 use std::time::{Duration, Instant};
 
 pub use crate::metrics::RunMetrics;
-pub use mrsim_sys::process::pid_alive;
+use mrsim_sys::process::pid_alive;
 use options::out_err;
 pub use options::{RunError, RunOptions, RunOutcome};
 
