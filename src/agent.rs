@@ -1,6 +1,6 @@
 //! `mrsim agent`: one robot's agent process.
 
-use crate::cli::AgentArgs;
+use crate::cli::{AgentArgs, LinkArg};
 use crate::exit::fail;
 use anyhow::Result;
 use mrsim_runtime::agent::{AgentRequest, Misbehave};
@@ -18,6 +18,7 @@ pub fn main(args: &AgentArgs) -> Result<i32> {
             protocol_version: args.protocol_version,
         },
         usage_out: args.usage_out.clone(),
+        zenoh: (args.transport == LinkArg::Zenoh).then(|| args.zenoh.options(args.connect.clone())),
     });
     if let (Some(e), Some(path)) = (&end.usage_error, &args.usage_out) {
         eprintln!(

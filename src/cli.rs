@@ -64,6 +64,38 @@ pub enum TransportArg {
     Shm,
     /// crossbeam channels, one thread per agent in one process.
     Inproc,
+    /// Zenoh over TCP, one process per agent (see --listen, --zenoh-config).
+    Zenoh,
+}
+
+/// The transport of a process started by hand (`world`, `agent`, `top`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ValueEnum)]
+pub enum LinkArg {
+    /// iceoryx2 shared memory: everything on this machine.
+    #[default]
+    Shm,
+    /// Zenoh over TCP (or TLS): the world listens, agents connect, from
+    /// this machine or others.
+    Zenoh,
+}
+
+/// Where a Zenoh world listens or its agents connect, and the config.
+#[derive(Debug, Clone, Default, Args)]
+pub struct ZenohArgs {
+    /// A Zenoh JSON5 config file (TLS, user/password auth, routers, lease);
+    /// --listen/--connect given as well override its endpoints.
+    #[arg(long, value_name = "FILE")]
+    pub zenoh_config: Option<PathBuf>,
+}
+
+impl ZenohArgs {
+    /// The runtime's Zenoh options with `endpoint`.
+    pub fn options(&self, endpoint: Option<String>) -> mrsim_transport::zenoh::ZenohOptions {
+        mrsim_transport::zenoh::ZenohOptions {
+            endpoint,
+            config_file: self.zenoh_config.clone(),
+        }
+    }
 }
 
 impl From<TransportArg> for Transport {
@@ -71,6 +103,7 @@ impl From<TransportArg> for Transport {
         match t {
             TransportArg::Shm => Transport::Shm,
             TransportArg::Inproc => Transport::Inproc,
+            TransportArg::Zenoh => Transport::Zenoh,
         }
     }
 }
@@ -112,10 +145,18 @@ pub struct RunArgs {
     /// command line); it rejoins and drives its robot from where it is.
     #[arg(long)]
     pub restart_agents: bool,
-    /// World and agents as processes over iceoryx2 (shm) or as threads
-    /// of one process over crossbeam channels (inproc).
+    /// World and agents as processes over iceoryx2 (shm), as threads
+    /// of one process over crossbeam channels (inproc), or as processes
+    /// over Zenoh on loopback (zenoh).
     #[arg(long, value_enum, default_value = "shm")]
     pub transport: TransportArg,
+    /// With --transport zenoh: where the world listens (default: a free
+    /// loopback port), e.g. tcp/127.0.0.1:7447.
+    #[arg(long, value_name = "ENDPOINT")]
+    pub listen: Option<String>,
+    /// With --transport zenoh: the config file.
+    #[command(flatten)]
+    pub zenoh: ZenohArgs,
     /// Scheduling: --cpus LIST, --rt.
     #[command(flatten)]
     pub sched: SchedArgs,
@@ -140,6 +181,16 @@ pub struct WorldArgs {
     /// Started by `mrsim run`: the launcher cleans up and prints.
     #[arg(long, hide = true)]
     pub launched: bool,
+    /// shm (this machine only) or zenoh (agents may be elsewhere).
+    #[arg(long, value_enum, default_value = "shm")]
+    pub transport: LinkArg,
+    /// With --transport zenoh: where to listen (default: loopback only,
+    /// tcp/127.0.0.1:7447; tcp/0.0.0.0:7447 for every interface).
+    #[arg(long, value_name = "ENDPOINT")]
+    pub listen: Option<String>,
+    /// With --transport zenoh: the config file.
+    #[command(flatten)]
+    pub zenoh: ZenohArgs,
 }
 
 /// `mrsim agent` options.
@@ -168,6 +219,16 @@ pub struct AgentArgs {
     /// Write CPU time and peak RSS here at the end (set by `mrsim run`).
     #[arg(long, hide = true)]
     pub usage_out: Option<PathBuf>,
+    /// shm (the world on this machine) or zenoh (the world at --connect).
+    #[arg(long, value_enum, default_value = "shm")]
+    pub transport: LinkArg,
+    /// With --transport zenoh: the world's address (default
+    /// tcp/127.0.0.1:7447).
+    #[arg(long, value_name = "ENDPOINT")]
+    pub connect: Option<String>,
+    /// With --transport zenoh: the config file.
+    #[command(flatten)]
+    pub zenoh: ZenohArgs,
 }
 
 /// `mrsim bench` options.
@@ -250,6 +311,16 @@ pub enum Command {
         /// Seconds to wait for the world.
         #[arg(long, default_value_t = 10.0)]
         timeout: f64,
+        /// shm (the world on this machine) or zenoh (the world at --connect).
+        #[arg(long, value_enum, default_value = "shm")]
+        transport: LinkArg,
+        /// With --transport zenoh: the world's address (default
+        /// tcp/127.0.0.1:7447).
+        #[arg(long, value_name = "ENDPOINT")]
+        connect: Option<String>,
+        /// With --transport zenoh: the config file.
+        #[command(flatten)]
+        zenoh: ZenohArgs,
     },
     /// Regenerate plot.svg, plot.png and replay.html of a run folder.
     Report {

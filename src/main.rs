@@ -11,7 +11,17 @@ fn main() {
         Command::Bench(args) => mrsim::bench::main(&args),
         Command::World(args) => mrsim::world::main(&args),
         Command::Agent(args) => mrsim::agent::main(&args),
-        Command::Top { run, timeout } => mrsim::top::run(&run, timeout),
+        Command::Top {
+            run,
+            timeout,
+            transport,
+            connect,
+            zenoh,
+        } => mrsim::top::run(
+            &run,
+            timeout,
+            (transport == mrsim::cli::LinkArg::Zenoh).then(|| zenoh.options(connect)),
+        ),
         Command::Report { dir } => mrsim::report::main(&dir),
         Command::Planners => mrsim::planners::main(),
         Command::Sweep(args) => mrsim::sweep::main(&args),

@@ -21,6 +21,7 @@ pub fn main(args: &RunArgs) -> Result<i32> {
             sched: (&args.sched).into(),
             render: !args.no_report,
             restart_agents: args.restart_agents,
+            zenoh: args.zenoh.options(args.listen.clone()),
         },
     )
     .map_err(fail)?;

@@ -16,6 +16,7 @@ use mrsim_proto::{
 };
 use mrsim_scenario::Scenario;
 use mrsim_transport::shm::ShmObserver;
+use mrsim_transport::zenoh::{ZenohObserver, ZenohOptions};
 use mrsim_transport::{Namespace, ObserverTransport, TransportError};
 use ratatui::Frame;
 use ratatui::layout::{Constraint, Direction, Layout, Rect};
@@ -485,9 +486,10 @@ pub fn wait_for_setup(obs: &mut dyn ObserverTransport, timeout: Duration) -> Res
     }
 }
 
-/// `mrsim top`: attaches to run `run_id` and shows the dashboard until `q`,
-/// Ctrl-C, or the end of the run. Returns the exit status.
-pub fn run(run_id: &str, timeout: f64) -> Result<i32> {
+/// `mrsim top`: attaches to run `run_id` (over Zenoh with `zenoh`) and
+/// shows the dashboard until `q`, Ctrl-C, or the end of the run. Returns
+/// the exit status.
+pub fn run(run_id: &str, timeout: f64, zenoh: Option<ZenohOptions>) -> Result<i32> {
     let ns = Namespace::new(run_id).map_err(|e| crate::exit::invalid(e.to_string()))?;
     if !std::io::stdout().is_terminal() {
         return Err(crate::exit::invalid(
@@ -496,17 +498,22 @@ pub fn run(run_id: &str, timeout: f64) -> Result<i32> {
     }
     let timeout = Duration::from_secs_f64(timeout.max(0.0));
     let node = format!("mrsim-top-{}", std::process::id());
-    let mut obs = ShmObserver::connect(&ns, &node, true, timeout).map_err(|e| {
+    let obs: Result<Box<dyn ObserverTransport>, _> = match &zenoh {
+        None => ShmObserver::connect(&ns, &node, true, timeout).map(|o| Box::new(o) as _),
+        Some(z) => ZenohObserver::connect(&ns, z, true, timeout).map(|o| Box::new(o) as _),
+    };
+    let mut obs = obs.map_err(|e| {
         anyhow!("no world is running with run id `{run_id}` (start one with `mrsim world --run {run_id}` or `mrsim run --run {run_id}`): {e}")
     })?;
-    let mut model = wait_for_setup(&mut obs, timeout).with_context(|| format!("run `{run_id}`"))?;
+    let mut model =
+        wait_for_setup(obs.as_mut(), timeout).with_context(|| format!("run `{run_id}`"))?;
 
     mrsim_sys::signal::catch_termination();
     let mut terminal = ratatui::try_init().context("cannot take over the terminal")?;
     let guard = TerminalGuard;
     use ratatui::crossterm::event::{self, Event, KeyCode, KeyEventKind, KeyModifiers};
     let end = loop {
-        model.poll(&mut obs)?;
+        model.poll(obs.as_mut())?;
         terminal
             .draw(|f| draw(f, &model))
             .context("cannot draw on the terminal")?;

@@ -3,7 +3,8 @@
 use crate::error::{Invalid, Refusal};
 use crate::usage::{Metered, Scope};
 use mrsim_transport::shm::ShmAgent;
-use mrsim_transport::{Namespace, TransportError};
+use mrsim_transport::zenoh::{ZenohAgent, ZenohOptions};
+use mrsim_transport::{AgentTransport, Namespace, TransportError};
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -32,6 +33,8 @@ pub struct AgentRequest {
     /// Write what the agent used (CPU while the run ticked, peak RSS) here
     /// at the end.
     pub usage_out: Option<PathBuf>,
+    /// Over Zenoh (where the world is, the config file) instead of iceoryx2.
+    pub zenoh: Option<ZenohOptions>,
 }
 
 /// Why an agent failed.
@@ -93,7 +96,11 @@ pub fn run(req: &AgentRequest) -> AgentEnd {
         Err(e) => return fail(Invalid(e.to_string()).into()),
     };
     let node_name = format!("mrsim-agent-{}", req.robot);
-    let mut link = match ShmAgent::connect(&ns, &node_name, req.timeout) {
+    let link: Result<Box<dyn AgentTransport>, _> = match &req.zenoh {
+        None => ShmAgent::connect(&ns, &node_name, req.timeout).map(|a| Box::new(a) as _),
+        Some(z) => ZenohAgent::connect(&ns, z, req.timeout).map(|a| Box::new(a) as _),
+    };
+    let mut link = match link {
         Ok(l) => l,
         Err(source) => {
             return fail(AgentError::Connect {
@@ -110,7 +117,7 @@ pub fn run(req: &AgentRequest) -> AgentEnd {
     if let Some(v) = req.misbehave.protocol_version {
         opts.protocol_version = v;
     }
-    let mut metered = Metered::new(&mut link, Scope::Process);
+    let mut metered = Metered::new(link.as_mut(), Scope::Process);
     let result = mrsim_agents::run(&mut metered, &opts);
     let usage_error = req
         .usage_out

@@ -228,7 +228,7 @@ fn row_from_run(
     let agents_cpu = usage.agents_cpu_s;
     // In-process, the world's process holds the agent threads too.
     let world_cpu = match transport {
-        Transport::Shm => t.process_cpu_s,
+        Transport::Shm | Transport::Zenoh => t.process_cpu_s,
         Transport::Inproc => (t.process_cpu_s - agents_cpu).max(0.0),
     };
     let pct_of_wall = |s: f64| if wall > 0.0 { 100.0 * s / wall } else { 0.0 };
@@ -306,7 +306,7 @@ pub fn prepare(plan: &BenchPlan) -> Result<PreparedBench, BenchError> {
         return Err(Invalid::new("--rate and --duration must be positive").into());
     }
     if plan.transports.is_empty() {
-        return Err(Invalid::new("--transport: give shm, inproc or both").into());
+        return Err(Invalid::new("--transport: give one or more of shm, inproc, zenoh").into());
     }
     let first = scene_toml(
         plan.agents[0],

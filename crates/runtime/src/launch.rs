@@ -16,6 +16,7 @@ use crate::sched::{Applied, Sched};
 use crate::usage::AgentUsage;
 use crate::validate::Validated;
 use mrsim_transport::Namespace;
+use mrsim_transport::zenoh::ZenohOptions;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::sync::Arc;
@@ -33,6 +34,9 @@ pub enum Transport {
     Shm,
     /// crossbeam channels, the agents in a pool of threads of one process.
     Inproc,
+    /// Zenoh over TCP, one process per agent (here on loopback; by hand,
+    /// agents on other machines).
+    Zenoh,
 }
 
 impl Transport {
@@ -41,6 +45,7 @@ impl Transport {
         match self {
             Transport::Shm => "shm",
             Transport::Inproc => "inproc",
+            Transport::Zenoh => "zenoh",
         }
     }
 }
@@ -61,6 +66,9 @@ pub struct RunRequest {
     /// Restart an agent process that dies while the world runs (at most
     /// [`MAX_RESTARTS`] times per robot).
     pub restart_agents: bool,
+    /// With [`Transport::Zenoh`]: where the world listens (`None`: a free
+    /// loopback port) and the Zenoh config file, if any.
+    pub zenoh: ZenohOptions,
 }
 
 /// What happens while a run goes on, for a caller that shows it.
@@ -212,7 +220,7 @@ impl Prepared {
     pub fn start(self, on_event: &mut dyn FnMut(Event<'_>)) -> Result<Outcome, RunError> {
         match self.request.transport {
             Transport::Inproc => self.run_inproc(),
-            Transport::Shm => self.run_processes(on_event),
+            Transport::Shm | Transport::Zenoh => self.run_processes(on_event),
         }
     }
 
@@ -273,6 +281,13 @@ impl Prepared {
         // join: the world and each agent wait a minute plus a second per
         // robot.
         let join_secs = format!("{}", 60.0 + scenario.robots.len() as f64);
+        let transport = self.request.transport;
+        // Over Zenoh the world listens where asked (a free loopback port by
+        // default) and the agents, on this machine, connect there.
+        let (world_net, agent_net) = match transport {
+            Transport::Zenoh => zenoh_args(&self.request.zenoh)?,
+            _ => (Vec::new(), Vec::new()),
+        };
         let mut world = Command::new(&exe)
             .arg("world")
             .args(source.to_args())
@@ -285,6 +300,7 @@ impl Prepared {
                 "--out",
             ])
             .arg(dir)
+            .args(&world_net)
             .stdin(Stdio::null())
             .spawn()
             .map_err(RunError::SpawnWorld)?;
@@ -293,6 +309,7 @@ impl Prepared {
                 .args(["agent", "--robot", robot, "--run", run_id, "--usage-out"])
                 .arg(usage_file(dir, robot))
                 .args(["--timeout", &join_secs])
+                .args(&agent_net)
                 .stdin(Stdio::null())
                 .spawn()
                 .map_err(|source| RunError::SpawnAgent {
@@ -370,7 +387,7 @@ impl Prepared {
             dir,
             world_failure,
             agent_failures,
-            usage: Some((Transport::Shm.name(), &usage)),
+            usage: Some((transport.name(), &usage)),
             render: self.request.render,
         })?)
     }
@@ -413,4 +430,43 @@ fn reap_agents(agents: &mut [(&str, Child)], world_status: ExitStatus) -> Vec<Ag
 /// Where the agent of `robot` writes what it used.
 fn usage_file(dir: &Path, robot: &str) -> PathBuf {
     dir.join(mrsim_runfolder::agent_usage_file(robot))
+}
+
+/// The world's and the agents' extra arguments of a Zenoh run started
+/// here: `--transport zenoh`, the world's `--listen` (a free loopback port
+/// unless given) and the agents' `--connect` to the same place (loopback
+/// when the world listens on every address), and the config file.
+fn zenoh_args(opts: &ZenohOptions) -> Result<(Vec<String>, Vec<String>), RunError> {
+    let listen = match &opts.endpoint {
+        Some(e) => e.clone(),
+        None => {
+            let port = std::net::TcpListener::bind("127.0.0.1:0")
+                .and_then(|l| l.local_addr())
+                .map_err(|e| Invalid(format!("cannot find a free loopback port for zenoh: {e}")))?
+                .port();
+            format!("tcp/127.0.0.1:{port}")
+        }
+    };
+    let connect = listen
+        .replace("0.0.0.0", "127.0.0.1")
+        .replace("[::]", "[::1]");
+    let mut world = vec![
+        "--transport".into(),
+        "zenoh".into(),
+        "--listen".into(),
+        listen,
+    ];
+    let mut agent = vec![
+        "--transport".into(),
+        "zenoh".into(),
+        "--connect".into(),
+        connect,
+    ];
+    if let Some(f) = &opts.config_file {
+        for side in [&mut world, &mut agent] {
+            side.push("--zenoh-config".into());
+            side.push(f.to_string_lossy().into_owned());
+        }
+    }
+    Ok((world, agent))
 }

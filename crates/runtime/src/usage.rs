@@ -122,14 +122,14 @@ impl AgentTransport for Metered<'_> {
 }
 
 /// Writes `usage.json` into `dir`: what the agents used while the run
-/// ticked, over `transport` (`shm` or `inproc`).
+/// ticked, over `transport` (`shm`, `zenoh` or `inproc`).
 pub fn write_report(dir: &Path, transport: &str, usage: &[AgentUsage]) -> std::io::Result<()> {
     let report = Usage {
         transport: transport.to_string(),
         agents_reported: usage.len(),
         agents_cpu_s: usage.iter().map(|u| u.cpu_s).sum::<f64>(),
         // In-process agents share the world's process: no RSS of their own.
-        agent_maxrss_kb: (transport == "shm")
+        agent_maxrss_kb: (transport != "inproc")
             .then(|| usage.iter().map(|u| u.maxrss_kb).max())
             .flatten(),
     };

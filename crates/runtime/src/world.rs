@@ -6,7 +6,8 @@ use crate::finish::{Ending, FinishError, Outcome};
 use crate::validate::Validated;
 use mrsim_scenario::Scenario;
 use mrsim_transport::shm::ShmWorld;
-use mrsim_transport::{Capacity, Namespace, TransportError};
+use mrsim_transport::zenoh::{ZenohOptions, ZenohWorld};
+use mrsim_transport::{Capacity, Namespace, TransportError, WorldTransport};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
@@ -23,6 +24,8 @@ pub struct WorldRequest {
     /// Started by the launcher, which claims the namespace and finishes the
     /// run; a world started by hand does both itself.
     pub launched: bool,
+    /// Over Zenoh (where to listen, the config file) instead of iceoryx2.
+    pub zenoh: Option<ZenohOptions>,
 }
 
 /// Why a world failed.
@@ -68,7 +71,7 @@ pub struct WorldOutcome {
     pub finished: Option<Outcome>,
 }
 
-/// Runs a world over iceoryx2 until its end. A world started by hand calls
+/// Runs a world over iceoryx2 (or Zenoh) until its end. A world started by hand calls
 /// `on_open` with its run id and scenario once its channels are open (the
 /// moment to tell the user how to start the agents).
 pub fn serve(
@@ -81,7 +84,7 @@ pub fn serve(
     let dir = std::fs::canonicalize(&dir).unwrap_or(dir);
     let run_id = req.run_id.as_str();
     let ns = Namespace::new(run_id).map_err(|e| Invalid(e.to_string()))?;
-    if !req.launched {
+    if !req.launched && req.zenoh.is_none() {
         // A world started by hand owns its namespace: clear what a crashed
         // earlier world of the same run id left behind.
         crate::launch::claim_namespace(&ns)?;
@@ -93,14 +96,13 @@ pub fn serve(
     .map(|v| v.len())
     .unwrap_or(1 << 16);
     let bodies = scenario.robots.len() + scenario.obstacles.len();
-    let mut link = ShmWorld::create(
-        &ns,
-        Capacity {
-            robots: scenario.robots.len(),
-        },
-        bodies,
-        setup_len,
-    )
+    let cap = Capacity {
+        robots: scenario.robots.len(),
+    };
+    let mut link: Box<dyn WorldTransport> = match &req.zenoh {
+        None => ShmWorld::create(&ns, cap, bodies, setup_len).map(|w| Box::new(w) as _),
+        Some(z) => ZenohWorld::create(&ns, z, cap, bodies).map(|w| Box::new(w) as _),
+    }
     .map_err(|source| WorldError::Create {
         run_id: run_id.to_string(),
         source,
@@ -111,11 +113,11 @@ pub fn serve(
     let opts = mrsim_world::RunOptions {
         out_dir: dir.clone(),
         run_id: run_id.to_string(),
-        transport: "shm".to_string(),
+        transport: if req.zenoh.is_some() { "zenoh" } else { "shm" }.to_string(),
         start_timeout: req.start_timeout,
         verbose: !req.launched || std::env::var_os("MRSIM_VERBOSE").is_some(),
     };
-    let outcome = mrsim_world::run(world, &mut link, opts);
+    let outcome = mrsim_world::run(world, link.as_mut(), opts);
     drop(link);
     let outcome = match outcome {
         Ok(outcome) => outcome,

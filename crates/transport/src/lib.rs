@@ -23,6 +23,9 @@
 //!   fast path for large headless runs and the lower bound for the IPC
 //!   cost. `inproc::world`, `inproc::agent`, and the pool's
 //!   `inproc::worker`.
+//! - [`zenoh`]: Zenoh sessions over TCP (or TLS), for agents on other
+//!   machines. `zenoh::world`, `zenoh::agent`, `zenoh::observer`, the
+//!   run's keys (`zenoh::keys`) and the bytes on the wire (`zenoh::wire`).
 //!
 //! # The protocol
 //!
@@ -63,6 +66,7 @@ pub mod namespace;
 pub mod shm;
 #[cfg(test)]
 mod test_support;
+pub mod zenoh;
 
 pub use namespace::{Namespace, NamespaceError};
 
@@ -194,6 +198,14 @@ pub trait WorldTransport {
         header: &StatsHeader,
         robots: &[RobotStats],
     ) -> Result<(), TransportError>;
+    /// Whether the agent process `pid` that joined is still there, if the
+    /// transport knows (over the network: its liveliness token); `None`
+    /// (the default) lets the world ask the process table, which is right
+    /// only when every agent runs on the world's host.
+    fn agent_alive(&self, pid: u32) -> Option<bool> {
+        let _ = pid;
+        None
+    }
 }
 
 /// An agent's side of the channels.

@@ -168,7 +168,9 @@ impl<'a> Loop<'a> {
     }
 
     fn handle_join(&mut self, req: JoinRequest) -> Result<(), TransportError> {
-        let (reply, events) = self.admission.join(&req, now_ns(), pid_alive);
+        let link = &*self.link;
+        let alive = |p| link.agent_alive(p).unwrap_or_else(|| pid_alive(p));
+        let (reply, events) = self.admission.join(&req, now_ns(), alive);
         for e in events {
             let lost = matches!(e, Event::Lost { .. });
             self.apply(e);
@@ -220,11 +222,13 @@ impl<'a> Loop<'a> {
         // every second also whether it is a zombie its parent has not
         // reaped yet (a /proc read: too dear to do every time).
         self.pid_checks += 1;
-        let alive = if self.pid_checks.is_multiple_of(10) {
+        let local = if self.pid_checks.is_multiple_of(10) {
             pid_alive
         } else {
             mrsim_sys::process::pid_exists
         };
+        let link = &*self.link;
+        let alive = |p| link.agent_alive(p).unwrap_or_else(|| local(p));
         // An agent in the world's own process (the in-process transport)
         // cannot die on its own: its thread's failure comes through the
         // transport, and reading /proc/self for each would walk every

@@ -1,0 +1,224 @@
+//! The Zenoh transport: the world and its agents on different machines.
+//!
+//! The world opens a Zenoh session in peer mode and listens (by default on
+//! loopback only, `tcp/127.0.0.1:7447`); agents and observers open client
+//! sessions that connect to it (or to the routers of a user's config). All
+//! keys are under the run id ([`keys`]):
+//!
+//! | key | what | from -> to |
+//! | --- | --- | --- |
+//! | `mrsim/<run>/setup` | queryable: the resolved scenario as JSON | world -> agents, observers |
+//! | `mrsim/<run>/snapshot` | `SnapshotHeader` + `[BodyState]`, one per tick | world -> agents |
+//! | `mrsim/<run>/join` | `JoinRequest` | agents -> world |
+//! | `mrsim/<run>/join-reply` | `JoinReply` (each agent keeps its nonce's) | world -> agents |
+//! | `mrsim/<run>/command` | `CommandMsg` (and ready messages) | agents -> world |
+//! | `mrsim/<run>/stats` | `StatsHeader` + `[RobotStats]` | world -> observers |
+//! | `mrsim/<run>/alive/world` | liveliness token of the world | |
+//! | `mrsim/<run>/alive/agent/<pid>` | liveliness token of an agent process | |
+//!
+//! The protocol is the one of shared memory (join with a token, version
+//! check, refusals with a reason, commands only for the current tick),
+//! judged by the same world loop; only the bytes differ ([`wire`]: fields in
+//! order, little endian, length checked before anything is read).
+//!
+//! **Liveness** comes from Zenoh's liveliness tokens, not process ids: the
+//! world's is what an agent watches, an agent's is what the world asks
+//! about in [`WorldTransport::agent_alive`](crate::WorldTransport::agent_alive).
+//! A token disappears when its process ends or when its session's lease
+//! runs out (a vanished host, a cut link).
+//!
+//! **Time**: every latency the world records is measured on the world's
+//! own clock (publish to receipt, the receipt stamped when the message is
+//! taken off the network); two hosts' clocks are never compared. An
+//! agent's `woke_ns`/`sent_ns` are its own clock's and are meaningful
+//! only when it runs on the world's host.
+//!
+//! All calls are blocking (Zenoh's `Wait`); Zenoh runs its own I/O threads
+//! and hands received messages to callbacks that fill a small inbox per
+//! side ([`inbox`]), which the world's and agents' loops drain.
+//!
+//! One module per side: `world` ([`ZenohWorld`]), `agent`
+//! ([`ZenohAgent`]), `observer` ([`ZenohObserver`]); they share `keys`,
+//! `wire`, `inbox` and the session configuration here.
+
+mod agent;
+mod inbox;
+pub mod keys;
+mod observer;
+pub mod wire;
+mod world;
+
+pub use agent::ZenohAgent;
+pub use observer::ZenohObserver;
+pub use world::ZenohWorld;
+
+use crate::TransportError;
+use std::path::PathBuf;
+
+/// Where the world listens unless told otherwise: loopback only.
+pub const DEFAULT_ENDPOINT: &str = "tcp/127.0.0.1:7447";
+
+/// How to reach the other side.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct ZenohOptions {
+    /// The world: the endpoint to listen on; an agent or observer: the
+    /// endpoint to connect to (`tcp/HOST:PORT`, or `tls/HOST:PORT` with a
+    /// TLS config). `None`: the config file's endpoints if one is given,
+    /// else [`DEFAULT_ENDPOINT`].
+    pub endpoint: Option<String>,
+    /// A Zenoh JSON5 config (TLS, user/password auth, routers, lease).
+    pub config_file: Option<PathBuf>,
+}
+
+/// The side a session is opened for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Role {
+    World,
+    Client,
+}
+
+/// How long a session may be silent before the other side counts it gone
+/// (when no config file says otherwise): a vanished agent's token goes
+/// this long after its last message.
+const LEASE_MS: u64 = 3000;
+
+/// Builds the session config of `role` from `opts`.
+fn config(opts: &ZenohOptions, role: Role) -> Result<zenoh::Config, TransportError> {
+    let err = |detail: String| TransportError::Setup {
+        what: "zenoh config".to_string(),
+        detail,
+    };
+    let mut cfg = match &opts.config_file {
+        Some(path) => {
+            zenoh::Config::from_file(path).map_err(|e| err(format!("{}: {e}", path.display())))?
+        }
+        None => zenoh::Config::default(),
+    };
+    let set = |cfg: &mut zenoh::Config, key: &str, value: &str| {
+        cfg.insert_json5(key, value)
+            .map_err(|e| err(format!("{key} = {value}: {e}")))
+    };
+    let mode = match role {
+        Role::World => r#""peer""#,
+        Role::Client => r#""client""#,
+    };
+    set(&mut cfg, "mode", mode)?;
+    // A run is found by its address, never by multicast: two runs on one
+    // network, or a lab's other Zenoh programs, must not meet by chance.
+    set(&mut cfg, "scouting/multicast/enabled", "false")?;
+    if opts.config_file.is_none() {
+        set(&mut cfg, "transport/link/tx/lease", &LEASE_MS.to_string())?;
+    }
+    let endpoint = match (&opts.endpoint, &opts.config_file) {
+        (Some(e), _) => Some(e.clone()),
+        (None, None) => Some(DEFAULT_ENDPOINT.to_string()),
+        (None, Some(_)) => None,
+    };
+    if let Some(e) = endpoint {
+        let list = serde_json_list(&e);
+        match role {
+            Role::World => set(&mut cfg, "listen/endpoints", &list)?,
+            Role::Client => set(&mut cfg, "connect/endpoints", &list)?,
+        }
+    }
+    if role == Role::World {
+        // The world is nobody's client: no connecting out unless a config
+        // file asks for routers.
+        if opts.config_file.is_none() {
+            set(&mut cfg, "connect/endpoints", "[]")?;
+        }
+    }
+    Ok(cfg)
+}
+
+/// `["ENDPOINT"]` with the endpoint's quotes and backslashes escaped.
+fn serde_json_list(endpoint: &str) -> String {
+    let escaped: String = endpoint
+        .chars()
+        .flat_map(|c| match c {
+            '"' | '\\' => vec!['\\', c],
+            c => vec![c],
+        })
+        .collect();
+    format!(r#"["{escaped}"]"#)
+}
+
+/// Opens a session of `role`.
+fn open(opts: &ZenohOptions, role: Role) -> Result<zenoh::Session, TransportError> {
+    use zenoh::Wait;
+    let cfg = config(opts, role)?;
+    zenoh::open(cfg).wait().map_err(|e| TransportError::Setup {
+        what: match role {
+            Role::World => format!(
+                "zenoh session listening on {}",
+                opts.endpoint.as_deref().unwrap_or(DEFAULT_ENDPOINT)
+            ),
+            Role::Client => format!(
+                "zenoh session to {}",
+                opts.endpoint.as_deref().unwrap_or(DEFAULT_ENDPOINT)
+            ),
+        },
+        detail: e.to_string(),
+    })
+}
+
+/// A declaration failed.
+fn declare_err(what: &str, e: impl std::fmt::Display) -> TransportError {
+    TransportError::Setup {
+        what: format!("zenoh {what}"),
+        detail: e.to_string(),
+    }
+}
+
+/// A send failed.
+fn send_err(what: &'static str, e: impl std::fmt::Display) -> TransportError {
+    TransportError::Send {
+        what,
+        detail: e.to_string(),
+    }
+}
+
+/// True once SIGINT or SIGTERM came (as the shared-memory sides ask).
+fn terminated(seen: &std::cell::Cell<bool>) -> bool {
+    if !seen.get() && iceoryx2_bb_posix::signal::SignalHandler::termination_requested() {
+        seen.set(true);
+    }
+    seen.get()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_world_listens_on_loopback_unless_told() {
+        let cfg = config(&ZenohOptions::default(), Role::World).unwrap();
+        let listen = cfg.get_json("listen/endpoints").unwrap();
+        assert!(listen.contains("127.0.0.1:7447"), "{listen}");
+    }
+
+    #[test]
+    fn an_agent_connects_where_it_is_told_as_a_client() {
+        let opts = ZenohOptions {
+            endpoint: Some("tcp/10.0.0.2:9000".to_string()),
+            config_file: None,
+        };
+        let cfg = config(&opts, Role::Client).unwrap();
+        assert!(
+            cfg.get_json("connect/endpoints")
+                .unwrap()
+                .contains("10.0.0.2:9000")
+        );
+        assert!(cfg.get_json("mode").unwrap().contains("client"));
+    }
+
+    #[test]
+    fn a_missing_config_file_is_an_error_naming_it() {
+        let opts = ZenohOptions {
+            endpoint: None,
+            config_file: Some("/nonexistent/zenoh.json5".into()),
+        };
+        let e = config(&opts, Role::World).unwrap_err().to_string();
+        assert!(e.contains("/nonexistent/zenoh.json5"), "{e}");
+    }
+}

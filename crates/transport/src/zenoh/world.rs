@@ -1,0 +1,263 @@
+//! The world's side over Zenoh ([`ZenohWorld`]): a peer session that
+//! listens, answers the setup query, publishes snapshots, join replies
+//! and statistics, and takes in commands and join requests through its
+//! inbox.
+
+use super::inbox::{WorldInbox, lock};
+use super::keys::Keys;
+use super::wire::{self, encode_slice};
+use super::{Role, ZenohOptions, declare_err, open, send_err, terminated};
+use crate::{Capacity, Namespace, TransportError, WorldTransport};
+use mrsim_proto::{
+    BodyState, CommandMsg, JoinReply, JoinRequest, RobotStats, SnapshotHeader, StatsHeader,
+};
+use std::sync::Arc;
+use std::time::Duration;
+use zenoh::Wait;
+use zenoh::liveliness::LivelinessToken;
+use zenoh::pubsub::{Publisher, Subscriber};
+use zenoh::qos::{CongestionControl, Priority};
+use zenoh::query::Queryable;
+use zenoh::sample::SampleKind;
+
+/// The world's side over Zenoh.
+pub struct ZenohWorld {
+    session: zenoh::Session,
+    keys: Keys,
+    inbox: Arc<WorldInbox>,
+    snap_pub: Publisher<'static>,
+    reply_pub: Publisher<'static>,
+    stats_pub: Publisher<'static>,
+    setup_queryable: Option<Queryable<()>>,
+    _cmd_sub: Subscriber<()>,
+    _join_sub: Subscriber<()>,
+    _agents_sub: Subscriber<()>,
+    _token: LivelinessToken,
+    buf: Vec<u8>,
+    max_bodies: usize,
+    max_robots: usize,
+    terminated: std::cell::Cell<bool>,
+    /// Refused and dropped messages already reported.
+    reported: (u64, u64),
+}
+
+impl ZenohWorld {
+    /// Opens the world's session (listening as `opts` says) and declares
+    /// everything of run `ns`. Fails if the address is taken.
+    pub fn create(
+        ns: &Namespace,
+        opts: &ZenohOptions,
+        cap: Capacity,
+        max_bodies: usize,
+    ) -> Result<Self, TransportError> {
+        let session = open(opts, Role::World)?;
+        let keys = Keys::new(ns);
+        // Room for every agent's command of a few ticks, then a flood is
+        // dropped rather than kept.
+        let inbox = Arc::new(WorldInbox::new(cap.agents() * 8 + 256));
+
+        let i = inbox.clone();
+        let cmd_sub = session
+            .declare_subscriber(keys.command.clone())
+            .callback(move |s| i.command(&s.payload().to_bytes()))
+            .wait()
+            .map_err(|e| declare_err("command subscriber", e))?;
+        let i = inbox.clone();
+        let join_sub = session
+            .declare_subscriber(keys.join.clone())
+            .callback(move |s| i.join(&s.payload().to_bytes()))
+            .wait()
+            .map_err(|e| declare_err("join subscriber", e))?;
+        let (i, k) = (inbox.clone(), keys.clone());
+        let agents_sub = session
+            .liveliness()
+            .declare_subscriber(format!("{}/*", keys.agent_alive))
+            .history(true)
+            .callback(move |s| {
+                if let Some(pid) = k.agent_pid(s.key_expr().as_str()) {
+                    i.token(pid, s.kind() == SampleKind::Put);
+                }
+            })
+            .wait()
+            .map_err(|e| declare_err("agents' liveliness subscriber", e))?;
+        let publisher = |key: &str, cc: CongestionControl, what: &str| {
+            session
+                .declare_publisher(key.to_string())
+                .congestion_control(cc)
+                .priority(Priority::RealTime)
+                .express(true)
+                .wait()
+                .map_err(|e| declare_err(what, e))
+        };
+        // Snapshots and replies wait for a full send queue rather than be
+        // lost (lockstep would stall on a lost snapshot); statistics are
+        // dropped instead (observers need only the newest).
+        let snap_pub = publisher(
+            &keys.snapshot,
+            CongestionControl::Block,
+            "snapshot publisher",
+        )?;
+        let reply_pub = publisher(
+            &keys.join_reply,
+            CongestionControl::Block,
+            "reply publisher",
+        )?;
+        let stats_pub = publisher(&keys.stats, CongestionControl::Drop, "stats publisher")?;
+        let token = session
+            .liveliness()
+            .declare_token(keys.world_alive.clone())
+            .wait()
+            .map_err(|e| declare_err("world liveliness token", e))?;
+        Ok(Self {
+            session,
+            keys,
+            inbox,
+            snap_pub,
+            reply_pub,
+            stats_pub,
+            setup_queryable: None,
+            _cmd_sub: cmd_sub,
+            _join_sub: join_sub,
+            _agents_sub: agents_sub,
+            _token: token,
+            buf: Vec::new(),
+            max_bodies,
+            max_robots: cap.robots,
+            terminated: std::cell::Cell::new(false),
+            reported: (0, 0),
+        })
+    }
+
+    /// Messages refused (did not decode) and dropped (inbox full) so far.
+    pub fn refused_and_dropped(&self) -> (u64, u64) {
+        let s = lock(&self.inbox.state);
+        (s.refused, s.dropped)
+    }
+
+    /// Says on stderr when more bad or excess messages came since the last
+    /// report (at most a line per call, called with each drain).
+    fn report_refusals(&mut self) {
+        let (refused, dropped) = self.refused_and_dropped();
+        if (refused, dropped) != self.reported {
+            eprintln!(
+                "world: zenoh: refused {refused} malformed message(s), dropped {dropped} over the inbox limit (so far)"
+            );
+            self.reported = (refused, dropped);
+        }
+    }
+}
+
+impl WorldTransport for ZenohWorld {
+    fn publish_setup(&mut self, setup: &[u8]) -> Result<(), TransportError> {
+        let bytes = zenoh::bytes::ZBytes::from(setup.to_vec());
+        let key = self.keys.setup.clone();
+        let q = self
+            .session
+            .declare_queryable(self.keys.setup.clone())
+            .callback(move |query| {
+                let _ = query.reply(key.clone(), bytes.clone()).wait();
+            })
+            .wait()
+            .map_err(|e| declare_err("setup queryable", e))?;
+        self.setup_queryable = Some(q);
+        Ok(())
+    }
+
+    fn publish_snapshot(
+        &mut self,
+        header: &SnapshotHeader,
+        bodies: &[BodyState],
+    ) -> Result<(), TransportError> {
+        let n = bodies.len().min(self.max_bodies);
+        encode_slice(header, &bodies[..n], &mut self.buf);
+        self.snap_pub
+            .put(self.buf.clone())
+            .wait()
+            .map_err(|e| send_err("snapshot", e))
+    }
+
+    fn wait(&mut self, timeout: Duration) -> Result<(), TransportError> {
+        let g = lock(&self.inbox.state);
+        drop(self.inbox.waker.wait(g, |s| &mut s.woken, timeout));
+        Ok(())
+    }
+
+    fn drain_commands(&mut self, f: &mut dyn FnMut(CommandMsg, u64)) -> Result<(), TransportError> {
+        let taken = std::mem::take(&mut lock(&self.inbox.state).commands);
+        for (c, at) in &taken {
+            f(*c, *at);
+        }
+        // The vector goes back (emptied) so that the callbacks do not
+        // allocate each tick.
+        let mut s = lock(&self.inbox.state);
+        if s.commands.is_empty() {
+            let mut v = taken;
+            v.clear();
+            s.commands = v;
+        }
+        drop(s);
+        self.report_refusals();
+        Ok(())
+    }
+
+    fn drain_joins(&mut self, f: &mut dyn FnMut(JoinRequest)) -> Result<(), TransportError> {
+        let taken = std::mem::take(&mut lock(&self.inbox.state).joins);
+        for j in taken {
+            f(j);
+        }
+        Ok(())
+    }
+
+    fn reply_join(&mut self, reply: &JoinReply) -> Result<(), TransportError> {
+        self.reply_pub
+            .put(wire::encode(reply))
+            .wait()
+            .map_err(|e| send_err("join reply", e))
+    }
+
+    fn termination_requested(&self) -> bool {
+        terminated(&self.terminated)
+    }
+
+    fn expect_answers(&mut self, tick: u64, count: usize) {
+        self.inbox.expect(tick, count);
+    }
+
+    fn joins_answered(&mut self) -> Result<(), TransportError> {
+        // Each reply wakes its agent when it arrives.
+        Ok(())
+    }
+
+    fn cleanup_dead(&mut self) {
+        // Nothing is left behind: a dead agent's session and token go with
+        // its connection.
+    }
+
+    fn prepare_ticks(&mut self) -> Result<bool, TransportError> {
+        // Routes are set up when subscribers are declared: nothing to take
+        // up before tick 0.
+        Ok(false)
+    }
+
+    fn publish_stats(
+        &mut self,
+        header: &StatsHeader,
+        robots: &[RobotStats],
+    ) -> Result<(), TransportError> {
+        let n = robots.len().min(self.max_robots);
+        let header = StatsHeader {
+            robot_count: n as u32,
+            ..*header
+        };
+        let mut buf = Vec::new();
+        encode_slice(&header, &robots[..n], &mut buf);
+        self.stats_pub
+            .put(buf)
+            .wait()
+            .map_err(|e| send_err("stats", e))
+    }
+
+    fn agent_alive(&self, pid: u32) -> Option<bool> {
+        Some(self.inbox.alive(pid))
+    }
+}
