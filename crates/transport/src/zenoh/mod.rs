@@ -45,6 +45,8 @@ mod agent;
 mod inbox;
 pub mod keys;
 mod observer;
+#[cfg(test)]
+mod tests;
 pub mod wire;
 mod world;
 
@@ -187,7 +189,7 @@ fn terminated(seen: &std::cell::Cell<bool>) -> bool {
 }
 
 #[cfg(test)]
-mod tests {
+mod config_tests {
     use super::*;
 
     #[test]
