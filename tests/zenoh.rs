@@ -281,3 +281,294 @@ fn with_user_and_password_auth_an_agent_without_the_credentials_cannot_join() {
     assert_eq!(m["success_rate"], 1.0, "{m:#}");
     assert_eq!(count_events(&out, "agent_joined", "a"), 1);
 }
+
+// ---------------------------------------------------------------------
+// Two network namespaces joined by a veth pair: the world in one, agents
+// in the other, as on two hosts.
+
+/// Two namespaces `w` (the world's) and `a` (the agents') joined by a veth
+/// pair, with 1 ms of netem delay each way; removed when dropped.
+struct NetPair {
+    w: String,
+    a: String,
+    veth_a: String,
+    world_ip: String,
+    /// Why the link has no netem delay (the kernel has no sch_netem), if so.
+    no_delay: Option<String>,
+}
+
+impl NetPair {
+    /// Makes the pair, or says why it cannot (not root, no `ip`, no
+    /// namespaces in this container).
+    fn new(tag: &str) -> Result<Self, String> {
+        // SAFETY: geteuid has no preconditions.
+        if unsafe { libc::geteuid() } != 0 {
+            return Err("not root: network namespaces need CAP_NET_ADMIN".into());
+        }
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        static N: AtomicUsize = AtomicUsize::new(0);
+        let n = N.fetch_add(1, Ordering::SeqCst);
+        let pid = std::process::id() % 100_000;
+        let mut p = Self {
+            w: format!("mrsim-{tag}-w-{pid}-{n}"),
+            a: format!("mrsim-{tag}-a-{pid}-{n}"),
+            veth_a: format!("vza{pid}{n}"),
+            world_ip: format!("10.{}.{}.1", 100 + n % 100, pid % 250),
+            no_delay: None,
+        };
+        let veth_w = format!("vzw{pid}{n}");
+        let agent_ip = match p.world_ip.rsplit_once('.') {
+            Some((net, _)) => format!("{net}.2"),
+            None => return Err(format!("bad address {}", p.world_ip)),
+        };
+        let steps: Vec<Vec<&str>> = vec![
+            vec!["netns", "add", &p.w],
+            vec!["netns", "add", &p.a],
+            vec![
+                "link", "add", &veth_w, "type", "veth", "peer", "name", &p.veth_a,
+            ],
+            vec!["link", "set", &veth_w, "netns", &p.w],
+            vec!["link", "set", &p.veth_a, "netns", &p.a],
+        ];
+        for s in &steps {
+            ip(s)?;
+        }
+        let w_addr = format!("{}/24", p.world_ip);
+        let a_addr = format!("{agent_ip}/24");
+        for (ns, dev, addr) in [(&p.w, &veth_w, &w_addr), (&p.a, &p.veth_a, &a_addr)] {
+            ip(&["-n", ns, "addr", "add", addr, "dev", dev])?;
+            ip(&["-n", ns, "link", "set", dev, "up"])?;
+            ip(&["-n", ns, "link", "set", "lo", "up"])?;
+            let tc = Command::new("tc")
+                .args([
+                    "-n", ns, "qdisc", "add", "dev", dev, "root", "netem", "delay", "1ms",
+                ])
+                .output();
+            match tc {
+                Ok(o) if o.status.success() => {}
+                Ok(o) => p.no_delay = Some(String::from_utf8_lossy(&o.stderr).trim().to_string()),
+                Err(e) => p.no_delay = Some(format!("cannot run tc: {e}")),
+            }
+        }
+        if let Some(why) = &p.no_delay {
+            eprintln!(
+                "note: no 1 ms netem delay on the link ({why}): the namespaces are joined without it"
+            );
+        }
+        Ok(p)
+    }
+
+    fn endpoint(&self) -> String {
+        format!("tcp/{}:7447", self.world_ip)
+    }
+
+    /// `mrsim ARGS` inside namespace `ns`.
+    fn mrsim_in(ns: &str) -> Command {
+        let mut c = Command::new("ip");
+        c.args(["netns", "exec", ns, env!("CARGO_BIN_EXE_mrsim")]);
+        c
+    }
+
+    fn world(&self, scenario: &Path, out: &Path, id: &str, extra: &[&str]) -> Child {
+        Self::mrsim_in(&self.w)
+            .arg("world")
+            .arg(scenario)
+            .args(["--run", id, "--start-timeout", "60", "--transport", "zenoh"])
+            .args(["--listen", &self.endpoint()])
+            .args(extra)
+            .arg("--out")
+            .arg(out)
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("world in its namespace")
+    }
+
+    /// An agent in the agents' namespace (or, `local`, in the world's).
+    fn agent(&self, robot: &str, id: &str, local: bool) -> Child {
+        Self::mrsim_in(if local { &self.w } else { &self.a })
+            .args([
+                "agent",
+                "--robot",
+                robot,
+                "--run",
+                id,
+                "--transport",
+                "zenoh",
+            ])
+            .args(["--connect", &self.endpoint(), "--timeout", "30"])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("agent in its namespace")
+    }
+
+    fn link(&self, up: bool) {
+        let state = if up { "up" } else { "down" };
+        ip(&["-n", &self.a, "link", "set", &self.veth_a, state]).expect("link set");
+    }
+}
+
+impl Drop for NetPair {
+    fn drop(&mut self) {
+        // Deleting a namespace deletes its end of the veth pair, and so
+        // the pair.
+        let _ = ip(&["netns", "del", &self.w]);
+        let _ = ip(&["netns", "del", &self.a]);
+    }
+}
+
+fn ip(args: &[&str]) -> Result<(), String> {
+    let o = Command::new("ip")
+        .args(args)
+        .output()
+        .map_err(|e| format!("cannot run ip (iproute2): {e}"))?;
+    if o.status.success() {
+        Ok(())
+    } else {
+        Err(format!(
+            "ip {}: {}",
+            args.join(" "),
+            String::from_utf8_lossy(&o.stderr).trim()
+        ))
+    }
+}
+
+/// The pair, or None after printing why these tests are skipped.
+fn net_pair(tag: &str) -> Option<NetPair> {
+    match NetPair::new(tag) {
+        Ok(p) => Some(p),
+        Err(why) => {
+            eprintln!(
+                "skipped: cannot make network namespaces ({why}); the loopback tests still ran"
+            );
+            None
+        }
+    }
+}
+
+/// A realtime scenario of `n` robots in a row, each driving 1 m/s towards
+/// a goal `dist` m ahead, ticking at 20 Hz for `duration` s.
+fn realtime_row(n: usize, dist: f64, duration: f64) -> String {
+    let mut s = format!(
+        "name = \"row\"\n[world]\ndt = 0.05\nduration = {duration}\nmode = \"realtime\"\nstall_timeout = 2.0\narena = {{ min = [-5.0, -5.0], max = [{}, {}] }}\n[defaults]\nplanner = \"homing\"\nradius = 0.2\nmax_speed = 1.0\n",
+        dist + 5.0,
+        n as f64 + 5.0
+    );
+    for i in 0..n {
+        s.push_str(&format!(
+            "[[robot]]\nname = \"r{i}\"\nstart = [0.0, {i}.0]\ngoal = [{dist}, {i}.0]\n"
+        ));
+    }
+    s
+}
+
+#[test]
+fn across_namespaces_with_1ms_delay_lockstep_matches_shm_and_16_realtime_agents_miss_nothing() {
+    let Some(net) = net_pair("d") else { return };
+    // Lockstep: world in one namespace, all eight agents in the other.
+    let scenario = root().join("scenarios/crossing.toml");
+    let shm = lockstep_run(&scenario, "shm", "zn-shm");
+    let out = fresh_dir("zn-lock");
+    let id = run_id("znlock");
+    let mut world = net.world(&scenario, &out, &id, &["--mode", "lockstep"]);
+    let mut agents: Vec<Child> = ["a0", "a1", "a2", "a3", "b0", "b1", "b2", "b3"]
+        .iter()
+        .map(|r| net.agent(r, &id, false))
+        .collect();
+    let ws = wait_timeout(&mut world, 120).expect("world ended");
+    assert!(ws.success(), "lockstep world failed");
+    agents.iter_mut().for_each(|a| {
+        wait_timeout(a, 10);
+    });
+    assert!(
+        trajectory_bytes(&shm) == trajectory_bytes(&out),
+        "trajectory.csv differs across namespaces: {shm:?} {out:?}"
+    );
+
+    // Realtime: 16 agents at 20 Hz over the delayed link, no deadline miss.
+    let dir = fresh_dir("zn-rt");
+    let file = dir.join("row.toml");
+    std::fs::write(&file, realtime_row(16, 3.0, 4.0)).expect("write");
+    let out = dir.join("out");
+    let id = run_id("znrt");
+    let mut world = net.world(&file, &out, &id, &[]);
+    let mut agents: Vec<Child> = (0..16)
+        .map(|i| net.agent(&format!("r{i}"), &id, false))
+        .collect();
+    let ws = wait_timeout(&mut world, 120).expect("world ended");
+    assert!(ws.success(), "realtime world failed");
+    agents.iter_mut().for_each(|a| {
+        wait_timeout(a, 10);
+    });
+    let m = metrics(&out);
+    assert_eq!(m["agents_lost"], 0, "{m:#}");
+    let robots = m["robots"].as_object().expect("robots");
+    assert_eq!(robots.len(), 16);
+    let misses: u64 = robots
+        .values()
+        .map(|r| r["deadline_misses"].as_u64().unwrap_or(0))
+        .sum();
+    assert_eq!(misses, 0, "{m:#}");
+}
+
+#[test]
+fn agents_behind_a_cut_link_are_lost_and_rejoin_once_it_is_back() {
+    let Some(net) = net_pair("c") else { return };
+    let dir = fresh_dir("zn-cut");
+    let file = dir.join("row.toml");
+    // Slow enough that nobody arrives before the end: 25 m at 1 m/s, 20 s.
+    std::fs::write(&file, realtime_row(4, 25.0, 20.0)).expect("write");
+    let out = dir.join("out");
+    let id = run_id("zncut");
+    let mut world = net.world(&file, &out, &id, &[]);
+    // r0, r1 beside the world; r2, r3 behind the link.
+    let mut near: Vec<Child> = ["r0", "r1"]
+        .iter()
+        .map(|r| net.agent(r, &id, true))
+        .collect();
+    let mut far: Vec<Child> = ["r2", "r3"]
+        .iter()
+        .map(|r| net.agent(r, &id, false))
+        .collect();
+    for r in ["r0", "r1", "r2", "r3"] {
+        wait_for_event(&out, 60, &format!("{r} joined"), |e| {
+            e["type"] == "agent_joined" && e["robot"] == r
+        });
+    }
+    net.link(false);
+    for r in ["r2", "r3"] {
+        wait_for_event(&out, 30, &format!("{r} lost"), |e| {
+            e["type"] == "agent_lost" && e["robot"] == r
+        });
+    }
+    // The agents behind the link find their world gone and end.
+    for a in &mut far {
+        let s = wait_timeout(a, 30).expect("far agent ended");
+        assert!(
+            !s.success(),
+            "an agent cut off from its world ends with an error"
+        );
+    }
+    net.link(true);
+    let mut back: Vec<Child> = ["r2", "r3"]
+        .iter()
+        .map(|r| net.agent(r, &id, false))
+        .collect();
+    for r in ["r2", "r3"] {
+        wait_for_event(&out, 30, &format!("{r} rejoined"), |e| {
+            e["type"] == "agent_rejoined" && e["robot"] == r
+        });
+    }
+    let ws = wait_timeout(&mut world, 60).expect("world ended");
+    assert!(ws.success(), "the run finishes after the cut");
+    for a in near.iter_mut().chain(back.iter_mut()) {
+        wait_timeout(a, 10);
+    }
+    let m = metrics(&out);
+    assert_eq!(m["agents_lost"], 2, "{m:#}");
+    assert!(out.join("trajectory.csv").exists());
+    for r in ["r0", "r1"] {
+        assert_eq!(count_events(&out, "agent_lost", r), 0, "{r} stayed");
+    }
+}
