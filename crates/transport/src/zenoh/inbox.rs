@@ -89,10 +89,16 @@ impl WorldInbox {
     pub(super) fn command(&self, bytes: &[u8]) {
         let received = now_ns();
         let mut s = lock(&self.state);
-        let Some(cmd) = wire::decode::<CommandMsg>(bytes) else {
+        let Some(mut cmd) = wire::decode::<CommandMsg>(bytes) else {
             s.refused += 1;
             return;
         };
+        // An agent's clock may be another host's: the world never compares
+        // it with its own. A command is late by when it arrived, and its
+        // wake-up is estimated as arrival less the agent's compute time (a
+        // duration, the same on any clock).
+        cmd.sent_ns = received;
+        cmd.woke_ns = received.saturating_sub(cmd.compute_ns);
         if s.commands.len() >= s.limit {
             s.dropped += 1;
             return;
@@ -261,6 +267,23 @@ mod tests {
         inbox.join(&[0xff; 3]);
         let s = lock(&inbox.state);
         assert_eq!((s.refused, s.commands.len(), s.joins.len()), (2, 0, 0));
+    }
+
+    #[test]
+    fn an_agents_clock_never_reaches_the_world() {
+        let inbox = WorldInbox::new(8);
+        let before = now_ns();
+        inbox.command(&wire::encode(&CommandMsg {
+            tick: 1,
+            compute_ns: 1000,
+            woke_ns: u64::MAX / 2,
+            sent_ns: u64::MAX / 2,
+            ..Default::default()
+        }));
+        let s = lock(&inbox.state);
+        let (c, received) = s.commands[0];
+        assert!(received >= before);
+        assert_eq!((c.sent_ns, c.woke_ns), (received, received - 1000));
     }
 
     #[test]
