@@ -15,9 +15,10 @@ impl Planner for Cautious {
         let gap = (obs.others.iter())
             .map(|o| (o.position - obs.me.position).norm() - o.radius - obs.me.radius)
             .fold(f64::INFINITY, f64::min);
+        let (d, a) = (to_goal.norm(), obs.me.max_accel);
         let speed = obs.me.max_speed * (gap / self.slow_within).clamp(0.2, 1.0);
-        // No faster than arriving within the tick: no overshoot.
-        let speed = speed.min(to_goal.norm() / obs.dt);
+        // No faster than it can still stop at the goal.
+        let speed = speed.min((2.0 * a * d).sqrt()).min(d / obs.dt);
         Command::Velocity(to_goal.try_normalize(1e-12).unwrap_or_default() * speed)
     }
 }
