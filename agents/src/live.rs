@@ -401,3 +401,146 @@ impl Drop for LiveAgent {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mrsim_proto::{JoinReply, PROTOCOL_VERSION, command_kind};
+    use mrsim_transport::WorldTransport;
+    use mrsim_transport::inproc::{InprocAgent, InprocWorld};
+    use std::sync::atomic::AtomicBool;
+
+    /// A world side with one robot `a` (planner `external`) and its
+    /// agent's side, the setup published.
+    fn world() -> (InprocWorld, InprocAgent) {
+        let scenario = mrsim_scenario::parse(
+            r#"
+            name = "live"
+            [world]
+            arena = { min = [0.0, 0.0], max = [10.0, 10.0] }
+            [[robot]]
+            name = "a"
+            start = [1.0, 5.0]
+            goal = [9.0, 5.0]
+            planner = "external"
+            params = { gain = 2.0 }
+            "#,
+            "live.toml",
+        )
+        .expect("scenario")
+        .scenario;
+        let (mut world, mut sides) =
+            mrsim_transport::inproc::channels(1, Arc::new(AtomicBool::new(false)));
+        let setup = serde_json::json!({"run_id": "live", "out_dir": null, "scenario": scenario});
+        world
+            .publish_setup(setup.to_string().as_bytes())
+            .expect("setup");
+        let side = sides.pop().expect("one side");
+        (world, side)
+    }
+
+    /// Answers the first join request with token 7.
+    fn admit(world: &mut InprocWorld) {
+        let mut asked = None;
+        while asked.is_none() {
+            world.wait(Duration::from_millis(10)).expect("wait");
+            world.drain_joins(&mut |r| asked = Some(r)).expect("joins");
+        }
+        let asked = asked.expect("a join request");
+        world
+            .reply_join(&JoinReply {
+                nonce: asked.nonce,
+                accepted: 1,
+                robot_id: 0,
+                token: 7,
+                protocol_version: PROTOCOL_VERSION,
+                world_pid: std::process::id(),
+                reason: Default::default(),
+            })
+            .expect("reply");
+    }
+
+    fn commands(world: &mut InprocWorld) -> Vec<mrsim_proto::CommandMsg> {
+        let mut got = Vec::new();
+        world
+            .drain_commands(&mut |c, _| got.push(c))
+            .expect("drain");
+        got
+    }
+
+    #[test]
+    fn a_live_robot_gets_each_tick_owned_and_answers_it_once_with_its_token() {
+        let (mut world, mut side) = world();
+        let agent = std::thread::spawn(move || {
+            let mut live = Live::join(&mut side, &AgentOptions::new("a"))
+                .expect("join")
+                .expect("not interrupted");
+            assert_eq!(live.robot(), "a");
+            assert!(live.params().contains_key("gain"));
+            let mut seen = Vec::new();
+            loop {
+                match live.next(&mut side, Duration::from_secs(5)).expect("next") {
+                    Next::Observation(obs) => {
+                        let view = obs.view();
+                        assert_eq!((view.goal.x, view.goal.y), (9.0, 5.0));
+                        assert_eq!(view.walls.len(), 4, "the arena's walls");
+                        seen.push(obs.tick);
+                        live.reply(&mut side, Command::Velocity(Vec2::new(1.0, 0.0)))
+                            .expect("reply");
+                        assert!(matches!(
+                            live.reply(&mut side, Command::Velocity(Vec2::zeros())),
+                            Err(AgentError::NothingToAnswer)
+                        ));
+                    }
+                    Next::Idle => {}
+                    Next::Finished => break,
+                    other => panic!("{other:?}"),
+                }
+            }
+            live.finish(AgentExit::Finished).expect("finish");
+            seen
+        });
+        admit(&mut world);
+        world.joins_answered().expect("answered");
+        // The ready command, then one answer per tick.
+        let mut ready = Vec::new();
+        while ready.is_empty() {
+            world.wait(Duration::from_millis(10)).expect("wait");
+            ready = commands(&mut world);
+        }
+        assert_eq!(ready[0].kind, command_kind::READY);
+        let bodies = [BodyState {
+            position: [1.0, 5.0],
+            ..Default::default()
+        }];
+        for tick in 0..3 {
+            let header = SnapshotHeader {
+                tick,
+                ..Default::default()
+            };
+            world.publish_snapshot(&header, &bodies).expect("snapshot");
+            let mut got = Vec::new();
+            while got
+                .iter()
+                .all(|c: &mrsim_proto::CommandMsg| c.tick != tick || c.kind == command_kind::READY)
+            {
+                world.wait(Duration::from_millis(10)).expect("wait");
+                got.extend(commands(&mut world));
+            }
+            let answer = got
+                .iter()
+                .find(|c| c.kind == command_kind::VELOCITY)
+                .expect("answer");
+            assert_eq!(
+                (answer.tick, answer.token, answer.value),
+                (tick, 7, [1.0, 0.0])
+            );
+        }
+        let end = SnapshotHeader {
+            finished: 1,
+            ..Default::default()
+        };
+        world.publish_snapshot(&end, &[]).expect("the end");
+        assert_eq!(agent.join().expect("agent thread"), [0, 1, 2]);
+    }
+}
