@@ -137,6 +137,22 @@ fn an_external_robot_is_refused_in_process_with_exit_status_2() {
 }
 
 #[test]
+fn a_sweep_over_a_scenario_with_an_external_robot_is_refused_with_exit_status_2() {
+    let out = fresh_dir("external-sweep");
+    let o = mrsim()
+        .arg("sweep")
+        .arg(root().join("examples/my_agent.toml"))
+        .args(["--seeds", "1", "--out"])
+        .arg(out.join("s"))
+        .output()
+        .expect("mrsim sweep");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("`me`") && err.contains("external"), "{err}");
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
 fn mrsim_planners_lists_external() {
     let o = mrsim().arg("planners").output().expect("mrsim planners");
     assert!(o.status.success());
