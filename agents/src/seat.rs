@@ -128,6 +128,7 @@ pub(crate) fn join_seat(
     let robot_count = scenario.robots.len();
     let capacity = robot_count + scenario.obstacles;
     let observer = observe::Observer::for_robot(&scenario.world, Some(&spec), me, capacity);
+    let diag = start_diagnostics(view.out_dir, me, &spec.name);
     Ok(Some(Seat {
         me,
         claim: opts.impersonate.unwrap_or(me as u32),
@@ -135,7 +136,7 @@ pub(crate) fn join_seat(
         robot_count,
         capacity,
         lockstep: scenario.world.mode == mrsim_scenario::Mode::Lockstep,
-        diag: None,
+        diag,
         spec,
         walls,
         path,
@@ -145,10 +146,6 @@ pub(crate) fn join_seat(
         hung: false,
         halt: opts.halt.clone(),
         failed: None,
-    })
-    .map(|mut seat| {
-        seat.diag = start_diagnostics(view.out_dir, me, &seat.spec.name);
-        seat
     }))
 }
 
