@@ -14,7 +14,7 @@ use crate::finish::{AgentFailure, Ending, FinishError, Outcome, WorldFailure};
 use crate::inproc::InprocError;
 use crate::sched::{Applied, Sched};
 use crate::usage::AgentUsage;
-use crate::validate::Validated;
+use crate::validate::{ScenarioSource, Validated};
 use mrsim_transport::Namespace;
 use mrsim_transport::zenoh::ZenohOptions;
 use std::path::{Path, PathBuf};
@@ -121,6 +121,16 @@ pub enum RunError {
     /// The in-process run failed.
     #[error(transparent)]
     Inproc(#[from] InprocError),
+    /// A robot's planner failed in an in-process lockstep run (panicked, or
+    /// returned a non-finite command): the run stopped at that tick; the
+    /// outputs so far are in `dir`.
+    #[error("{failure}; the run stopped there, outputs so far are in {}", dir.display())]
+    Planner {
+        /// Which robot, which tick, how.
+        failure: mrsim_agents::PlanFailure,
+        /// The run folder.
+        dir: PathBuf,
+    },
     /// The run ended but could not be finished.
     #[error(transparent)]
     Finish(#[from] FinishError),
@@ -151,6 +161,7 @@ pub struct Prepared {
 /// and the termination signals (from now on they stop the run instead of
 /// this process).
 pub fn prepare(validated: Validated, request: RunRequest) -> Result<Prepared, RunError> {
+    check_transport(&validated, request.transport)?;
     let dir = crate::out::prepare(request.out.as_deref(), &validated.scenario().name)?;
     let run_id = request
         .run_id
@@ -167,6 +178,99 @@ pub fn prepare(validated: Validated, request: RunRequest) -> Result<Prepared, Ru
         ns,
         applied,
     })
+}
+
+/// A run in this process, headless: what a program that brings its own
+/// planners asks for ([`run_in_process`]).
+#[derive(Debug, Clone, Default)]
+pub struct InProcess {
+    /// The scenario file and its overrides.
+    pub scenario: ScenarioSource,
+    /// The planners the robots' names are looked up in: the built-in ones
+    /// and the program's own ([`mrsim_planners::Registry::register`]).
+    pub registry: Arc<mrsim_planners::Registry>,
+    /// The output folder; `None`: a fresh folder under `runs/`.
+    pub out: Option<PathBuf>,
+    /// Draw plot.svg/png and replay.html at the end.
+    pub render: bool,
+}
+
+/// What a finished in-process run gives back.
+#[derive(Debug, Clone)]
+pub struct RunResult {
+    /// The run folder (trajectory.csv, events.jsonl, metrics.json, ...).
+    pub dir: PathBuf,
+    /// metrics.json, typed.
+    pub metrics: mrsim_runfolder::RunMetrics,
+    /// Agents that ended badly while the world ran to its end.
+    pub agent_failures: Vec<AgentFailure>,
+}
+
+/// Runs a scenario in this process (the world in the calling thread, the
+/// robots' planners in a pool of threads, as `--transport inproc`), its
+/// robots' planners built from `req.registry`. Unlike `mrsim run` it takes
+/// no termination signals over (the calling program keeps its own) and
+/// claims no shared memory. A refusal ([`RunError::Invalid`]) comes before
+/// anything ran; a planner that fails in lockstep stops the run
+/// ([`RunError::Planner`], the outputs so far written).
+pub fn run_in_process(req: &InProcess) -> Result<RunResult, RunError> {
+    let validated = Validated::with_registry(req.scenario.clone(), req.registry.clone())?;
+    let request = RunRequest {
+        out: req.out.clone(),
+        transport: Transport::Inproc,
+        render: req.render,
+        ..Default::default()
+    };
+    check_transport(&validated, request.transport)?;
+    let dir = crate::out::prepare(request.out.as_deref(), &validated.scenario().name)?;
+    let ns = Namespace::new(&Namespace::fresh_run_id()).map_err(|e| Invalid(e.to_string()))?;
+    let prepared = Prepared {
+        validated,
+        request,
+        dir,
+        ns,
+        applied: Applied::default(),
+    };
+    let outcome = prepared.run_inproc()?;
+    let metrics = outcome.metrics.ok_or_else(|| {
+        RunError::Finish(FinishError::ReadMetrics {
+            path: outcome.dir.join(mrsim_runfolder::METRICS_FILE),
+            source: std::io::Error::other("the run wrote no metrics"),
+        })
+    })?;
+    Ok(RunResult {
+        dir: outcome.dir,
+        metrics,
+        agent_failures: outcome.agent_failures,
+    })
+}
+
+/// Refuses a transport the scenario's robots cannot run over: an
+/// in-process run has no way in for an `external` robot's program, and an
+/// agent process knows only the built-in planners, not a program's own.
+fn check_transport(validated: &Validated, transport: Transport) -> Result<(), Invalid> {
+    let (robots, why) = match transport {
+        Transport::Inproc => (
+            validated.external_robots(),
+            "has planner = \"external\": its own program joins the run over shared memory, \
+             which an in-process run (--transport inproc) does not offer; run it without \
+             --transport inproc, or register the program's planner for an in-process run",
+        ),
+        Transport::Shm => (
+            validated.robots_with_own_planners(),
+            "has a planner registered in this program only: agent processes know the \
+             built-in planners alone; run it in-process",
+        ),
+    };
+    if robots.is_empty() {
+        return Ok(());
+    }
+    let quoted: Vec<String> = robots.iter().map(|r| format!("`{r}`")).collect();
+    Err(Invalid(format!(
+        "{}: robot {} {why}",
+        validated.origin(),
+        mrsim_world::names::first_few(&quoted, 5)
+    )))
 }
 
 /// Clears what a crashed earlier run with this id left behind, unless a
@@ -232,8 +336,14 @@ impl Prepared {
             ns,
             ..
         } = self;
+        let registry = validated.registry().clone();
         let (scenario, world) = validated.into_world();
         let stop = Arc::new(AtomicBool::new(false));
+        // A planner that fails in lockstep stops the run as a signal would.
+        let halt = mrsim_agents::Halt::new(stop.clone());
+        let mut agents = mrsim_agents::AgentOptions::new("");
+        agents.registry = registry;
+        agents.halt = Some(halt.clone());
         let done = Arc::new(AtomicBool::new(false));
         // A signal to the launcher stops the in-process run as SIGTERM stops
         // a world process.
@@ -248,7 +358,8 @@ impl Prepared {
                 }
             })
         };
-        let outcome = crate::inproc::run_scenario(&scenario, world, &dir, ns.run_id(), stop);
+        let outcome =
+            crate::inproc::run_scenario(&scenario, world, &dir, ns.run_id(), stop, &agents);
         done.store(true, Ordering::SeqCst);
         let _ = watcher.join();
         let outcome = outcome?;
@@ -263,13 +374,17 @@ impl Prepared {
                 })
             })
             .collect();
-        Ok(crate::finish::finish(Ending {
+        let finished = crate::finish::finish(Ending {
             dir: &dir,
             world_failure: None,
             agent_failures,
             usage: Some((Transport::Inproc.name(), &outcome.agent_usage)),
             render: request.render,
-        })?)
+        })?;
+        match halt.failure() {
+            Some(failure) => Err(RunError::Planner { failure, dir }),
+            None => Ok(finished),
+        }
     }
 
     fn run_processes(self, on_event: &mut dyn FnMut(Event<'_>)) -> Result<Outcome, RunError> {
@@ -288,17 +403,24 @@ impl Prepared {
             Transport::Zenoh => zenoh_args(&self.request.zenoh)?,
             _ => (Vec::new(), Vec::new()),
         };
+        // An `external` robot's program is started by its user, whenever:
+        // then the world waits for its agents without a limit (a signal
+        // ends the wait).
+        let external = scenario
+            .robots
+            .iter()
+            .any(|r| r.planner == mrsim_planners::EXTERNAL);
+        let start_timeout: &[&str] = if external {
+            &[]
+        } else {
+            &["--start-timeout", &join_secs]
+        };
         let mut world = Command::new(&exe)
             .arg("world")
             .args(source.to_args())
-            .args([
-                "--run",
-                run_id,
-                "--start-timeout",
-                &join_secs,
-                "--launched",
-                "--out",
-            ])
+            .args(["--run", run_id])
+            .args(start_timeout)
+            .args(["--launched", "--out"])
             .arg(dir)
             .args(&world_net)
             .stdin(Stdio::null())
@@ -319,7 +441,9 @@ impl Prepared {
         };
         let mut agents: Vec<(&str, Child)> = Vec::with_capacity(scenario.robots.len());
         for r in &scenario.robots {
-            agents.push((&r.name, spawn(&r.name)?));
+            if r.planner != mrsim_planners::EXTERNAL {
+                agents.push((&r.name, spawn(&r.name)?));
+            }
         }
         let mut restarts = vec![0u32; agents.len()];
 

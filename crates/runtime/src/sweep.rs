@@ -389,6 +389,14 @@ pub fn prepare(plan: &SweepPlan) -> Result<Sweep, SweepError> {
                 .collect();
             Invalid(format!("combination {}: {e}", what.join(" ")))
         })?;
+        if let Some(r) = v.external_robots().first() {
+            return Err(Invalid(format!(
+                "{}: robot `{r}` has planner = \"external\": a sweep starts its runs \
+                 unattended, with no program of yours to join them",
+                v.origin()
+            ))
+            .into());
+        }
         name = v.scenario().name.clone();
     }
     let dir = crate::out::prepare(plan.out.as_deref(), &format!("sweep-{name}"))?;
