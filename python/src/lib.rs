@@ -7,7 +7,9 @@
 use mrsim_runtime::sim::{Sim as Engine, SimError, observation_size};
 use mrsim_runtime::{ScenarioSource, Validated};
 use mrsim_world::Applied;
-use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyReadwriteArray2};
+use numpy::{
+    PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadwriteArray2,
+};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
@@ -79,14 +81,17 @@ impl Sim {
     }
 
     /// One tick. `actions`: (learners, 2) float64, forces if `force` else
-    /// velocities. Returns per learner: collisions started (int64),
-    /// distance to goal, at goal now, goal reached (held).
+    /// velocities; learners marked in `brake` (bool per learner) brake
+    /// instead. Returns per learner: collisions started (int64), distance
+    /// to goal, at goal now, goal reached (held).
     #[allow(clippy::type_complexity)]
+    #[pyo3(signature = (actions, force, brake=None))]
     fn step<'py>(
         &mut self,
         py: Python<'py>,
         actions: PyReadonlyArray2<'py, f64>,
         force: bool,
+        brake: Option<PyReadonlyArray1<'py, bool>>,
     ) -> PyResult<(
         Bound<'py, PyArray1<i64>>,
         Bound<'py, PyArray1<f64>>,
@@ -101,15 +106,19 @@ impl Sim {
                 self.engine.learners().len()
             )));
         }
+        let brake = brake.as_ref().map(|b| b.as_array());
         self.commands.clear();
-        self.commands.extend(a.rows().into_iter().map(|r| {
-            let v = [r[0], r[1]];
-            if force {
-                Applied::Force(v)
-            } else {
-                Applied::Velocity(v)
-            }
-        }));
+        self.commands
+            .extend(a.rows().into_iter().enumerate().map(|(j, r)| {
+                let v = [r[0], r[1]];
+                if brake.as_ref().and_then(|b| b.get(j)).copied() == Some(true) {
+                    Applied::BRAKE
+                } else if force {
+                    Applied::Force(v)
+                } else {
+                    Applied::Velocity(v)
+                }
+            }));
         let info = self.engine.step(&self.commands).map_err(err)?;
         Ok((
             PyArray1::from_iter(py, info.iter().map(|i| i64::from(i.collisions))),
