@@ -7,20 +7,33 @@
 //! an agent process over iceoryx2, in a thread over crossbeam channels, or
 //! in a test against a scripted fake world. The planner is pure and never
 //! sees the transport or a clock; the agent measures its compute time.
+//!
+//! Three ways to drive a joined robot share one seat (`seat`: join, observe,
+//! send, fault injection, diagnostics): [`Live`] hands out each tick's
+//! observation and takes the reply (a user's own program, [`LiveAgent`]
+//! over iceoryx2); [`run`] is [`drive`] over it, a planner answering (what
+//! `mrsim agent` runs); a [`Driver`] pairs the seat with a planner for the
+//! in-process pool, which plans for many robots per snapshot. Every plan
+//! call goes through [`guard::plan_checked`].
 #![warn(missing_docs)]
 
 pub mod diagnostics;
 pub mod fault;
+pub mod guard;
+pub mod live;
 pub mod observe;
+mod seat;
 
-use mrsim_planners::{Command, DesignatedPath, Planner, Segment, Vec2};
-use mrsim_proto::{
-    BodyState, CommandMsg, FixedStr, JoinRequest, PROTOCOL_VERSION, SnapshotHeader, command_kind,
-    now_ns,
-};
+pub use guard::{Halt, PlanFailure, PlanFault, plan_checked};
+pub use live::{Live, LiveAgent, Next, OwnedObservation, drive};
+
+use mrsim_planners::{Planner, Registry};
+use mrsim_proto::{BodyState, CommandMsg, PROTOCOL_VERSION, SnapshotHeader, now_ns};
 use mrsim_scenario::RobotSpec;
 use mrsim_transport::{AgentTransport, TransportError};
-use std::time::{Duration, Instant};
+use seat::Seat;
+use std::sync::Arc;
+use std::time::Duration;
 
 /// Why an agent stopped with an error.
 #[derive(Debug, thiserror::Error)]
@@ -60,6 +73,30 @@ pub enum AgentError {
     /// The world process is gone.
     #[error("the world is gone (its process died or left without ending the run)")]
     WorldGone,
+    /// The robot's planner failed at a tick (panicked, or returned a
+    /// non-finite command).
+    #[error(transparent)]
+    Plan(#[from] PlanFailure),
+    /// A reply without a tick to answer (none handed out, or answered).
+    #[error("no tick to answer: reply once to each observation `next` gives")]
+    NothingToAnswer,
+    /// The run id is not one a world can have.
+    #[error("bad run id: {0}")]
+    BadRunId(String),
+    /// No world of that run id was found in time.
+    #[error(
+        "cannot reach the world of run `{run_id}` (is `mrsim world ... --run {run_id}` running?)"
+    )]
+    NoWorld {
+        /// The run id.
+        run_id: String,
+        /// Why.
+        #[source]
+        source: TransportError,
+    },
+    /// The process was asked to stop before the robot had joined.
+    #[error("interrupted before joining")]
+    Interrupted,
 }
 
 /// How an agent ended without error.
@@ -88,6 +125,13 @@ pub struct AgentOptions {
     /// The protocol version announced when joining (tests of strangers
     /// set another one).
     pub protocol_version: u32,
+    /// Where the robot's planner is built from (by the name its scenario
+    /// entry gives): the built-in planners unless a program registered
+    /// its own (in-process runs).
+    pub registry: Arc<Registry>,
+    /// In an in-process run: what stops the run when a planner fails in
+    /// lockstep ([`Halt`]).
+    pub halt: Option<Halt>,
 }
 
 impl AgentOptions {
@@ -100,6 +144,8 @@ impl AgentOptions {
             impersonate: None,
             fault: None,
             protocol_version: PROTOCOL_VERSION,
+            registry: Arc::new(Registry::builtin()),
+            halt: None,
         }
     }
 }
@@ -123,9 +169,18 @@ pub fn planner_params(spec: &RobotSpec) -> mrsim_planners::Params {
         .collect()
 }
 
-/// Builds the planner a robot's scenario entry asks for.
+/// Builds the planner a robot's scenario entry asks for, from the
+/// built-in ones.
 pub fn build_planner(spec: &RobotSpec) -> Result<Box<dyn Planner>, mrsim_planners::BuildError> {
     mrsim_planners::build(&spec.planner, &planner_params(spec))
+}
+
+/// Builds the planner a robot's scenario entry asks for, from `registry`.
+pub fn build_planner_in(
+    registry: &Registry,
+    spec: &RobotSpec,
+) -> Result<Box<dyn Planner>, mrsim_planners::BuildError> {
+    registry.build(&spec.planner, &planner_params(spec))
 }
 
 /// How far from its centre robot `spec` senses other bodies' centres, less
@@ -136,289 +191,57 @@ pub fn reach(spec: &RobotSpec) -> Option<f64> {
     r.is_finite().then_some(r)
 }
 
-/// How often (at most) [`run`] asks its transport whether the process is
-/// to stop: 50 ms, so a stop is heard within that and one wait (100 ms).
-const STOP_CHECK_EVERY_NS: u64 = 50_000_000;
-
-/// Joins the run as `opts.robot` and drives it until the world ends the
-/// run, the process is asked to stop, or something fails.
+/// Joins the run as `opts.robot` and drives it with the planner its
+/// scenario entry names (built from `opts.registry`) until the world ends
+/// the run, the process is asked to stop, or something fails: [`drive`]
+/// over a [`Live`] robot.
 pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentExit, AgentError> {
-    let Some(mut driver) = join(link, opts)? else {
+    let Some(seat) = seat::join_seat(link, opts)? else {
         return Ok(AgentExit::Interrupted);
     };
-    link.send_command(&driver.ready())?;
-    link.joined();
-    // Where a transport that cannot lend its snapshot copies it.
-    let mut scratch = (
-        SnapshotHeader::default(),
-        Vec::<BodyState>::with_capacity(driver.capacity),
-    );
-    // When the last snapshot came (the clock read as the agent woke for
-    // it: one clock read a tick fewer).
-    let mut last_heard = now_ns();
-    // A snapshot has come (after it, a wake-up without one is spurious).
-    let mut heard_one = false;
-    let check_after = u64::try_from(opts.world_check_after.as_nanos()).unwrap_or(u64::MAX);
-    // When the agent last asked whether it is to stop (over iceoryx2 the
-    // question takes a process-wide lock: asked every few ticks, not
-    // every tick).
-    let mut asked_to_stop_at = 0;
-    let mut woke = last_heard;
-    loop {
-        if woke.saturating_sub(asked_to_stop_at) >= STOP_CHECK_EVERY_NS {
-            asked_to_stop_at = woke;
-            if link.termination_requested() {
-                return driver.finish(AgentExit::Interrupted);
-            }
-        }
-        link.wait(Duration::from_millis(100))?;
-        woke = now_ns();
-        let (mut finished, mut failed) = (false, None);
-        let got = link.with_latest_snapshot(&mut scratch, &mut |header, bodies, send| {
-            heard_one = true;
-            if header.finished != 0 {
-                finished = true;
-            } else if let Err(e) = driver.on_snapshot(header, bodies, woke, send) {
-                failed = Some(e);
-            }
-        })?;
-        if !got {
-            if woke.saturating_sub(last_heard) > check_after && !link.world_alive() {
-                return Err(AgentError::WorldGone);
-            }
-            if !heard_one {
-                // Before the first snapshot a wake-up is the world's
-                // call to take up the tick's channels (this receive just
-                // did): say ready again, and the world starts the clock
-                // once every agent has (`WorldTransport::prepare_ticks`).
-                link.send_command(&driver.ready())?;
-            }
-            continue;
-        }
-        last_heard = woke;
-        if let Some(e) = failed {
-            return Err(e);
-        }
-        if finished {
-            return driver.finish(AgentExit::Finished);
-        }
-    }
+    let mut planner = seat.build_planner(&opts.registry)?;
+    let mut live = Live::start(link, seat, opts)?;
+    let exit = drive(link, &mut live, planner.as_mut())?;
+    live.finish(exit)
 }
 
 /// Joins the run as `opts.robot` and reads the run's setup: the robot's
-/// [`Driver`], ready for the first snapshot. `None` if the process was
-/// asked to stop meanwhile.
+/// [`Driver`] (its planner built from `opts.registry`), ready for the
+/// first snapshot. `None` if the process was asked to stop meanwhile.
 pub fn join(
     link: &mut dyn AgentTransport,
     opts: &AgentOptions,
 ) -> Result<Option<Driver>, AgentError> {
-    // Join: ask for the robot, re-asking until the world answers.
-    let nonce = now_ns() ^ ((std::process::id() as u64) << 20) ^ 0x6d72_7369_6d00_0000;
-    let req = JoinRequest {
-        protocol_version: opts.protocol_version,
-        pid: std::process::id(),
-        nonce,
-        robot: FixedStr::new(&opts.robot),
+    let Some(seat) = seat::join_seat(link, opts)? else {
+        return Ok(None);
     };
-    let start = Instant::now();
-    let mut last_ask: Option<Instant> = None;
-    let reply = loop {
-        if link.termination_requested() {
-            return Ok(None);
-        }
-        if last_ask.is_none_or(|t| t.elapsed() > Duration::from_millis(500)) {
-            if last_ask.is_none() && opts.fault == Some(fault::Fault::JoinTwice) {
-                link.request_join(&req)?;
-            }
-            link.request_join(&req)?;
-            last_ask = Some(Instant::now());
-        }
-        if let Some(r) = link.poll_join_reply(nonce)? {
-            break r;
-        }
-        if start.elapsed() > opts.join_timeout {
-            return Err(AgentError::Timeout {
-                what: "join reply",
-                secs: opts.join_timeout.as_secs_f64(),
-            });
-        }
-        link.wait(Duration::from_millis(50))?;
-    };
-    if reply.accepted == 0 {
-        return Err(AgentError::Refused {
-            robot: opts.robot.clone(),
-            reason: reply.reason.as_str().to_string(),
-        });
-    }
-
-    // Setup: the resolved scenario, from the world.
-    let setup = loop {
-        if let Some(s) = link.setup()? {
-            break s;
-        }
-        if start.elapsed() > opts.join_timeout {
-            return Err(AgentError::Timeout {
-                what: "setup",
-                secs: opts.join_timeout.as_secs_f64(),
-            });
-        }
-        link.wait(Duration::from_millis(20))?;
-    };
-    let me = reply.robot_id as usize;
-    let view: SetupView =
-        serde_json::from_slice(&setup).map_err(|e| AgentError::BadSetup(e.to_string()))?;
-    let scenario = view.scenario;
-    let spec: RobotSpec = scenario
-        .robots
-        .get(me)
-        .ok_or_else(|| AgentError::BadSetup(format!("no robot with id {me}")))
-        .and_then(|raw| {
-            serde_json::from_str(raw.get()).map_err(|e| AgentError::BadSetup(e.to_string()))
-        })?;
-    let planner = build_planner(&spec).map_err(|source| AgentError::Planner {
-        robot: spec.name.clone(),
-        source,
-    })?;
-    let walls: Vec<Segment> =
-        mrsim_scenario::walls_and_arena(&scenario.walls, scenario.world.arena)
-            .iter()
-            .map(|w| Segment {
-                a: Vec2::new(w[0][0], w[0][1]),
-                b: Vec2::new(w[1][0], w[1][1]),
-            })
-            .collect();
-    let path = (!spec.path.is_empty()).then(|| DesignatedPath {
-        points: spec.path.iter().map(|p| Vec2::new(p[0], p[1])).collect(),
-        boundary: spec.boundary.unwrap_or(f64::INFINITY),
-    });
-    let robot_count = scenario.robots.len();
-    let capacity = robot_count + scenario.obstacles;
-    let observer = observe::Observer::for_robot(&scenario.world, Some(&spec), me, capacity);
-    // The planner's diagnostics go to a part file in the run's folder, when
-    // the world's folder is reachable from here (same machine).
-    let diag = view
-        .out_dir
-        .map(std::path::PathBuf::from)
-        .filter(|d| d.is_dir())
-        .and_then(
-            |d| match diagnostics::DiagnosticsWriter::start(&d, me, &spec.name) {
-                Ok(w) => Some(w),
-                Err(e) => {
-                    eprintln!("agent {}: no diagnostics: {e}", spec.name);
-                    None
-                }
-            },
-        );
-    Ok(Some(Driver {
-        me,
-        claim: opts.impersonate.unwrap_or(me as u32),
-        token: reply.token,
-        robot_count,
-        capacity,
-        spec,
-        planner,
-        walls,
-        path,
-        observer,
-        diag,
-        answered: None,
-        injector: opts.fault.map(fault::Injector::new),
-        hung: false,
-    }))
-}
-
-/// The part of the world's setup an agent reads. Only its own robot's
-/// entry is parsed (the others are skipped as raw text, nothing built): a
-/// thousand agents each building all thousand robots' specs cost O(n²) at
-/// join, seconds on two cores.
-#[derive(serde::Deserialize)]
-struct SetupView<'a> {
-    #[serde(borrow)]
-    scenario: ScenarioView<'a>,
-    #[serde(default)]
-    out_dir: Option<String>,
-}
-
-/// [`Scenario`] as an agent needs it.
-#[derive(serde::Deserialize)]
-struct ScenarioView<'a> {
-    world: mrsim_scenario::WorldConfig,
-    #[serde(borrow)]
-    robots: Vec<&'a serde_json::value::RawValue>,
-    /// Only counted.
-    #[serde(default, deserialize_with = "count")]
-    obstacles: usize,
-    #[serde(default)]
-    walls: Vec<mrsim_scenario::WallSpec>,
-}
-
-/// The length of a sequence, its items skipped.
-fn count<'de, D: serde::Deserializer<'de>>(d: D) -> Result<usize, D::Error> {
-    struct Count;
-    impl<'de> serde::de::Visitor<'de> for Count {
-        type Value = usize;
-        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-            f.write_str("a sequence")
-        }
-        fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<usize, A::Error> {
-            let mut n = 0;
-            while seq.next_element::<serde::de::IgnoredAny>()?.is_some() {
-                n += 1;
-            }
-            Ok(n)
-        }
-    }
-    d.deserialize_seq(Count)
+    let planner = seat.build_planner(&opts.registry)?;
+    Ok(Some(Driver { seat, planner }))
 }
 
 /// One joined robot's control: from each snapshot to its command. It holds
 /// no transport and no clock of its own, so the same driver runs in an
 /// agent process ([`run`]) or among many in a thread of an in-process run.
 pub struct Driver {
-    me: usize,
-    /// The robot id put in commands (another one only in fault tests).
-    claim: u32,
-    token: u64,
-    robot_count: usize,
-    capacity: usize,
-    spec: RobotSpec,
+    seat: Seat,
     planner: Box<dyn Planner>,
-    walls: Vec<Segment>,
-    path: Option<DesignatedPath>,
-    observer: observe::Observer,
-    diag: Option<diagnostics::DiagnosticsWriter>,
-    answered: Option<u64>,
-    injector: Option<fault::Injector>,
-    hung: bool,
 }
 
 impl Driver {
     /// The robot's index in the scenario.
     pub fn robot_id(&self) -> usize {
-        self.me
+        self.seat.me
     }
 
     /// The message telling the world this robot's agent is ready (sent
     /// once, right after [`join`]).
     pub fn ready(&self) -> CommandMsg {
-        let now = now_ns();
-        CommandMsg {
-            // Its own robot even when impersonating (fault tests): the
-            // world must start the run to see the forged commands.
-            robot_id: self.me as u32,
-            kind: command_kind::READY,
-            token: self.token,
-            tick: 0,
-            value: [0.0, 0.0],
-            compute_ns: 0,
-            woke_ns: now,
-            sent_ns: now,
-        }
+        self.seat.ready()
     }
 
     /// Bodies a snapshot of this run holds (robots and obstacles).
     pub fn capacity(&self) -> usize {
-        self.capacity
+        self.seat.capacity
     }
 
     /// Plans on one snapshot (not the run's last) and hands the command to
@@ -438,12 +261,12 @@ impl Driver {
 
     /// This robot's [`reach`].
     pub fn reach(&self) -> Option<f64> {
-        reach(&self.spec)
+        reach(&self.seat.spec)
     }
 
     /// The robot's position in `bodies`.
     pub fn position(&self, bodies: &[BodyState]) -> Option<[f64; 2]> {
-        bodies.get(self.me).map(|b| b.position)
+        bodies.get(self.seat.me).map(|b| b.position)
     }
 
     /// [`Self::on_snapshot`], the observation looking only at the bodies of
@@ -452,7 +275,9 @@ impl Driver {
     /// compute time counted from `start` when given (a worker that plans
     /// for many robots reads the clock once per robot: the end of one is
     /// the start of the next). Returns the clock at the end of its work
-    /// (`start`, or `woke`, if there was none to do).
+    /// (`start`, or `woke`, if there was none to do). A planner that
+    /// panics or returns a non-finite command fails the robot at this tick
+    /// ([`guard`]; in lockstep an error naming the robot and the tick).
     pub fn on_snapshot_among(
         &mut self,
         header: &SnapshotHeader,
@@ -462,66 +287,32 @@ impl Driver {
         start: Option<u64>,
         send: &mut dyn FnMut(&CommandMsg) -> Result<(), TransportError>,
     ) -> Result<u64, AgentError> {
-        let idle = start.unwrap_or(woke);
-        if self.hung || self.answered.is_some_and(|t| t >= header.tick) || self.me >= bodies.len() {
-            return Ok(idle);
-        }
-        if let Some(inj) = self.injector.as_mut() {
-            self.hung = inj.before_plan(header.tick) == fault::Before::Hang;
-            if self.hung {
-                return Ok(idle);
-            }
+        if !self.seat.due(header, bodies.len()) {
+            return Ok(start.unwrap_or(woke));
         }
         let t0 = start.unwrap_or_else(now_ns);
-        let obs = self.observer.observe_among(
-            header,
-            bodies,
-            near,
-            &self.spec,
-            &self.walls,
-            self.path.as_ref(),
-        );
-        let cmd = self.planner.plan(&obs);
-        let t1 = now_ns();
-        let compute_ns = t1.saturating_sub(t0);
-        let (kind, v) = match cmd {
-            Command::Force(f) => (command_kind::FORCE, f),
-            Command::Velocity(v) => (command_kind::VELOCITY, v),
-        };
-        let msg = CommandMsg {
-            robot_id: self.claim,
-            kind,
-            token: self.token,
-            tick: header.tick,
-            value: [v.x, v.y],
-            compute_ns,
-            woke_ns: woke,
-            sent_ns: t1,
-        };
-        match &self.injector {
-            Some(inj) => {
-                for m in inj.corrupt(msg, self.robot_count, header.deadline_ns) {
-                    send(&m)?;
-                }
+        let obs = self.seat.observe_among(header, bodies, near);
+        let cmd = match guard::plan_checked(self.planner.as_mut(), &obs) {
+            Ok(cmd) => cmd,
+            Err(what) => {
+                self.seat.failed(header.tick, what)?;
+                return Ok(now_ns());
             }
-            None => send(&msg)?,
-        }
-        self.answered = Some(header.tick);
+        };
+        let t1 = now_ns();
+        self.seat
+            .send(header, cmd, [t1.saturating_sub(t0), woke, t1], send)?;
         // After the command is out: off the tick's critical path.
-        if let Some(d) = &mut self.diag {
-            d.push(header.tick, header.sim_time, self.planner.diagnostics());
+        if self.seat.wants_diagnostics() {
+            self.seat
+                .diagnostics(header.tick, header.sim_time, self.planner.diagnostics());
         }
         Ok(t1)
     }
 
-    /// Ends the robot's control: writes out its diagnostics.
+    /// Ends the robot's control: writes out its diagnostics (and reports a
+    /// planner that failed in a realtime run).
     pub fn finish(mut self, exit: AgentExit) -> Result<AgentExit, AgentError> {
-        if let Some(Err(e)) = self.diag.take().map(diagnostics::DiagnosticsWriter::finish) {
-            eprintln!(
-                "agent {}: diagnostics not fully written: {e}",
-                self.spec.name
-            );
-        }
-        Ok(exit)
+        self.seat.finish(exit)
     }
 }

@@ -21,7 +21,9 @@
 //! - **One table.** [`PLANNERS`] is the only list of planners: each entry
 //!   has the scenario name, a one-line summary and the constructor, and
 //!   both the listing (`mrsim --help`, error messages) and [`build`] read
-//!   it, so a planner is added in one place.
+//!   it, so a planner is added in one place. A [`Registry`] is that table
+//!   plus [`EXTERNAL`] (a robot driven by the user's own program) plus
+//!   planners a program registers by name (in-process runs).
 //! - **The testkit is for tests.** `testkit` is a reference simulation with
 //!   the world's actuator model (m r'' + b r' = f, the same limits and
 //!   integration), in which the unit tests check each planner's behaviour
@@ -50,7 +52,10 @@ pub mod trajectory_guided;
 pub mod vdf;
 
 pub use params::{ParamError, ParamReader, ParamValue, Params};
-pub use registry::{BuildError, FromParams, PLANNERS, PlannerInfo, build};
+pub use registry::{
+    BuildError, EXTERNAL, Entry, Factory, FromParams, PLANNERS, PlannerInfo, RegisterError,
+    Registry, build,
+};
 
 /// 2-D vector, f64, in the scenario's units.
 pub type Vec2 = nalgebra::Vector2<f64>;

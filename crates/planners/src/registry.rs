@@ -1,8 +1,12 @@
-//! The planners by scenario name: one table, [`PLANNERS`], from which both
-//! the listing (`mrsim --help`, the README, error messages) and [`build`]
-//! come, so a planner is added or renamed in one place.
+//! The planners by scenario name: one table of the built-in ones,
+//! [`PLANNERS`], from which both the listing (`mrsim planners`, the README,
+//! error messages) and [`build`] come, so a planner is added or renamed in
+//! one place; and a [`Registry`]: the built-in planners, the name
+//! [`EXTERNAL`], and planners a program registers under names of its own
+//! (what an in-process run with a user's planners builds from).
 
-use crate::{ParamError, Params, Planner};
+use crate::{ParamError, ParamReader, Params, Planner};
+use std::sync::Arc;
 
 /// A planner's constructor: reads the robot's params (each planner's
 /// `from_params` documents its keys and defaults) and refuses unknown or
@@ -116,6 +120,225 @@ pub const PLANNERS: &[PlannerInfo] = &[
     },
 ];
 
+/// The planner name of a robot that mrsim does not drive: no agent is
+/// started for it, and the world waits for the user's own program to join
+/// as its agent (`mrsim_agents::LiveAgent`).
+pub const EXTERNAL: &str = "external";
+
+/// What [`EXTERNAL`] means, in listings.
+const EXTERNAL_SUMMARY: &str =
+    "driven by your own program, which joins the run as the robot's agent (mrsim::LiveAgent)";
+
+/// A registered planner's constructor: the robot's params in, the planner
+/// (or why not) out. It may be called from any thread, once per robot
+/// (and once more per robot when the scenario is validated).
+pub type Factory = dyn Fn(&Params) -> Result<Box<dyn Planner>, BuildError> + Send + Sync;
+
+/// Planners by name: the built-in ones ([`PLANNERS`]), [`EXTERNAL`], and
+/// any a program registers (in-process runs only: an agent process knows
+/// the built-in ones alone). Cheap to clone (the factories are shared).
+///
+/// ```
+/// use mrsim_planners::{Command, Observation, Planner, Registry};
+///
+/// struct Still;
+/// impl Planner for Still {
+///     fn plan(&mut self, _obs: &Observation) -> Command {
+///         Command::Velocity(Default::default())
+///     }
+/// }
+///
+/// let mut registry = Registry::builtin();
+/// registry
+///     .register_simple("still", "stands still", || Still)
+///     .expect("a new name");
+/// assert!(registry.build("still", &Default::default()).is_ok());
+/// assert!(registry.get("orca").is_some());
+/// assert!(registry.register_simple("orca", "", || Still).is_err());
+/// ```
+#[derive(Clone)]
+pub struct Registry {
+    entries: Vec<Entry>,
+}
+
+/// One planner of a [`Registry`].
+#[derive(Clone)]
+pub struct Entry {
+    name: String,
+    summary: String,
+    source: Source,
+}
+
+/// Where an entry's planners come from.
+#[derive(Clone)]
+enum Source {
+    Builtin(FromParams),
+    External,
+    User(Arc<Factory>),
+}
+
+impl Entry {
+    /// The name scenarios use (`planner = "..."`).
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// One line: what it is.
+    pub fn summary(&self) -> &str {
+        &self.summary
+    }
+
+    /// True for a planner every mrsim process knows (a built-in one, or
+    /// [`EXTERNAL`]); false for one registered by this program, which only
+    /// an in-process run can use.
+    pub fn is_builtin(&self) -> bool {
+        !matches!(self.source, Source::User(_))
+    }
+
+    /// True for [`EXTERNAL`]: nothing is built, the user's program drives.
+    pub fn is_external(&self) -> bool {
+        matches!(self.source, Source::External)
+    }
+}
+
+/// Why a planner could not be registered.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum RegisterError {
+    /// The name is taken (by a built-in planner, `external`, or an earlier
+    /// registration).
+    #[error("a planner named `{0}` is already registered")]
+    Taken(String),
+    /// The name is empty or holds whitespace, quotes or control characters.
+    #[error(
+        "`{0}` cannot be a planner name (non-empty, no whitespace, quotes or control characters)"
+    )]
+    BadName(String),
+}
+
+impl Default for Registry {
+    fn default() -> Self {
+        Self::builtin()
+    }
+}
+
+impl std::fmt::Debug for Registry {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_list()
+            .entries(self.entries.iter().map(|e| &e.name))
+            .finish()
+    }
+}
+
+impl std::fmt::Debug for Entry {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Entry")
+            .field("name", &self.name)
+            .field("builtin", &self.is_builtin())
+            .finish_non_exhaustive()
+    }
+}
+
+impl Registry {
+    /// The built-in planners ([`PLANNERS`], in their order), then
+    /// [`EXTERNAL`].
+    pub fn builtin() -> Self {
+        let mut entries: Vec<Entry> = PLANNERS
+            .iter()
+            .map(|p| Entry {
+                name: p.name.to_string(),
+                summary: p.summary.to_string(),
+                source: Source::Builtin(p.from_params),
+            })
+            .collect();
+        entries.push(Entry {
+            name: EXTERNAL.to_string(),
+            summary: EXTERNAL_SUMMARY.to_string(),
+            source: Source::External,
+        });
+        Self { entries }
+    }
+
+    /// Registers `factory` under `name`, with a one-line `summary`. The
+    /// factory reads the robot's params (refusing unknown ones, as the
+    /// built-in planners do: [`ParamReader`] helps).
+    pub fn register<F>(
+        &mut self,
+        name: &str,
+        summary: &str,
+        factory: F,
+    ) -> Result<&mut Self, RegisterError>
+    where
+        F: Fn(&Params) -> Result<Box<dyn Planner>, BuildError> + Send + Sync + 'static,
+    {
+        let bad = name.is_empty()
+            || name
+                .chars()
+                .any(|c| c.is_whitespace() || c.is_control() || c == '"' || c == '\'');
+        if bad {
+            return Err(RegisterError::BadName(name.to_string()));
+        }
+        if self.get(name).is_some() {
+            return Err(RegisterError::Taken(name.to_string()));
+        }
+        self.entries.push(Entry {
+            name: name.to_string(),
+            summary: summary.to_string(),
+            source: Source::User(Arc::new(factory)),
+        });
+        Ok(self)
+    }
+
+    /// Registers a planner without parameters: `make` builds one per
+    /// robot, and a robot that gives it any parameter is refused.
+    pub fn register_simple<P, M>(
+        &mut self,
+        name: &str,
+        summary: &str,
+        make: M,
+    ) -> Result<&mut Self, RegisterError>
+    where
+        P: Planner + 'static,
+        M: Fn() -> P + Send + Sync + 'static,
+    {
+        let owned = name.to_string();
+        self.register(name, summary, move |params| {
+            ParamReader::new(&owned, params).finish()?;
+            Ok(Box::new(make()))
+        })
+    }
+
+    /// The entry called `name`.
+    pub fn get(&self, name: &str) -> Option<&Entry> {
+        self.entries.iter().find(|e| e.name == name)
+    }
+
+    /// Every entry: the built-in planners, [`EXTERNAL`], then the
+    /// registered ones in the order they were registered.
+    pub fn entries(&self) -> &[Entry] {
+        &self.entries
+    }
+
+    /// Builds the planner called `name` with a robot's `params`.
+    pub fn build(&self, name: &str, params: &Params) -> Result<Box<dyn Planner>, BuildError> {
+        let Some(entry) = self.get(name) else {
+            return Err(BuildError::UnknownPlanner {
+                name: name.to_string(),
+                known: self
+                    .entries
+                    .iter()
+                    .map(|e| e.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            });
+        };
+        match &entry.source {
+            Source::Builtin(from_params) => Ok(from_params(params)?),
+            Source::External => Err(BuildError::External),
+            Source::User(factory) => factory(params),
+        }
+    }
+}
+
 /// Why a planner could not be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum BuildError {
@@ -130,17 +353,31 @@ pub enum BuildError {
     /// The planner refused its parameters.
     #[error(transparent)]
     Param(#[from] ParamError),
+    /// The robot's planner is [`EXTERNAL`]: mrsim builds nothing for it,
+    /// the user's own program drives it.
+    #[error(
+        "planner `external` is not built by mrsim: the robot is driven by your own program, \
+         which joins the run as its agent (mrsim::LiveAgent)"
+    )]
+    External,
+    /// A registered planner's factory refused (its own message).
+    #[error("{0}")]
+    Other(String),
 }
 
 /// Builds the planner called `name` with the robot's `params`: the entry of
-/// [`PLANNERS`] of that name.
+/// [`PLANNERS`] of that name ([`EXTERNAL`] builds nothing).
 pub fn build(name: &str, params: &Params) -> Result<Box<dyn Planner>, BuildError> {
     let Some(info) = PLANNERS.iter().find(|p| p.name == name) else {
+        if name == EXTERNAL {
+            return Err(BuildError::External);
+        }
         return Err(BuildError::UnknownPlanner {
             name: name.to_string(),
             known: PLANNERS
                 .iter()
                 .map(|p| p.name)
+                .chain([EXTERNAL])
                 .collect::<Vec<_>>()
                 .join(", "),
         });
@@ -181,6 +418,70 @@ mod tests {
                 info.name
             );
         }
+    }
+
+    struct Still;
+    impl Planner for Still {
+        fn plan(&mut self, _obs: &crate::Observation) -> crate::Command {
+            crate::Command::Velocity(crate::Vec2::zeros())
+        }
+    }
+
+    #[test]
+    fn a_registered_planner_is_built_by_name_and_listed_after_the_builtin_ones() {
+        let mut r = Registry::builtin();
+        r.register_simple("still", "stands", || Still).expect("new");
+        assert!(r.build("still", &Params::new()).is_ok());
+        let names: Vec<&str> = r.entries().iter().map(Entry::name).collect();
+        assert_eq!(names.len(), PLANNERS.len() + 2);
+        assert_eq!(names[names.len() - 2..], [EXTERNAL, "still"]);
+        assert!(!r.get("still").expect("still").is_builtin());
+        assert!(r.get("orca").expect("orca").is_builtin());
+        let err = r.build("nope", &Params::new()).err().expect("unknown");
+        assert!(err.to_string().contains("still"), "{err}");
+    }
+
+    #[test]
+    fn a_taken_or_malformed_name_is_refused() {
+        let mut r = Registry::builtin();
+        for name in ["homing", EXTERNAL] {
+            assert_eq!(
+                r.register_simple(name, "", || Still).err(),
+                Some(RegisterError::Taken(name.into()))
+            );
+        }
+        r.register_simple("mine", "", || Still).expect("new");
+        assert!(matches!(
+            r.register_simple("mine", "", || Still),
+            Err(RegisterError::Taken(_))
+        ));
+        for bad in ["", "my planner", "a\"b"] {
+            assert!(matches!(
+                r.register_simple(bad, "", || Still),
+                Err(RegisterError::BadName(_))
+            ));
+        }
+    }
+
+    #[test]
+    fn a_simple_planner_refuses_any_parameter_and_external_builds_nothing() {
+        let mut r = Registry::builtin();
+        r.register_simple("still", "", || Still).expect("new");
+        let mut params = Params::new();
+        params.insert("gain".into(), crate::ParamValue::Number(1.0));
+        let err = r.build("still", &params).err().expect("refused");
+        assert!(
+            matches!(&err, BuildError::Param(p) if p.key() == "gain"),
+            "{err}"
+        );
+        assert_eq!(
+            r.build(EXTERNAL, &Params::new()).err(),
+            Some(BuildError::External)
+        );
+        assert_eq!(
+            build(EXTERNAL, &Params::new()).err(),
+            Some(BuildError::External)
+        );
     }
 
     #[test]

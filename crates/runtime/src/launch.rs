@@ -113,6 +113,16 @@ pub enum RunError {
     /// The in-process run failed.
     #[error(transparent)]
     Inproc(#[from] InprocError),
+    /// A robot's planner failed in an in-process lockstep run (panicked, or
+    /// returned a non-finite command): the run stopped at that tick; the
+    /// outputs so far are in `dir`.
+    #[error("{failure}; the run stopped there, outputs so far are in {}", dir.display())]
+    Planner {
+        /// Which robot, which tick, how.
+        failure: mrsim_agents::PlanFailure,
+        /// The run folder.
+        dir: PathBuf,
+    },
     /// The run ended but could not be finished.
     #[error(transparent)]
     Finish(#[from] FinishError),
@@ -143,6 +153,7 @@ pub struct Prepared {
 /// and the termination signals (from now on they stop the run instead of
 /// this process).
 pub fn prepare(validated: Validated, request: RunRequest) -> Result<Prepared, RunError> {
+    check_transport(&validated, request.transport)?;
     let dir = crate::out::prepare(request.out.as_deref(), &validated.scenario().name)?;
     let run_id = request
         .run_id
@@ -159,6 +170,33 @@ pub fn prepare(validated: Validated, request: RunRequest) -> Result<Prepared, Ru
         ns,
         applied,
     })
+}
+
+/// Refuses a transport the scenario's robots cannot run over: an
+/// in-process run has no way in for an `external` robot's program, and an
+/// agent process knows only the built-in planners, not a program's own.
+fn check_transport(validated: &Validated, transport: Transport) -> Result<(), Invalid> {
+    let (robots, why) = match transport {
+        Transport::Inproc => (
+            validated.external_robots(),
+            "has planner = \"external\": its own program joins the run over shared memory, \
+             which an in-process run (--transport inproc) does not offer; run it without \
+             --transport inproc, or register the program's planner for an in-process run",
+        ),
+        Transport::Shm => (
+            validated.robots_with_own_planners(),
+            "has a planner registered in this program only: agent processes know the \
+             built-in planners alone; run it in-process",
+        ),
+    };
+    match robots.as_slice() {
+        [] => Ok(()),
+        robots => Err(Invalid(format!(
+            "{}: robot {} {why}",
+            validated.origin(),
+            mrsim_world::names::first_few(robots, 5)
+        ))),
+    }
 }
 
 /// Clears what a crashed earlier run with this id left behind, unless a
@@ -224,8 +262,14 @@ impl Prepared {
             ns,
             ..
         } = self;
+        let registry = validated.registry().clone();
         let (scenario, world) = validated.into_world();
         let stop = Arc::new(AtomicBool::new(false));
+        // A planner that fails in lockstep stops the run as a signal would.
+        let halt = mrsim_agents::Halt::new(stop.clone());
+        let mut agents = mrsim_agents::AgentOptions::new("");
+        agents.registry = registry;
+        agents.halt = Some(halt.clone());
         let done = Arc::new(AtomicBool::new(false));
         // A signal to the launcher stops the in-process run as SIGTERM stops
         // a world process.
@@ -240,7 +284,8 @@ impl Prepared {
                 }
             })
         };
-        let outcome = crate::inproc::run_scenario(&scenario, world, &dir, ns.run_id(), stop);
+        let outcome =
+            crate::inproc::run_scenario(&scenario, world, &dir, ns.run_id(), stop, &agents);
         done.store(true, Ordering::SeqCst);
         let _ = watcher.join();
         let outcome = outcome?;
@@ -255,13 +300,17 @@ impl Prepared {
                 })
             })
             .collect();
-        Ok(crate::finish::finish(Ending {
+        let finished = crate::finish::finish(Ending {
             dir: &dir,
             world_failure: None,
             agent_failures,
             usage: Some((Transport::Inproc.name(), &outcome.agent_usage)),
             render: request.render,
-        })?)
+        })?;
+        match halt.failure() {
+            Some(failure) => Err(RunError::Planner { failure, dir }),
+            None => Ok(finished),
+        }
     }
 
     fn run_processes(self, on_event: &mut dyn FnMut(Event<'_>)) -> Result<Outcome, RunError> {
@@ -273,17 +322,24 @@ impl Prepared {
         // join: the world and each agent wait a minute plus a second per
         // robot.
         let join_secs = format!("{}", 60.0 + scenario.robots.len() as f64);
+        // An `external` robot's program is started by its user, whenever:
+        // then the world waits for its agents without a limit (a signal
+        // ends the wait).
+        let external = scenario
+            .robots
+            .iter()
+            .any(|r| r.planner == mrsim_planners::EXTERNAL);
+        let start_timeout: &[&str] = if external {
+            &[]
+        } else {
+            &["--start-timeout", &join_secs]
+        };
         let mut world = Command::new(&exe)
             .arg("world")
             .args(source.to_args())
-            .args([
-                "--run",
-                run_id,
-                "--start-timeout",
-                &join_secs,
-                "--launched",
-                "--out",
-            ])
+            .args(["--run", run_id])
+            .args(start_timeout)
+            .args(["--launched", "--out"])
             .arg(dir)
             .stdin(Stdio::null())
             .spawn()
@@ -302,7 +358,9 @@ impl Prepared {
         };
         let mut agents: Vec<(&str, Child)> = Vec::with_capacity(scenario.robots.len());
         for r in &scenario.robots {
-            agents.push((&r.name, spawn(&r.name)?));
+            if r.planner != mrsim_planners::EXTERNAL {
+                agents.push((&r.name, spawn(&r.name)?));
+            }
         }
         let mut restarts = vec![0u32; agents.len()];
 

@@ -4,10 +4,12 @@
 //! world and the in-process run take instead of checking again.
 
 use crate::error::Invalid;
+use mrsim_planners::{BuildError, EXTERNAL, Registry};
 use mrsim_scenario::{Loaded, Mode, Scenario};
 use mrsim_world::World;
 use std::ffi::OsString;
 use std::path::PathBuf;
+use std::sync::Arc;
 
 /// Where a scenario comes from: a file (or the built-in demo) and the
 /// overrides applied to it.
@@ -78,13 +80,15 @@ pub fn mode_name(mode: Mode) -> &'static str {
 }
 
 /// A scenario that passed every check: the file and its overrides, every
-/// robot's planner and parameters, and whether the world can run it (the
-/// obstacles' motion models). Built once per process; the world built while
-/// checking is kept for the run.
+/// robot's planner and parameters (against the [`Registry`] it was
+/// validated with; a robot whose planner is `external` builds nothing), and
+/// whether the world can run it (the obstacles' motion models). Built once
+/// per process; the world built while checking is kept for the run.
 pub struct Validated {
     source: ScenarioSource,
     loaded: Loaded,
     world: World,
+    registry: Arc<Registry>,
 }
 
 impl std::fmt::Debug for Validated {
@@ -97,9 +101,16 @@ impl std::fmt::Debug for Validated {
 }
 
 impl Validated {
-    /// Loads the scenario of `source` and checks it fully. A refusal names
-    /// the file, line and key where it can.
+    /// Loads the scenario of `source` and checks it fully, against the
+    /// built-in planners. A refusal names the file, line and key where it
+    /// can.
     pub fn new(source: ScenarioSource) -> Result<Self, Invalid> {
+        Self::with_registry(source, Arc::new(Registry::builtin()))
+    }
+
+    /// [`Self::new`], every robot's planner looked up in `registry` (the
+    /// built-in planners and a program's own).
+    pub fn with_registry(source: ScenarioSource, registry: Arc<Registry>) -> Result<Self, Invalid> {
         let overrides = source.overrides()?;
         let loaded = match &source.path {
             Some(path) => mrsim_scenario::load_with_overrides(path, &overrides),
@@ -111,14 +122,16 @@ impl Validated {
         }
         .map_err(|e| Invalid(e.to_string()))?;
         for r in &loaded.scenario.robots {
-            if let Err(e) = mrsim_agents::build_planner(r) {
+            if r.planner == EXTERNAL {
+                continue;
+            }
+            if let Err(e) = mrsim_agents::build_planner_in(&registry, r) {
                 let key = match &e {
-                    mrsim_planners::BuildError::UnknownPlanner { .. } => {
+                    BuildError::Param(p) => format!("robot.{}.params.{}", r.name, p.key()),
+                    BuildError::UnknownPlanner { .. } | BuildError::External => {
                         format!("robot.{}.planner", r.name)
                     }
-                    mrsim_planners::BuildError::Param(p) => {
-                        format!("robot.{}.params.{}", r.name, p.key())
-                    }
+                    BuildError::Other(_) => format!("robot.{}.params", r.name),
                 };
                 return Err(Invalid(loaded.error_at(&key, e.to_string()).to_string()));
             }
@@ -138,7 +151,34 @@ impl Validated {
             source,
             loaded,
             world,
+            registry,
         })
+    }
+
+    /// The planners the scenario was validated against.
+    pub fn registry(&self) -> &Arc<Registry> {
+        &self.registry
+    }
+
+    /// The robots whose planner is `external` (driven by the user's own
+    /// program, which joins the run as their agent).
+    pub fn external_robots(&self) -> Vec<&str> {
+        self.robots_where(|planner| planner == EXTERNAL)
+    }
+
+    /// The robots whose planner this program registered (not built in):
+    /// only an in-process run can build them.
+    pub fn robots_with_own_planners(&self) -> Vec<&str> {
+        self.robots_where(|planner| self.registry.get(planner).is_some_and(|e| !e.is_builtin()))
+    }
+
+    fn robots_where(&self, f: impl Fn(&str) -> bool) -> Vec<&str> {
+        self.scenario()
+            .robots
+            .iter()
+            .filter(|r| f(&r.planner))
+            .map(|r| r.name.as_str())
+            .collect()
     }
 
     /// The resolved scenario (defaults applied, generated robots expanded).
@@ -197,6 +237,44 @@ mod tests {
         };
         assert!(refused("world.dt").contains("expected KEY=VALUE"));
         assert!(refused("planner=nope").contains("nope"));
+    }
+
+    struct Still;
+    impl mrsim_planners::Planner for Still {
+        fn plan(&mut self, _obs: &mrsim_planners::Observation) -> mrsim_planners::Command {
+            mrsim_planners::Command::Velocity(Default::default())
+        }
+    }
+
+    #[test]
+    fn every_robots_planner_is_checked_against_the_registry_and_external_builds_nothing() {
+        let demo = |set: &str, registry: &Arc<Registry>| {
+            Validated::with_registry(
+                ScenarioSource {
+                    set: vec![set.into()],
+                    ..Default::default()
+                },
+                registry.clone(),
+            )
+        };
+        let builtin = Arc::new(Registry::builtin());
+        let mut own = Registry::builtin();
+        own.register_simple("still", "stands", || Still)
+            .expect("a new name");
+        let own = Arc::new(own);
+        let refused = demo("planner=still", &builtin).expect_err("unknown to the built-ins");
+        assert!(refused.to_string().contains("still"), "{refused}");
+        let v = demo("planner=still", &own).expect("registered");
+        assert_eq!(
+            v.robots_with_own_planners().len(),
+            v.scenario().robots.len()
+        );
+        assert!(v.external_robots().is_empty());
+        let v = demo("robot.r0.planner=external", &builtin).expect("external is valid");
+        assert_eq!(v.external_robots(), ["r0"]);
+        assert!(v.robots_with_own_planners().is_empty());
+        let refused = demo("robot.r0.params.gain=1", &own).expect_err("an unknown param");
+        assert!(refused.to_string().contains("gain"), "{refused}");
     }
 
     #[test]

@@ -79,13 +79,16 @@ pub struct InprocOutcome {
 /// Runs `scenario` on `world` (built from it) with the world in this thread and one thread per agent,
 /// writing the outputs (trajectory.csv, events.jsonl, metrics.json,
 /// scenario.json) into `out_dir`, which must exist. `stop` ends the run
-/// early (the role SIGTERM plays for processes).
+/// early (the role SIGTERM plays for processes). Each agent joins with
+/// `agents`'s options (its robot's name put in): where planners come from,
+/// and what stops the run when one fails.
 pub fn run_scenario(
     scenario: &Scenario,
     world: mrsim_world::World,
     out_dir: &Path,
     run_id: &str,
     stop: Arc<AtomicBool>,
+    agents: &mrsim_agents::AgentOptions,
 ) -> Result<InprocOutcome, InprocError> {
     let n = scenario.robots.len();
     let cpus = std::thread::available_parallelism().map_or(1, |p| p.get());
@@ -131,7 +134,8 @@ pub fn run_scenario(
     }
     let mut handles = Vec::with_capacity(n);
     for (i, (robot, mut side)) in scenario.robots.iter().zip(sides).enumerate() {
-        let opts = mrsim_agents::AgentOptions::new(&robot.name);
+        let mut opts = agents.clone();
+        opts.robot = robot.name.clone();
         let pool = pool.clone();
         let handle = std::thread::Builder::new()
             .name(format!("agent-{}", robot.name))

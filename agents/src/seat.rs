@@ -1,0 +1,366 @@
+//! A robot's seat in a run: what joining gives an agent (its id and token,
+//! its scenario entry, the static geometry, its observer and diagnostics)
+//! and what every way of driving the robot does with it each tick: observe
+//! a snapshot, turn a command into the wire message, send it (through the
+//! fault injector in tests), and note a planner's failure. The planner
+//! itself is not here: a [`crate::Driver`] pairs a seat with one, a
+//! [`crate::Live`] hands the observation to whatever program answers.
+
+use crate::guard::{Halt, PlanFailure, PlanFault};
+use crate::{AgentError, AgentExit, AgentOptions, diagnostics, fault, observe};
+use mrsim_planners::{
+    Command, DesignatedPath, Diagnostic, Observation, Planner, Registry, Segment, Vec2,
+};
+use mrsim_proto::{
+    BodyState, CommandMsg, FixedStr, JoinRequest, SnapshotHeader, command_kind, now_ns,
+};
+use mrsim_scenario::RobotSpec;
+use mrsim_transport::{AgentTransport, TransportError};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// One joined robot, without its planner.
+pub(crate) struct Seat {
+    pub(crate) me: usize,
+    /// The robot id put in commands (another one only in fault tests).
+    claim: u32,
+    token: u64,
+    robot_count: usize,
+    pub(crate) capacity: usize,
+    pub(crate) spec: RobotSpec,
+    pub(crate) walls: Arc<[Segment]>,
+    pub(crate) path: Option<Arc<DesignatedPath>>,
+    observer: observe::Observer,
+    diag: Option<diagnostics::DiagnosticsWriter>,
+    answered: Option<u64>,
+    injector: Option<fault::Injector>,
+    hung: bool,
+    lockstep: bool,
+    halt: Option<Halt>,
+    /// The first failure of the planner in a realtime run (reported at
+    /// the end; the run goes on, each failed tick a miss).
+    failed: Option<PlanFailure>,
+}
+
+/// Joins the run as `opts.robot` and reads the run's setup. `None` if the
+/// process was asked to stop meanwhile.
+pub(crate) fn join_seat(
+    link: &mut dyn AgentTransport,
+    opts: &AgentOptions,
+) -> Result<Option<Seat>, AgentError> {
+    // Join: ask for the robot, re-asking until the world answers.
+    let nonce = now_ns() ^ ((std::process::id() as u64) << 20) ^ 0x6d72_7369_6d00_0000;
+    let req = JoinRequest {
+        protocol_version: opts.protocol_version,
+        pid: std::process::id(),
+        nonce,
+        robot: FixedStr::new(&opts.robot),
+    };
+    let start = Instant::now();
+    let mut last_ask: Option<Instant> = None;
+    let reply = loop {
+        if link.termination_requested() {
+            return Ok(None);
+        }
+        if last_ask.is_none_or(|t| t.elapsed() > Duration::from_millis(500)) {
+            if last_ask.is_none() && opts.fault == Some(fault::Fault::JoinTwice) {
+                link.request_join(&req)?;
+            }
+            link.request_join(&req)?;
+            last_ask = Some(Instant::now());
+        }
+        if let Some(r) = link.poll_join_reply(nonce)? {
+            break r;
+        }
+        if start.elapsed() > opts.join_timeout {
+            return Err(AgentError::Timeout {
+                what: "join reply",
+                secs: opts.join_timeout.as_secs_f64(),
+            });
+        }
+        link.wait(Duration::from_millis(50))?;
+    };
+    if reply.accepted == 0 {
+        return Err(AgentError::Refused {
+            robot: opts.robot.clone(),
+            reason: reply.reason.as_str().to_string(),
+        });
+    }
+
+    // Setup: the resolved scenario, from the world.
+    let setup = loop {
+        if let Some(s) = link.setup()? {
+            break s;
+        }
+        if start.elapsed() > opts.join_timeout {
+            return Err(AgentError::Timeout {
+                what: "setup",
+                secs: opts.join_timeout.as_secs_f64(),
+            });
+        }
+        link.wait(Duration::from_millis(20))?;
+    };
+    let me = reply.robot_id as usize;
+    let view: SetupView =
+        serde_json::from_slice(&setup).map_err(|e| AgentError::BadSetup(e.to_string()))?;
+    let scenario = view.scenario;
+    let spec: RobotSpec = scenario
+        .robots
+        .get(me)
+        .ok_or_else(|| AgentError::BadSetup(format!("no robot with id {me}")))
+        .and_then(|raw| {
+            serde_json::from_str(raw.get()).map_err(|e| AgentError::BadSetup(e.to_string()))
+        })?;
+    let walls: Arc<[Segment]> =
+        mrsim_scenario::walls_and_arena(&scenario.walls, scenario.world.arena)
+            .iter()
+            .map(|w| Segment {
+                a: Vec2::new(w[0][0], w[0][1]),
+                b: Vec2::new(w[1][0], w[1][1]),
+            })
+            .collect();
+    let path = (!spec.path.is_empty()).then(|| {
+        Arc::new(DesignatedPath {
+            points: spec.path.iter().map(|p| Vec2::new(p[0], p[1])).collect(),
+            boundary: spec.boundary.unwrap_or(f64::INFINITY),
+        })
+    });
+    let robot_count = scenario.robots.len();
+    let capacity = robot_count + scenario.obstacles;
+    let observer = observe::Observer::for_robot(&scenario.world, Some(&spec), me, capacity);
+    Ok(Some(Seat {
+        me,
+        claim: opts.impersonate.unwrap_or(me as u32),
+        token: reply.token,
+        robot_count,
+        capacity,
+        lockstep: scenario.world.mode == mrsim_scenario::Mode::Lockstep,
+        diag: None,
+        spec,
+        walls,
+        path,
+        observer,
+        answered: None,
+        injector: opts.fault.map(fault::Injector::new),
+        hung: false,
+        halt: opts.halt.clone(),
+        failed: None,
+    })
+    .map(|mut seat| {
+        seat.diag = start_diagnostics(view.out_dir, me, &seat.spec.name);
+        seat
+    }))
+}
+
+/// The planner's diagnostics go to a part file in the run's folder, when
+/// the world's folder is reachable from here (same machine).
+fn start_diagnostics(
+    out_dir: Option<String>,
+    me: usize,
+    robot: &str,
+) -> Option<diagnostics::DiagnosticsWriter> {
+    let dir = out_dir
+        .map(std::path::PathBuf::from)
+        .filter(|d| d.is_dir())?;
+    match diagnostics::DiagnosticsWriter::start(&dir, me, robot) {
+        Ok(w) => Some(w),
+        Err(e) => {
+            eprintln!("agent {robot}: no diagnostics: {e}");
+            None
+        }
+    }
+}
+
+/// The part of the world's setup an agent reads. Only its own robot's
+/// entry is parsed (the others are skipped as raw text, nothing built): a
+/// thousand agents each building all thousand robots' specs cost O(n²) at
+/// join, seconds on two cores.
+#[derive(serde::Deserialize)]
+struct SetupView<'a> {
+    #[serde(borrow)]
+    scenario: ScenarioView<'a>,
+    #[serde(default)]
+    out_dir: Option<String>,
+}
+
+/// [`mrsim_scenario::Scenario`] as an agent needs it.
+#[derive(serde::Deserialize)]
+struct ScenarioView<'a> {
+    world: mrsim_scenario::WorldConfig,
+    #[serde(borrow)]
+    robots: Vec<&'a serde_json::value::RawValue>,
+    /// Only counted.
+    #[serde(default, deserialize_with = "count")]
+    obstacles: usize,
+    #[serde(default)]
+    walls: Vec<mrsim_scenario::WallSpec>,
+}
+
+/// The length of a sequence, its items skipped.
+fn count<'de, D: serde::Deserializer<'de>>(d: D) -> Result<usize, D::Error> {
+    struct Count;
+    impl<'de> serde::de::Visitor<'de> for Count {
+        type Value = usize;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("a sequence")
+        }
+        fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<usize, A::Error> {
+            let mut n = 0;
+            while seq.next_element::<serde::de::IgnoredAny>()?.is_some() {
+                n += 1;
+            }
+            Ok(n)
+        }
+    }
+    d.deserialize_seq(Count)
+}
+
+impl Seat {
+    /// Builds the robot's planner from `registry`.
+    pub(crate) fn build_planner(
+        &self,
+        registry: &Registry,
+    ) -> Result<Box<dyn Planner>, AgentError> {
+        registry
+            .build(&self.spec.planner, &crate::planner_params(&self.spec))
+            .map_err(|source| AgentError::Planner {
+                robot: self.spec.name.clone(),
+                source,
+            })
+    }
+
+    /// The message telling the world this robot's agent is ready.
+    pub(crate) fn ready(&self) -> CommandMsg {
+        let now = now_ns();
+        CommandMsg {
+            // Its own robot even when impersonating (fault tests): the
+            // world must start the run to see the forged commands.
+            robot_id: self.me as u32,
+            kind: command_kind::READY,
+            token: self.token,
+            tick: 0,
+            value: [0.0, 0.0],
+            compute_ns: 0,
+            woke_ns: now,
+            sent_ns: now,
+        }
+    }
+
+    /// True if this snapshot (not the run's last) is one to answer: not
+    /// answered yet, with this robot in it, and the agent not hung (a
+    /// fault test's process fault due at this tick runs here).
+    pub(crate) fn due(&mut self, header: &SnapshotHeader, bodies: usize) -> bool {
+        if self.hung || self.answered.is_some_and(|t| t >= header.tick) || self.me >= bodies {
+            return false;
+        }
+        if let Some(inj) = self.injector.as_mut() {
+            self.hung = inj.before_plan(header.tick) == fault::Before::Hang;
+        }
+        !self.hung
+    }
+
+    /// The observation of this snapshot, looking only at the bodies of
+    /// indices `near` when given (see [`observe::Observer::observe_among`]).
+    pub(crate) fn observe_among(
+        &mut self,
+        header: &SnapshotHeader,
+        bodies: &[BodyState],
+        near: Option<&[u32]>,
+    ) -> Observation<'_> {
+        self.observer.observe_among(
+            header,
+            bodies,
+            near,
+            &self.spec,
+            &self.walls,
+            self.path.as_deref(),
+        )
+    }
+
+    /// Sends `cmd` as this robot's answer to `tick` (through the fault
+    /// injector in fault tests) and notes the tick answered.
+    pub(crate) fn send(
+        &mut self,
+        header: &SnapshotHeader,
+        cmd: Command,
+        times: [u64; 3],
+        send: &mut dyn FnMut(&CommandMsg) -> Result<(), TransportError>,
+    ) -> Result<(), AgentError> {
+        let [compute_ns, woke_ns, sent_ns] = times;
+        let (kind, v) = match cmd {
+            Command::Force(f) => (command_kind::FORCE, f),
+            Command::Velocity(v) => (command_kind::VELOCITY, v),
+        };
+        let msg = CommandMsg {
+            robot_id: self.claim,
+            kind,
+            token: self.token,
+            tick: header.tick,
+            value: [v.x, v.y],
+            compute_ns,
+            woke_ns,
+            sent_ns,
+        };
+        match &self.injector {
+            Some(inj) => {
+                for m in inj.corrupt(msg, self.robot_count, header.deadline_ns) {
+                    send(&m)?;
+                }
+            }
+            None => send(&msg)?,
+        }
+        self.answered = Some(header.tick);
+        Ok(())
+    }
+
+    /// True if the planner's diagnostics are written (asking a planner
+    /// for them costs it something).
+    pub(crate) fn wants_diagnostics(&self) -> bool {
+        self.diag.is_some()
+    }
+
+    /// Queues the planner's values of one tick for diagnostics.csv.
+    pub(crate) fn diagnostics(&mut self, tick: u64, time: f64, values: Vec<Diagnostic>) {
+        if let Some(d) = &mut self.diag {
+            d.push(tick, time, values);
+        }
+    }
+
+    /// The planner failed at `tick`. Lockstep: the robot answers no more,
+    /// the run's [`Halt`] (in-process) stops the run, and the error names
+    /// the robot and the tick. Realtime: the tick goes unanswered (a miss,
+    /// the scenario's `on_deadline_miss` applies) and the run goes on; the
+    /// first failure is reported at the end.
+    pub(crate) fn failed(&mut self, tick: u64, what: PlanFault) -> Result<(), AgentError> {
+        let failure = PlanFailure {
+            robot: self.spec.name.clone(),
+            tick,
+            what,
+        };
+        self.answered = Some(tick);
+        if !self.lockstep {
+            self.failed.get_or_insert(failure);
+            return Ok(());
+        }
+        self.hung = true;
+        if let Some(h) = &self.halt {
+            h.raise(&failure);
+        }
+        Err(AgentError::Plan(failure))
+    }
+
+    /// Ends the robot's control: writes out its diagnostics; a planner
+    /// that failed in a realtime run is reported now.
+    pub(crate) fn finish(&mut self, exit: AgentExit) -> Result<AgentExit, AgentError> {
+        if let Some(Err(e)) = self.diag.take().map(diagnostics::DiagnosticsWriter::finish) {
+            eprintln!(
+                "agent {}: diagnostics not fully written: {e}",
+                self.spec.name
+            );
+        }
+        match self.failed.take() {
+            Some(f) => Err(AgentError::Plan(f)),
+            None => Ok(exit),
+        }
+    }
+}
