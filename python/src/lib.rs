@@ -4,6 +4,10 @@
 //! environments themselves.
 #![warn(missing_docs)]
 
+mod live;
+mod planner;
+mod run;
+
 use mrsim_runtime::sim::{Sim as Engine, SimError, observation_size};
 use mrsim_runtime::{ScenarioSource, Validated};
 use mrsim_world::Applied;
@@ -261,6 +265,11 @@ fn reshape(py: Python<'_>, flat: Vec<f64>, rows: usize, cols: usize) -> Bound<'_
 /// The native module.
 #[pymodule]
 fn _mrsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    planner::quiet_planner_panics();
     m.add_class::<Sim>()?;
+    m.add_class::<planner::PyObservation>()?;
+    m.add_class::<live::Agent>()?;
+    m.add_function(wrap_pyfunction!(run::run_inproc, m)?)?;
+    m.add("PlannerError", m.py().get_type::<run::PlannerError>())?;
     Ok(())
 }

@@ -21,11 +21,12 @@
 use crate::error::Invalid;
 use crate::validate::{ScenarioSource, Validated};
 use mrsim_agents::observe::Observer;
-use mrsim_planners::{Command, DesignatedPath, Planner, Segment, Vec2};
+use mrsim_planners::{Command, DesignatedPath, Planner, Registry, Segment, Vec2};
 use mrsim_proto::{BodyState, SnapshotHeader};
 use mrsim_scenario::Scenario;
 use mrsim_world::physics::{Contact, Owner};
 use mrsim_world::{Applied, World};
+use std::sync::Arc;
 
 /// Why a simulation could not be built or stepped.
 #[derive(Debug, thiserror::Error)]
@@ -109,6 +110,7 @@ pub fn observation_size(k: usize) -> usize {
 /// The stepping engine; see the module documentation.
 pub struct Sim {
     source: ScenarioSource,
+    registry: Arc<Registry>,
     scenario: Scenario,
     world: World,
     learners: Vec<usize>,
@@ -125,9 +127,11 @@ pub struct Sim {
 impl Sim {
     /// A simulation of `validated` in which the robots named `learners` take
     /// their commands from the caller (in this order) and the others follow
-    /// their planners.
+    /// their planners (built from `validated`'s registry; a learner's
+    /// planner, `external` included, is never built).
     pub fn new(validated: Validated, learners: &[String]) -> Result<Self, SimError> {
         let source = validated.source().clone();
+        let registry = validated.registry().clone();
         let (scenario, world) = validated.into_world();
         let mut learner_ids = Vec::with_capacity(learners.len());
         for name in learners {
@@ -141,6 +145,7 @@ impl Sim {
         }
         let mut sim = Self {
             source,
+            registry,
             walls: Vec::new(),
             builtins: Vec::new(),
             contacts: Vec::new(),
@@ -163,7 +168,8 @@ impl Sim {
             Some(seed) => {
                 let mut source = self.source.clone();
                 source.set.push(format!("world.seed={seed}"));
-                let (scenario, world) = Validated::new(source)?.into_world();
+                let (scenario, world) =
+                    Validated::with_registry(source, self.registry.clone())?.into_world();
                 self.scenario = scenario;
                 self.world = world;
             }
@@ -188,9 +194,11 @@ impl Sim {
                 continue;
             }
             let planner =
-                mrsim_agents::build_planner(spec).map_err(|source| SimError::Planner {
-                    robot: spec.name.clone(),
-                    source,
+                mrsim_agents::build_planner_in(&self.registry, spec).map_err(|source| {
+                    SimError::Planner {
+                        robot: spec.name.clone(),
+                        source,
+                    }
                 })?;
             self.builtins.push(Builtin {
                 index: i,
