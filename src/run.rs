@@ -28,6 +28,16 @@ pub fn main(args: &RunArgs) -> Result<i32> {
         eprintln!("warning: {why}");
     }
     let ns = prepared.namespace().clone();
+    let external = prepared.validated().external_robots();
+    if !external.is_empty() {
+        eprintln!(
+            "run `{}`: waiting for your own agent for {} (planner = \"external\"): a program \
+             that joins with mrsim::LiveAgent, run id `{}`",
+            ns.run_id(),
+            external.join(", "),
+            ns.run_id()
+        );
+    }
     let mut watch = None;
     let outcome = prepared
         .start(&mut |event| match event {

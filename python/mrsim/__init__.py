@@ -13,8 +13,6 @@ navigation environments.
 """
 
 import json
-import signal
-import threading
 from importlib import resources as _resources
 from pathlib import Path
 from typing import NamedTuple
@@ -56,23 +54,14 @@ def run(scenario=None, planners=None, out=None, set=(), render=False, plan_timeo
     the outputs so far written: :class:`PlannerError` names the robot and
     the tick (attributes ``robot``, ``tick``, ``dir``).
     """
-    # The run catches SIGINT and SIGTERM to stop cleanly; Python's own
-    # handlers come back afterwards.
-    main = threading.current_thread() is threading.main_thread()
-    saved = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)} if main else {}
-    try:
-        folder = run_inproc(
-            None if scenario is None else str(scenario),
-            dict(planners or {}),
-            None if out is None else str(out),
-            list(set),
-            render,
-            plan_timeout,
-        )
-    finally:
-        for s, h in saved.items():
-            if h is not None:
-                signal.signal(s, h)
+    folder = run_inproc(
+        None if scenario is None else str(scenario),
+        dict(planners or {}),
+        None if out is None else str(out),
+        list(set),
+        render,
+        plan_timeout,
+    )
     folder = Path(folder)
     metrics = json.loads((folder / "metrics.json").read_text())
     return Run(metrics, folder)

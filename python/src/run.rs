@@ -4,8 +4,8 @@
 
 use crate::planner::{PyPlanner, describe};
 use mrsim_planners::{BuildError, ParamValue, Params, Registry};
-use mrsim_runtime::launch::{self, RunError, RunRequest, Transport};
-use mrsim_runtime::{ScenarioSource, Validated};
+use mrsim_runtime::ScenarioSource;
+use mrsim_runtime::launch::{self, InProcess, RunError};
 use mrsim_scenario::Mode;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -106,28 +106,22 @@ pub fn run_inproc(
             )));
         }
     };
-    let registry = Arc::new(registry(planners.as_ref(), limit)?);
-    let source = ScenarioSource {
-        path: scenario,
-        mode: Some(Mode::Lockstep),
-        set,
-    };
-    // Validating builds each Python planner once: with the GIL released,
-    // as the run's worker threads take it.
-    let validated = py
-        .detach(|| Validated::with_registry(source, registry))
-        .map_err(|e| PyValueError::new_err(e.to_string()))?;
-    let request = RunRequest {
+    let req = InProcess {
+        scenario: ScenarioSource {
+            path: scenario,
+            mode: Some(Mode::Lockstep),
+            set,
+        },
+        registry: Arc::new(registry(planners.as_ref(), limit)?),
         out,
-        transport: Transport::Inproc,
         render,
-        ..Default::default()
     };
-    let prepared = launch::prepare(validated, request).map_err(|e| run_error(py, e))?;
-    let outcome = py
-        .detach(|| prepared.start(&mut |_| {}))
+    // The GIL is released for the run: its worker threads take it to call
+    // the Python planners.
+    let result = py
+        .detach(|| launch::run_in_process(&req))
         .map_err(|e| run_error(py, e))?;
-    Ok(outcome.dir.to_string_lossy().into_owned())
+    Ok(result.dir.to_string_lossy().into_owned())
 }
 
 /// The Python exception for a failed run.

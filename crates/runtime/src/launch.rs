@@ -14,7 +14,7 @@ use crate::finish::{AgentFailure, Ending, FinishError, Outcome, WorldFailure};
 use crate::inproc::InprocError;
 use crate::sched::{Applied, Sched};
 use crate::usage::AgentUsage;
-use crate::validate::Validated;
+use crate::validate::{ScenarioSource, Validated};
 use mrsim_transport::Namespace;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
@@ -172,6 +172,71 @@ pub fn prepare(validated: Validated, request: RunRequest) -> Result<Prepared, Ru
     })
 }
 
+/// A run in this process, headless: what a program that brings its own
+/// planners asks for ([`run_in_process`]).
+#[derive(Debug, Clone, Default)]
+pub struct InProcess {
+    /// The scenario file and its overrides.
+    pub scenario: ScenarioSource,
+    /// The planners the robots' names are looked up in: the built-in ones
+    /// and the program's own ([`mrsim_planners::Registry::register`]).
+    pub registry: Arc<mrsim_planners::Registry>,
+    /// The output folder; `None`: a fresh folder under `runs/`.
+    pub out: Option<PathBuf>,
+    /// Draw plot.svg/png and replay.html at the end.
+    pub render: bool,
+}
+
+/// What a finished in-process run gives back.
+#[derive(Debug, Clone)]
+pub struct RunResult {
+    /// The run folder (trajectory.csv, events.jsonl, metrics.json, ...).
+    pub dir: PathBuf,
+    /// metrics.json, typed.
+    pub metrics: mrsim_runfolder::RunMetrics,
+    /// Agents that ended badly while the world ran to its end.
+    pub agent_failures: Vec<AgentFailure>,
+}
+
+/// Runs a scenario in this process (the world in the calling thread, the
+/// robots' planners in a pool of threads, as `--transport inproc`), its
+/// robots' planners built from `req.registry`. Unlike `mrsim run` it takes
+/// no termination signals over (the calling program keeps its own) and
+/// claims no shared memory. A refusal ([`RunError::Invalid`]) comes before
+/// anything ran; a planner that fails in lockstep stops the run
+/// ([`RunError::Planner`], the outputs so far written).
+pub fn run_in_process(req: &InProcess) -> Result<RunResult, RunError> {
+    let validated = Validated::with_registry(req.scenario.clone(), req.registry.clone())?;
+    let request = RunRequest {
+        out: req.out.clone(),
+        transport: Transport::Inproc,
+        render: req.render,
+        ..Default::default()
+    };
+    check_transport(&validated, request.transport)?;
+    let dir = crate::out::prepare(request.out.as_deref(), &validated.scenario().name)?;
+    let ns = Namespace::new(&Namespace::fresh_run_id()).map_err(|e| Invalid(e.to_string()))?;
+    let prepared = Prepared {
+        validated,
+        request,
+        dir,
+        ns,
+        applied: Applied::default(),
+    };
+    let outcome = prepared.run_inproc()?;
+    let metrics = outcome.metrics.ok_or_else(|| {
+        RunError::Finish(FinishError::ReadMetrics {
+            path: outcome.dir.join(mrsim_runfolder::METRICS_FILE),
+            source: std::io::Error::other("the run wrote no metrics"),
+        })
+    })?;
+    Ok(RunResult {
+        dir: outcome.dir,
+        metrics,
+        agent_failures: outcome.agent_failures,
+    })
+}
+
 /// Refuses a transport the scenario's robots cannot run over: an
 /// in-process run has no way in for an `external` robot's program, and an
 /// agent process knows only the built-in planners, not a program's own.
@@ -189,14 +254,15 @@ fn check_transport(validated: &Validated, transport: Transport) -> Result<(), In
              built-in planners alone; run it in-process",
         ),
     };
-    match robots.as_slice() {
-        [] => Ok(()),
-        robots => Err(Invalid(format!(
-            "{}: robot {} {why}",
-            validated.origin(),
-            mrsim_world::names::first_few(robots, 5)
-        ))),
+    if robots.is_empty() {
+        return Ok(());
     }
+    let quoted: Vec<String> = robots.iter().map(|r| format!("`{r}`")).collect();
+    Err(Invalid(format!(
+        "{}: robot {} {why}",
+        validated.origin(),
+        mrsim_world::names::first_few(&quoted, 5)
+    )))
 }
 
 /// Clears what a crashed earlier run with this id left behind, unless a
