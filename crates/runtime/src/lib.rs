@@ -35,6 +35,7 @@ pub mod inproc;
 pub mod launch;
 pub mod out;
 pub mod sched;
+pub mod sim;
 pub mod sweep;
 pub mod usage;
 pub mod validate;

@@ -1,0 +1,67 @@
+"""mrsim from Python: your own planners, live agents, and multi-robot
+navigation environments.
+
+- :func:`mrsim.run`: an in-process lockstep run of a scenario in which
+  robots may be driven by planners written in Python.
+- :class:`mrsim.Agent`: drive a robot (``planner = "external"``) of a
+  running world from Python, over shared memory.
+- :class:`mrsim.gym.NavEnv`: one learning robot among robots driven by
+  mrsim's built-in planners (Gymnasium).
+- :class:`mrsim.pettingzoo.ParallelNavEnv`: every robot a learning agent
+  (PettingZoo parallel API).
+- :class:`mrsim.Sim`: the stepping engine the environments are built on.
+"""
+
+import json
+from importlib import resources as _resources
+from pathlib import Path
+from typing import NamedTuple
+
+from ._mrsim import Agent, Observation, PlannerError, Sim, run_inproc
+
+__all__ = ["Agent", "Observation", "PlannerError", "Run", "Sim", "run", "scenario_path"]
+
+
+def scenario_path(name: str = "circle-16") -> str:
+    """The path of a scenario shipped with the package (``circle-16``)."""
+    return str(_resources.files(__package__).joinpath("scenarios", f"{name}.toml"))
+
+
+class Run(NamedTuple):
+    """What :func:`run` gives back."""
+
+    metrics: dict
+    """metrics.json of the run, as a dict."""
+    dir: Path
+    """The run folder (trajectory.csv, events.jsonl, metrics.json, ...)."""
+
+
+def run(scenario=None, planners=None, out=None, set=(), render=False, plan_timeout=None) -> Run:
+    """Runs ``scenario`` (a path; None: the built-in demo) in this process,
+    in lockstep, and returns its metrics and run folder.
+
+    ``planners`` maps names to Python planners: a class (or any callable)
+    called with the robot's ``params`` as a dict, whose instances have
+    ``plan(observation)`` returning two numbers, a velocity (m/s), or a force
+    (N) if the class sets ``command = "force"``. A robot uses one with
+    ``planner = "NAME"`` in the scenario or ``set=["robot.r0.planner=NAME"]``.
+    ``set`` takes ``KEY=VALUE`` overrides as ``mrsim run --set``; ``out`` the
+    run folder (default: a new one under ``runs/``); ``plan_timeout`` the
+    longest one ``plan`` call may take, s.
+
+    A planner that raises, returns something else than two finite numbers,
+    or takes longer than ``plan_timeout`` stops the run at that tick, with
+    the outputs so far written: :class:`PlannerError` names the robot and
+    the tick (attributes ``robot``, ``tick``, ``dir``).
+    """
+    folder = run_inproc(
+        None if scenario is None else str(scenario),
+        dict(planners or {}),
+        None if out is None else str(out),
+        list(set),
+        render,
+        plan_timeout,
+    )
+    folder = Path(folder)
+    metrics = json.loads((folder / "metrics.json").read_text())
+    return Run(metrics, folder)

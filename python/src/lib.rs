@@ -1,0 +1,275 @@
+//! The native half of the `mrsim` Python package: the stepping engine of
+//! `mrsim_runtime::sim` for the Gymnasium and PettingZoo environments,
+//! arrays in and out as numpy. The Python half (python/mrsim/) holds the
+//! environments themselves.
+#![warn(missing_docs)]
+
+mod live;
+mod planner;
+mod run;
+
+use mrsim_runtime::sim::{Sim as Engine, SimError, observation_size};
+use mrsim_runtime::{ScenarioSource, Validated};
+use mrsim_world::Applied;
+use numpy::{
+    PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadwriteArray2,
+};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+
+fn err(e: SimError) -> PyErr {
+    PyValueError::new_err(e.to_string())
+}
+
+/// A scenario stepped tick by tick: the robots named as learners take their
+/// commands from `step`, the others follow their built-in planners.
+#[pyclass(unsendable, module = "mrsim._mrsim")]
+struct Sim {
+    engine: Engine,
+    k: usize,
+    /// The learners' commands, reused each step.
+    commands: Vec<Applied>,
+}
+
+impl Sim {
+    fn learner_column(&self, f: impl Fn(&mrsim_scenario::RobotSpec) -> f64) -> Vec<f64> {
+        let robots = &self.engine.scenario().robots;
+        self.engine
+            .learners()
+            .iter()
+            .map(|&i| f(&robots[i]))
+            .collect()
+    }
+}
+
+#[pymethods]
+impl Sim {
+    /// `scenario`: a scenario file (None: the built-in demo); `learners`:
+    /// robot names (None: every robot); `set`: `KEY=VALUE` overrides as
+    /// `mrsim run --set`; `k`: neighbours in an observation vector.
+    #[new]
+    #[pyo3(signature = (scenario=None, learners=None, set=Vec::new(), k=8))]
+    fn new(
+        scenario: Option<std::path::PathBuf>,
+        learners: Option<Vec<String>>,
+        set: Vec<String>,
+        k: usize,
+    ) -> PyResult<Self> {
+        let validated = Validated::new(ScenarioSource {
+            path: scenario,
+            mode: None,
+            set,
+        })
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        let learners = learners.unwrap_or_else(|| {
+            validated
+                .scenario()
+                .robots
+                .iter()
+                .map(|r| r.name.clone())
+                .collect()
+        });
+        let engine = Engine::new(validated, &learners).map_err(err)?;
+        Ok(Self {
+            commands: Vec::with_capacity(learners.len()),
+            engine,
+            k,
+        })
+    }
+
+    /// Starts a new episode (with `seed`: the scenario loaded with
+    /// `world.seed` set to it).
+    #[pyo3(signature = (seed=None))]
+    fn reset(&mut self, seed: Option<u64>) -> PyResult<()> {
+        self.engine.reset(seed).map_err(err)
+    }
+
+    /// One tick. `actions`: (learners, 2) float64, forces if `force` else
+    /// velocities; learners marked in `brake` (bool per learner) brake
+    /// instead. Returns per learner: collisions started (int64), distance
+    /// to goal, at goal now, goal reached (held).
+    #[allow(clippy::type_complexity)]
+    #[pyo3(signature = (actions, force, brake=None))]
+    fn step<'py>(
+        &mut self,
+        py: Python<'py>,
+        actions: PyReadonlyArray2<'py, f64>,
+        force: bool,
+        brake: Option<PyReadonlyArray1<'py, bool>>,
+    ) -> PyResult<(
+        Bound<'py, PyArray1<i64>>,
+        Bound<'py, PyArray1<f64>>,
+        Bound<'py, PyArray1<bool>>,
+        Bound<'py, PyArray1<bool>>,
+    )> {
+        let a = actions.as_array();
+        if a.ncols() != 2 {
+            return Err(PyValueError::new_err(format!(
+                "actions of shape {:?}, expected ({}, 2)",
+                a.shape(),
+                self.engine.learners().len()
+            )));
+        }
+        let brake = brake.as_ref().map(|b| b.as_array());
+        self.commands.clear();
+        self.commands
+            .extend(a.rows().into_iter().enumerate().map(|(j, r)| {
+                let v = [r[0], r[1]];
+                if brake.as_ref().and_then(|b| b.get(j)).copied() == Some(true) {
+                    Applied::BRAKE
+                } else if force {
+                    Applied::Force(v)
+                } else {
+                    Applied::Velocity(v)
+                }
+            }));
+        let info = self.engine.step(&self.commands).map_err(err)?;
+        Ok((
+            PyArray1::from_iter(py, info.iter().map(|i| i64::from(i.collisions))),
+            PyArray1::from_iter(py, info.iter().map(|i| i.distance_to_goal)),
+            PyArray1::from_iter(py, info.iter().map(|i| i.at_goal)),
+            PyArray1::from_iter(py, info.iter().map(|i| i.reached)),
+        ))
+    }
+
+    /// Fills `out` ((learners, obs_size) float32, C-contiguous) with every
+    /// learner's observation vector.
+    fn observe(&mut self, mut out: PyReadwriteArray2<'_, f32>) -> PyResult<()> {
+        let slice = out
+            .as_slice_mut()
+            .map_err(|_| PyValueError::new_err("the observation buffer must be C-contiguous"))?;
+        self.engine.observe_f32(self.k, slice).map_err(err)
+    }
+
+    /// Values in one learner's observation vector: 4 + 6 k.
+    #[getter]
+    fn obs_size(&self) -> usize {
+        observation_size(self.k)
+    }
+
+    /// Ticks done in this episode.
+    #[getter]
+    fn tick(&self) -> u64 {
+        self.engine.world().tick()
+    }
+
+    /// Simulated time, s.
+    #[getter]
+    fn time(&self) -> f64 {
+        self.engine.world().time()
+    }
+
+    /// The control period, s.
+    #[getter]
+    fn dt(&self) -> f64 {
+        self.engine.scenario().world.dt
+    }
+
+    /// The scenario's duration, s.
+    #[getter]
+    fn duration(&self) -> f64 {
+        self.engine.scenario().world.duration
+    }
+
+    /// Every robot's name, by index.
+    #[getter]
+    fn robot_names(&self) -> Vec<String> {
+        let s = self.engine.scenario();
+        s.robots.iter().map(|r| r.name.clone()).collect()
+    }
+
+    /// The learners' names, in action order.
+    #[getter]
+    fn learner_names(&self) -> Vec<String> {
+        let s = self.engine.scenario();
+        let l = self.engine.learners();
+        l.iter().map(|&i| s.robots[i].name.clone()).collect()
+    }
+
+    /// The learners' robot indices (rows of `positions()` etc.).
+    #[getter]
+    fn learner_indices(&self) -> Vec<usize> {
+        self.engine.learners().to_vec()
+    }
+
+    /// The learners' top speeds.
+    #[getter]
+    fn max_speed<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_vec(py, self.learner_column(|r| r.max_speed))
+    }
+
+    /// The largest force that matters per learner: enough for its top
+    /// acceleration against damping at top speed.
+    #[getter]
+    fn max_force<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let f = self.learner_column(|r| r.mass * r.max_accel + r.damping * r.max_speed);
+        PyArray1::from_vec(py, f)
+    }
+
+    /// The learners' goals, (learners, 2).
+    fn goals<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let s = self.engine.scenario();
+        let rows: Vec<Vec<f64>> = (self.engine.learners().iter())
+            .map(|&i| s.robots[i].goal.to_vec())
+            .collect();
+        Ok(PyArray2::from_vec2(py, &rows)?)
+    }
+
+    /// Every body's position, (bodies, 2): robots, then obstacles.
+    fn positions<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        let s = self.engine.world().states();
+        let flat: Vec<f64> = s.iter().flat_map(|b| b.position).collect();
+        reshape(py, flat, s.len(), 2)
+    }
+
+    /// Every body's velocity, (bodies, 2).
+    fn velocities<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        let s = self.engine.world().states();
+        let flat: Vec<f64> = s.iter().flat_map(|b| b.velocity).collect();
+        reshape(py, flat, s.len(), 2)
+    }
+
+    /// Every body's radius.
+    fn radii<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let s = self.engine.world().states();
+        PyArray1::from_iter(py, s.iter().map(|b| b.radius))
+    }
+
+    /// Every body's kind: 0 robot, 1 obstacle.
+    fn kinds<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u32>> {
+        let s = self.engine.world().states();
+        PyArray1::from_iter(py, s.iter().map(|b| b.kind))
+    }
+
+    /// Every wall segment (the arena's included), (walls, 4): x0, y0, x1, y1.
+    fn walls<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        let w = self.engine.world().walls();
+        let flat: Vec<f64> = w
+            .iter()
+            .flat_map(|s| [s[0][0], s[0][1], s[1][0], s[1][1]])
+            .collect();
+        reshape(py, flat, w.len(), 4)
+    }
+}
+
+/// A (rows, cols) array of `flat`, row by row.
+fn reshape(py: Python<'_>, flat: Vec<f64>, rows: usize, cols: usize) -> Bound<'_, PyArray2<f64>> {
+    let a = PyArray1::from_vec(py, flat);
+    match a.reshape([rows, cols]) {
+        Ok(a) => a,
+        // Cannot happen: `flat` has rows × cols values by construction.
+        Err(_) => PyArray2::zeros(py, [rows, cols], false),
+    }
+}
+
+/// The native module.
+#[pymodule]
+fn _mrsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    planner::quiet_planner_panics();
+    m.add_class::<Sim>()?;
+    m.add_class::<planner::PyObservation>()?;
+    m.add_class::<live::Agent>()?;
+    m.add_function(wrap_pyfunction!(run::run_inproc, m)?)?;
+    m.add("PlannerError", m.py().get_type::<run::PlannerError>())?;
+    Ok(())
+}

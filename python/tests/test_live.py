@@ -1,0 +1,94 @@
+"""mrsim.Agent: a Python program driving a robot of a real run (the world
+and the other robots' agents as processes, over shared memory)."""
+
+import json
+import os
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+import mrsim
+
+
+def mrsim_binary(repo):
+    exe = os.environ.get("MRSIM_BIN") or str(repo / "target" / "release" / "mrsim")
+    if not os.path.exists(exe):
+        pytest.fail(f"{exe} not found: build it first (cargo build --release)")
+    return exe
+
+
+def start_run(repo, tmp_path, run_id, *args):
+    """`mrsim run crossing.toml` with robot a0 external, the others on ORCA."""
+    cmd = [
+        mrsim_binary(repo), "run", str(repo / "scenarios" / "crossing.toml"),
+        "--set", "planner=orca", "--set", "robot.a0.planner=external",
+        "--run", run_id, "--out", str(tmp_path / "run"), "--quiet", *args,
+    ]  # fmt: skip
+    return subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def finish(proc):
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 0, f"mrsim run failed ({proc.returncode}): {out}\n{err}"
+
+
+def toward(obs):
+    d = obs.goal - obs.position
+    n = max(np.hypot(*d), 1e-9)
+    return d / n * min(obs.max_speed, n)
+
+
+def run_id(tag):
+    return f"py{tag}{os.getpid()}"
+
+
+def test_a_python_agent_drives_its_robot_through_a_lockstep_run(repo, tmp_path):
+    proc = start_run(repo, tmp_path, run_id("lock"))
+    try:
+        agent = mrsim.Agent(run_id("lock"), "a0", timeout=60)
+        assert agent.robot == "a0"
+        ticks = []
+        for obs in agent:
+            ticks.append(obs.tick)
+            assert obs.others_position.shape == (len(obs.others_radius), 2)
+            assert set(obs.others_kind) <= {0}
+            assert obs.walls.shape == (4, 4)
+            agent.reply(toward(obs))
+        finish(proc)
+    finally:
+        proc.kill()
+    assert ticks[:3] == [0, 1, 2] and ticks == sorted(ticks)
+    metrics = json.loads((tmp_path / "run" / "metrics.json").read_text())
+    assert metrics["robots"]["a0"]["reached_goal"]
+    assert metrics["robots"]["a0"]["commands_rejected"] == 0
+
+
+def test_a_late_reply_in_realtime_is_a_miss_and_the_run_goes_on(repo, tmp_path):
+    proc = start_run(repo, tmp_path, run_id("rt"), "--mode", "realtime", "--set", "world.duration=2.0")
+    try:
+        agent = mrsim.Agent(run_id("rt"), "a0", timeout=60)
+        late = None
+        for obs in agent:
+            if late is None and obs.tick >= 3:
+                late = obs.tick
+                time.sleep(0.35)  # three and a half ticks of 0.1 s
+            try:
+                agent.reply(toward(obs))
+            except RuntimeError:
+                pass  # a reply for a tick the world has left may be refused
+        finish(proc)
+    finally:
+        proc.kill()
+    metrics = json.loads((tmp_path / "run" / "metrics.json").read_text())
+    assert metrics["robots"]["a0"]["deadline_misses"] >= 1
+    assert metrics["ticks"] >= 19
+
+
+def test_a_bad_reply_is_refused_in_python_and_joining_no_run_times_out(repo):
+    with pytest.raises(RuntimeError):
+        mrsim.Agent(run_id("none"), "a0", timeout=0.5)
+    with pytest.raises(ValueError, match="velocity"):
+        mrsim.Agent(run_id("none"), "a0", command="torque")

@@ -1,0 +1,143 @@
+"""mrsim.run with planners written in Python, and what a bad one does."""
+
+import numpy as np
+import pytest
+
+import mrsim
+
+
+class Toward:
+    """Heads straight for the goal at its speed (params: speed)."""
+
+    def __init__(self, params):
+        self.speed = params.get("speed", 1.0)
+
+    def plan(self, obs):
+        d = obs.goal - obs.position
+        n = max(np.hypot(*d), 1e-9)
+        return d / n * min(self.speed, obs.max_speed, n)
+
+
+def crossing(repo):
+    return repo / "scenarios" / "crossing.toml"
+
+
+def test_a_python_planner_drives_its_robot_to_the_goal_beside_built_in_ones(repo, tmp_path):
+    seen = []
+
+    class Recording(Toward):
+        def plan(self, obs):
+            seen.append((obs.tick, obs.others_position.shape, obs.walls.shape))
+            return super().plan(obs)
+
+    result = mrsim.run(
+        crossing(repo),
+        planners={"toward": Recording},
+        set=["planner=orca", "robot.a3.planner=toward", "robot.a3.params.speed=0.8"],
+        out=tmp_path / "run",
+    )
+    assert result.dir == tmp_path / "run"
+    assert (result.dir / "trajectory.csv").is_file()
+    assert result.metrics["robots"]["a3"]["reached_goal"]
+    assert result.metrics["robots"]["b0"]["reached_goal"]
+    ticks = [t for t, _, _ in seen]
+    assert ticks[:3] == [0, 1, 2]
+    # The walls are the arena's four sides; the others are n x 2.
+    assert seen[0][2] == (4, 4) and seen[0][1][1] == 2
+
+
+def test_the_robots_params_reach_the_planner_and_force_commands_are_applied(repo, tmp_path):
+    got = {}
+
+    class Push:
+        command = "force"
+
+        def __init__(self, params):
+            got.update(params)
+
+        def plan(self, obs):
+            d = obs.goal - obs.position
+            return 2.0 * d / max(np.hypot(*d), 1e-9) - 2.0 * obs.velocity
+
+    result = mrsim.run(
+        crossing(repo),
+        planners={"push": Push},
+        set=["planner=orca", "robot.a0.planner=push", "robot.a0.params.gain=3"],
+        out=tmp_path / "run",
+    )
+    assert got == {"gain": 3.0}
+    assert result.metrics["robots"]["a0"]["reached_goal"]
+
+
+def failing(repo, tmp_path, plan, **kw):
+    class P:
+        def __init__(self, params):
+            pass
+
+    P.plan = lambda self, obs: plan(obs)
+    with pytest.raises(mrsim.PlannerError) as e:
+        mrsim.run(
+            crossing(repo),
+            planners={"p": P},
+            set=["robot.b1.planner=p"],
+            out=tmp_path / "run",
+            **kw,
+        )
+    return e.value
+
+
+def test_a_planner_that_raises_stops_the_run_naming_robot_tick_and_exception(repo, tmp_path):
+    def plan(obs):
+        if obs.tick == 7:
+            raise KeyError("lost my map")
+        return (0.0, 0.0)
+
+    e = failing(repo, tmp_path, plan)
+    assert (e.robot, e.tick) == ("b1", 7)
+    assert "KeyError" in str(e) and "lost my map" in str(e)
+    # The outputs so far are written.
+    lines = (tmp_path / "run" / "trajectory.csv").read_text().splitlines()
+    assert len(lines) > 7
+
+
+def test_a_planner_that_returns_nan_stops_the_run(repo, tmp_path):
+    e = failing(repo, tmp_path, lambda obs: (np.nan, 0.0) if obs.tick == 3 else (0.0, 0.0))
+    assert (e.robot, e.tick) == ("b1", 3)
+    assert "non-finite" in str(e)
+
+
+@pytest.mark.parametrize("answer", [(1.0, 2.0, 3.0), "go", None, np.zeros((1, 2))])
+def test_a_planner_that_returns_the_wrong_shape_stops_the_run(repo, tmp_path, answer):
+    e = failing(repo, tmp_path, lambda obs: answer)
+    assert (e.robot, e.tick) == ("b1", 0)
+    assert "expected two numbers" in str(e)
+
+
+def test_a_planner_slower_than_the_limit_stops_the_run(repo, tmp_path):
+    import time
+
+    def plan(obs):
+        if obs.tick == 2:
+            time.sleep(0.3)
+        return (0.0, 0.0)
+
+    e = failing(repo, tmp_path, plan, plan_timeout=0.1)
+    assert (e.robot, e.tick) == ("b1", 2)
+    assert "over the limit of 0.100 s" in str(e)
+
+
+def test_a_planner_whose_constructor_raises_is_refused_before_the_run(repo, tmp_path):
+    class Broken:
+        def __init__(self, params):
+            raise ValueError("needs a map")
+
+    with pytest.raises(ValueError, match="needs a map"):
+        mrsim.run(crossing(repo), planners={"broken": Broken}, set=["robot.a0.planner=broken"],
+                  out=tmp_path / "run")
+    assert not (tmp_path / "run").exists()
+
+
+def test_an_unknown_planner_name_is_refused_naming_the_known_ones(repo, tmp_path):
+    with pytest.raises(ValueError, match="toward"):
+        mrsim.run(crossing(repo), planners={"toward": Toward}, set=["robot.a0.planner=towards"],
+                  out=tmp_path / "run")
