@@ -256,7 +256,7 @@ fn check_transport(validated: &Validated, transport: Transport) -> Result<(), In
              which an in-process run (--transport inproc) does not offer; run it without \
              --transport inproc, or register the program's planner for an in-process run",
         ),
-        Transport::Shm => (
+        Transport::Shm | Transport::Zenoh => (
             validated.robots_with_own_planners(),
             "has a planner registered in this program only: agent processes know the \
              built-in planners alone; run it in-process",
