@@ -167,6 +167,9 @@ impl Observer {
                 damping: spec.damping,
                 max_speed: spec.max_speed,
                 max_accel: spec.max_accel,
+                heading: 0.0,
+                angular_velocity: 0.0,
+                kinematics: mrsim_planners::Kinematics::Holonomic,
             },
             goal,
             goal_tolerance: spec.goal_tolerance,
@@ -174,6 +177,7 @@ impl Observer {
             others: &self.others,
             walls,
             path,
+            scan: None,
         }
     }
 }
