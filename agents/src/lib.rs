@@ -124,8 +124,18 @@ pub fn planner_params(spec: &RobotSpec) -> mrsim_planners::Params {
 }
 
 /// Builds the planner a robot's scenario entry asks for.
+/// On a unicycle robot the planner drives through the look-ahead point
+/// controller (`mrsim_planners::unicycle`), which passes a planner's own
+/// unicycle commands (dwa's) through unchanged.
 pub fn build_planner(spec: &RobotSpec) -> Result<Box<dyn Planner>, mrsim_planners::BuildError> {
-    mrsim_planners::build(&spec.planner, &planner_params(spec))
+    let planner = mrsim_planners::build(&spec.planner, &planner_params(spec))?;
+    Ok(match spec.kinematics {
+        mrsim_scenario::Kinematics::Holonomic => planner,
+        mrsim_scenario::Kinematics::Unicycle => Box::new(mrsim_planners::unicycle::LookAhead::new(
+            planner,
+            spec.lookahead,
+        )),
+    })
 }
 
 /// How far from its centre robot `spec` senses other bodies' centres, less
@@ -487,6 +497,7 @@ impl Driver {
         let (kind, v) = match cmd {
             Command::Force(f) => (command_kind::FORCE, f),
             Command::Velocity(v) => (command_kind::VELOCITY, v),
+            Command::Unicycle { v, omega } => (command_kind::UNICYCLE, Vec2::new(v, omega)),
         };
         let msg = CommandMsg {
             robot_id: self.claim,

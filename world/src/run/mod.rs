@@ -421,10 +421,10 @@ impl<'a> Loop<'a> {
             );
             match (agent, got) {
                 (Agent::Live { .. }, Some(c)) => {
-                    let applied = if c.kind == command_kind::VELOCITY {
-                        Applied::Velocity(c.value)
-                    } else {
-                        Applied::Force(c.value)
+                    let applied = match c.kind {
+                        command_kind::VELOCITY => Applied::Velocity(c.value),
+                        command_kind::UNICYCLE => Applied::Unicycle(c.value),
+                        _ => Applied::Force(c.value),
                     };
                     self.world.set_command(i, applied);
                 }
