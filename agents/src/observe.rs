@@ -57,7 +57,8 @@ pub fn lidar_config(l: &Lidar) -> LidarConfig {
 
 /// The scan of robot `me` (entry `spec`) in `bodies` among `walls`, as its
 /// observation gets it, into `out`; `false` (and `out` untouched) if the
-/// robot has no sensor. The world's scan.csv calls this too.
+/// robot has no sensor. The world's scan.csv (`mrsim_world::scan`) computes
+/// the same, line for line.
 pub fn scan_of(
     out: &mut LaserScan,
     seed: u64,

@@ -18,10 +18,16 @@
 //! v = cos theta u_x + sin theta u_y,
 //! omega = (-sin theta u_x + cos theta u_y) / l.
 //!
-//! [`LookAhead`] wraps any planner: the planner sees the robot's true
-//! observation (its disc at its centre); a velocity command u is applied to
-//! p through the inverse above; a force f becomes the velocity it would give
-//! p in one tick under m r'' + b r' = f, u = p' + dt (f - b p') / m; a
+//! [`LookAhead`] wraps any planner: the planner sees the robot as the
+//! point p (its observation's position and velocity are p's, p' = the
+//! matrix above times the current (v, omega); its disc, goal and everything
+//! else unchanged), so the planner's closed loop runs on a point that
+//! moves exactly as asked, and p, not the centre, is brought to the goal:
+//! the centre stops within l of it, so l should be below the goal
+//! tolerance. A velocity command u is applied to p through the inverse
+//! above; a force f becomes the velocity it would give
+//! p in one tick under m r'' + b r' = f with the world's acceleration
+//! clamp, u = p' + dt clamp((f - b p') / m, max_accel); a
 //! unicycle command (a planner that knows the model, such as
 //! [`crate::dwa`]) passes unchanged, and on a holonomic robot nothing is
 //! converted. The world then enforces the speed, turn-rate and acceleration
@@ -53,20 +59,26 @@ impl LookAhead {
 
 impl Planner for LookAhead {
     fn plan(&mut self, obs: &Observation) -> Command {
-        let cmd = self.inner.plan(obs);
         if obs.me.kinematics == Kinematics::Holonomic {
-            return cmd;
+            return self.inner.plan(obs);
         }
-        let me = &obs.me;
         let l = self.lookahead;
-        let (s, c) = me.heading.sin_cos();
+        let (s, c) = obs.me.heading.sin_cos();
+        let mut seen = *obs;
+        seen.me.position += Vec2::new(c, s) * l;
+        seen.me.velocity += Vec2::new(-s, c) * (l * obs.me.angular_velocity);
+        let me = &seen.me;
+        let cmd = self.inner.plan(&seen);
         let u = match cmd {
             Command::Unicycle { .. } => return cmd,
             Command::Velocity(u) => u,
             Command::Force(f) => {
-                let p_dot = me.velocity + Vec2::new(-s, c) * (l * me.angular_velocity);
                 let m = if me.mass > 0.0 { me.mass } else { 1.0 };
-                p_dot + (f - p_dot * me.damping) * (obs.dt / m)
+                let mut a = (f - me.velocity * me.damping) / m;
+                if a.norm() > me.max_accel {
+                    a *= me.max_accel / a.norm();
+                }
+                me.velocity + a * obs.dt
             }
         };
         let (v, omega) = Self::unicycle_for(u, me.heading, l);
