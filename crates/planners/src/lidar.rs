@@ -126,35 +126,89 @@ pub fn scan(
     out.angle_increment = inc;
     out.range_max = range;
     out.ranges.clear();
-    // Only what can be within range can be hit.
-    let near_discs: Vec<(Vec2, f64)> = discs
-        .into_iter()
-        .filter(|(c, r)| (c - origin).norm() - r <= range)
-        .collect();
-    let near_walls: Vec<&Segment> = walls
-        .iter()
-        .filter(|w| (w.closest_point(origin) - origin).norm() <= range)
-        .collect();
-    for k in 0..config.beams.max(1) {
-        let a = heading + angle_min + inc * k as f64;
-        let d = Vec2::new(a.cos(), a.sin());
-        let mut t = f64::INFINITY;
-        for (c, r) in &near_discs {
-            if let Some(h) = ray_disc(origin, d, *c, *r) {
-                t = t.min(h);
+    let beams = config.beams.max(1) as usize;
+    out.ranges.resize(beams, f64::INFINITY);
+    let ranges = &mut out.ranges;
+    let full = config.fov >= std::f64::consts::TAU - 1e-12;
+    // Each surface is tested only on the beams within the angle it
+    // subtends from the origin (one beam more either side for rounding;
+    // the exact ray test decides), so the cost is the beams that can hit
+    // it rather than every beam.
+    let mut each = |start: f64, width: f64, hit: &mut dyn FnMut(Vec2) -> Option<f64>| {
+        let mut test = |k: usize, ranges: &mut Vec<f64>| {
+            let a = heading + angle_min + inc * k as f64;
+            if let Some(t) = hit(Vec2::new(a.cos(), a.sin())) {
+                ranges[k] = ranges[k].min(t);
+            }
+        };
+        if width >= std::f64::consts::PI || inc <= 0.0 {
+            (0..beams).for_each(|k| test(k, ranges));
+        } else if full {
+            let o = (start - heading - angle_min).rem_euclid(std::f64::consts::TAU) / inc;
+            let k0 = o.floor() as i64 - 1;
+            let count = ((width / inc).ceil() as usize + 3).min(beams);
+            for j in 0..count {
+                test((k0 + j as i64).rem_euclid(beams as i64) as usize, ranges);
+            }
+        } else {
+            let rs = wrap(start - heading);
+            for shift in [0.0, -std::f64::consts::TAU] {
+                let lo = ((rs + shift - angle_min) / inc).floor() as i64 - 1;
+                let hi = ((rs + shift + width - angle_min) / inc).ceil() as i64 + 1;
+                for k in lo.max(0)..=hi.min(beams as i64 - 1) {
+                    test(k as usize, ranges);
+                }
             }
         }
-        for w in &near_walls {
-            if let Some(h) = ray_segment(origin, d, w) {
-                t = t.min(h);
-            }
+    };
+    for (c, r) in discs {
+        let d = c - origin;
+        let dist = d.norm();
+        if dist - r > range {
+            continue;
         }
-        if t > range {
-            t = f64::INFINITY;
+        let half = if dist <= r {
+            std::f64::consts::PI
+        } else {
+            (r / dist).asin()
+        };
+        each(d.y.atan2(d.x) - half, 2.0 * half, &mut |dir| {
+            ray_disc(origin, dir, c, r)
+        });
+    }
+    for w in walls {
+        if (w.closest_point(origin) - origin).norm() > range {
+            continue;
+        }
+        let (da, db) = (w.a - origin, w.b - origin);
+        let (ta, tb) = (da.y.atan2(da.x), db.y.atan2(db.x));
+        let delta = wrap(tb - ta);
+        let cross = da.x * db.y - da.y * db.x;
+        // The origin on the segment's line: every beam.
+        let width = if cross.abs() <= 1e-12 * (da.norm() * db.norm()).max(1e-300) {
+            std::f64::consts::PI
+        } else {
+            delta.abs()
+        };
+        let start = if delta >= 0.0 { ta } else { tb };
+        each(start, width, &mut |dir| ray_segment(origin, dir, w));
+    }
+    for t in ranges.iter_mut() {
+        if *t > range {
+            *t = f64::INFINITY;
         } else if config.noise > 0.0 {
-            t = (t + config.noise * gaussian()).clamp(0.0, range);
+            *t = (*t + config.noise * gaussian()).clamp(0.0, range);
         }
-        out.ranges.push(t);
+    }
+}
+
+/// Angle `a` wrapped to (-pi, pi].
+fn wrap(a: f64) -> f64 {
+    let w = a.rem_euclid(std::f64::consts::TAU);
+    if w > std::f64::consts::PI {
+        w - std::f64::consts::TAU
+    } else {
+        w
     }
 }
 
@@ -278,6 +332,64 @@ mod tests {
             &mut no_noise,
         );
         assert_eq!(s.ranges, vec![f64::INFINITY]);
+    }
+
+    #[test]
+    fn the_beams_tested_per_surface_give_what_testing_every_beam_gives() {
+        // Pseudo-random discs and walls around the origin; each scan equals
+        // the brute force over every beam and surface.
+        let mut x: u64 = 7;
+        let mut next = || {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (x >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let discs: Vec<(Vec2, f64)> = (0..20)
+            .map(|_| {
+                (
+                    Vec2::new(6.0 * next(), 6.0 * next()),
+                    0.2 + 0.3 * next().abs(),
+                )
+            })
+            .collect();
+        let walls: Vec<Segment> = (0..20)
+            .map(|_| Segment {
+                a: Vec2::new(8.0 * next(), 8.0 * next()),
+                b: Vec2::new(8.0 * next(), 8.0 * next()),
+            })
+            .collect();
+        for (beams, fov, heading) in [(360, 2.0 * PI, 0.3), (91, 1.5, -2.9), (7, 3.0, 3.1)] {
+            let cfg = LidarConfig {
+                beams,
+                fov,
+                range: 7.0,
+                noise: 0.0,
+            };
+            let mut s = LaserScan::default();
+            let o = Vec2::new(0.1, -0.2);
+            scan(
+                &mut s,
+                &cfg,
+                o,
+                heading,
+                discs.iter().copied(),
+                &walls,
+                &mut no_noise,
+            );
+            let (a0, inc) = cfg.angles();
+            for (k, r) in s.ranges.iter().enumerate() {
+                let a = heading + a0 + inc * k as f64;
+                let d = Vec2::new(a.cos(), a.sin());
+                let brute = discs
+                    .iter()
+                    .filter_map(|(c, rr)| ray_disc(o, d, *c, *rr))
+                    .chain(walls.iter().filter_map(|w| ray_segment(o, d, w)))
+                    .fold(f64::INFINITY, f64::min);
+                let brute = if brute > 7.0 { f64::INFINITY } else { brute };
+                assert_eq!(*r, brute, "beams {beams}, beam {k}");
+            }
+        }
     }
 
     #[test]
