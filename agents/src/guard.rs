@@ -118,6 +118,9 @@ mod tests {
                 damping: 0.0,
                 max_speed: 1.0,
                 max_accel: 1.0,
+                heading: 0.0,
+                angular_velocity: 0.0,
+                kinematics: mrsim_planners::Kinematics::Holonomic,
             },
             goal: Vec2::new(1.0, 0.0),
             goal_tolerance: 0.1,
@@ -125,6 +128,7 @@ mod tests {
             others: &[],
             walls: &[],
             path: None,
+            scan: None,
         }
     }
 

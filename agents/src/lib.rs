@@ -172,7 +172,8 @@ pub fn planner_params(spec: &RobotSpec) -> mrsim_planners::Params {
 /// Builds the planner a robot's scenario entry asks for, from the
 /// built-in ones.
 pub fn build_planner(spec: &RobotSpec) -> Result<Box<dyn Planner>, mrsim_planners::BuildError> {
-    mrsim_planners::build(&spec.planner, &planner_params(spec))
+    let planner = mrsim_planners::build(&spec.planner, &planner_params(spec))?;
+    Ok(fit_kinematics(spec, planner))
 }
 
 /// Builds the planner a robot's scenario entry asks for, from `registry`.
@@ -180,7 +181,22 @@ pub fn build_planner_in(
     registry: &Registry,
     spec: &RobotSpec,
 ) -> Result<Box<dyn Planner>, mrsim_planners::BuildError> {
-    registry.build(&spec.planner, &planner_params(spec))
+    let planner = registry.build(&spec.planner, &planner_params(spec))?;
+    Ok(fit_kinematics(spec, planner))
+}
+
+/// On a unicycle robot the planner drives through the look-ahead point
+/// controller (`mrsim_planners::unicycle`), which passes a planner's own
+/// unicycle commands (dwa's) through unchanged; a holonomic robot's
+/// planner is used as built.
+fn fit_kinematics(spec: &RobotSpec, planner: Box<dyn Planner>) -> Box<dyn Planner> {
+    match spec.kinematics {
+        mrsim_scenario::Kinematics::Holonomic => planner,
+        mrsim_scenario::Kinematics::Unicycle => Box::new(mrsim_planners::unicycle::LookAhead::new(
+            planner,
+            spec.lookahead,
+        )),
+    }
 }
 
 /// How far from its centre robot `spec` senses other bodies' centres, less

@@ -13,7 +13,7 @@ use crate::guard::plan_checked;
 use crate::seat::{Seat, join_seat};
 use crate::{AgentError, AgentExit, AgentOptions};
 use mrsim_planners::{
-    Command, DesignatedPath, Observation, Params, Planner, Segment, SelfState, Sensed, Vec2,
+    Command, DesignatedPath, Observation, lidar::LaserScan, Params, Planner, Segment, SelfState, Sensed, Vec2,
 };
 use mrsim_proto::{BodyState, SnapshotHeader, now_ns};
 use mrsim_transport::shm::ShmAgent;
@@ -53,6 +53,9 @@ pub struct OwnedObservation {
     pub path: Option<Arc<DesignatedPath>>,
     /// The tick's deadline (CLOCK_MONOTONIC ns) in realtime; 0 in lockstep.
     pub deadline_ns: u64,
+    /// The robot's laser scan this tick, if its scenario entry has a
+    /// `sensor`.
+    pub scan: Option<LaserScan>,
 }
 
 impl OwnedObservation {
@@ -69,6 +72,7 @@ impl OwnedObservation {
             others: &self.others,
             walls: &self.walls,
             path: self.path.as_deref(),
+            scan: self.scan.as_ref(),
         }
     }
 }
@@ -259,6 +263,7 @@ fn owned(seat: &mut Seat, header: &SnapshotHeader, bodies: &[BodyState]) -> Owne
         walls,
         path,
         deadline_ns: header.deadline_ns,
+        scan: o.scan.cloned(),
     }
 }
 

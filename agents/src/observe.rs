@@ -11,12 +11,24 @@
 //! replaced by differences of its observed (noisy) positions, eqs 2.9-2.12
 //! ([`VelocityEstimator`]). With `"truth"` the velocity is the snapshot's and
 //! the acceleration zero.
+//!
+//! A unicycle robot's heading is its body's (the snapshot's `heading`), and
+//! the observation says so ([`SelfState::heading`], `kinematics`). A robot
+//! with a `sensor` gets a laser scan each tick ([`mrsim_planners::lidar`]):
+//! cast from its centre along its heading (a holonomic robot's frame is the
+//! world's: heading 0) against every other body of the snapshot (true
+//! positions, whatever the sensing range) and every wall, with noise from
+//! [`Rng::lidar`], a stream per robot and tick, so the world's scan.csv
+//! repeats exactly what the planner saw.
 
 use mrsim_planners::estimate::VelocityEstimator;
-use mrsim_planners::{BodyKind, DesignatedPath, Observation, Segment, SelfState, Sensed, Vec2};
+use mrsim_planners::lidar::{LaserScan, LidarConfig};
+use mrsim_planners::{
+    BodyKind, DesignatedPath, Kinematics, Observation, Segment, SelfState, Sensed, Vec2,
+};
 use mrsim_proto::{BodyState, SnapshotHeader, body_kind};
 use mrsim_scenario::rng::Rng;
-use mrsim_scenario::{RobotSpec, Scenario, VelocitySource, WorldConfig};
+use mrsim_scenario::{Lidar, RobotSpec, Scenario, VelocitySource, WorldConfig};
 
 /// Turns snapshots into observations for one robot; keeps the buffers.
 pub struct Observer {
@@ -28,6 +40,52 @@ pub struct Observer {
     /// Standard deviation of the position noise (0 = none).
     noise: f64,
     rng: Rng,
+    seed: u64,
+    /// The last scan, if the robot has a lidar.
+    scan: LaserScan,
+}
+
+/// The planners' scanner configuration of a robot's `sensor`.
+pub fn lidar_config(l: &Lidar) -> LidarConfig {
+    LidarConfig {
+        beams: l.beams,
+        fov: l.fov_deg.to_radians(),
+        range: l.range,
+        noise: l.noise,
+    }
+}
+
+/// The scan of robot `me` (entry `spec`) in `bodies` among `walls`, as its
+/// observation gets it, into `out`; `false` (and `out` untouched) if the
+/// robot has no sensor. The world's scan.csv (`mrsim_world::scan`) computes
+/// the same, line for line.
+pub fn scan_of(
+    out: &mut LaserScan,
+    seed: u64,
+    tick: u64,
+    me: usize,
+    spec: &RobotSpec,
+    bodies: &[BodyState],
+    walls: &[Segment],
+) -> bool {
+    let (Some(sensor), Some(s)) = (&spec.sensor, bodies.get(me)) else {
+        return false;
+    };
+    let mut rng = Rng::lidar(seed, me as u64, tick);
+    mrsim_planners::lidar::scan(
+        out,
+        &lidar_config(sensor),
+        Vec2::new(s.position[0], s.position[1]),
+        s.heading,
+        bodies
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| *k != me)
+            .map(|(_, b)| (Vec2::new(b.position[0], b.position[1]), b.radius)),
+        walls,
+        &mut || rng.gaussian(),
+    );
+    true
 }
 
 impl Observer {
@@ -58,6 +116,8 @@ impl Observer {
                 .then(VelocityEstimator::new),
             noise: spec.map_or(0.0, |r| r.position_noise),
             rng: Rng::stream(world.seed, "position-noise", me as u64),
+            seed: world.seed,
+            scan: LaserScan::default(),
         }
     }
 
@@ -91,7 +151,10 @@ impl Observer {
         let position = Vec2::new(s.position[0], s.position[1]);
         let velocity = Vec2::new(s.velocity[0], s.velocity[1]);
         let goal = Vec2::new(spec.goal[0], spec.goal[1]);
-        let heading = if velocity.norm() > 1e-9 {
+        let unicycle = spec.kinematics == mrsim_scenario::Kinematics::Unicycle;
+        let heading = if unicycle {
+            Vec2::new(s.heading.cos(), s.heading.sin())
+        } else if velocity.norm() > 1e-9 {
             velocity.normalize()
         } else if (goal - position).norm() > 1e-12 {
             (goal - position).normalize()
@@ -154,6 +217,15 @@ impl Observer {
         if let Some(e) = &mut self.estimator {
             e.apply(header.sim_time, &mut self.others);
         }
+        let scanned = scan_of(
+            &mut self.scan,
+            self.seed,
+            header.tick,
+            self.me,
+            spec,
+            bodies,
+            walls,
+        );
         Observation {
             tick: header.tick,
             time: header.sim_time,
@@ -167,6 +239,16 @@ impl Observer {
                 damping: spec.damping,
                 max_speed: spec.max_speed,
                 max_accel: spec.max_accel,
+                heading: s.heading,
+                angular_velocity: s.angular_velocity,
+                kinematics: if unicycle {
+                    Kinematics::Unicycle {
+                        max_angular_speed: spec.max_angular_speed,
+                        max_angular_accel: spec.max_angular_accel,
+                    }
+                } else {
+                    Kinematics::Holonomic
+                },
             },
             goal,
             goal_tolerance: spec.goal_tolerance,
@@ -174,6 +256,7 @@ impl Observer {
             others: &self.others,
             walls,
             path,
+            scan: scanned.then_some(&self.scan),
         }
     }
 }

@@ -218,8 +218,7 @@ impl Seat {
         &self,
         registry: &Registry,
     ) -> Result<Box<dyn Planner>, AgentError> {
-        registry
-            .build(&self.spec.planner, &crate::planner_params(&self.spec))
+        crate::build_planner_in(registry, &self.spec)
             .map_err(|source| AgentError::Planner {
                 robot: self.spec.name.clone(),
                 source,
@@ -287,6 +286,7 @@ impl Seat {
         let (kind, v) = match cmd {
             Command::Force(f) => (command_kind::FORCE, f),
             Command::Velocity(v) => (command_kind::VELOCITY, v),
+            Command::Unicycle { v, omega } => (command_kind::UNICYCLE, Vec2::new(v, omega)),
         };
         let msg = CommandMsg {
             robot_id: self.claim,

@@ -43,6 +43,7 @@ fn body(id: u32, kind: u32, position: [f64; 2], velocity: [f64; 2]) -> BodyState
         position,
         velocity,
         radius: 0.0,
+        ..Default::default()
     }
 }
 

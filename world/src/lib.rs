@@ -40,6 +40,7 @@ pub mod path_metrics;
 pub mod physics;
 pub mod record;
 pub mod run;
+pub mod scan;
 pub mod timings;
 pub mod tracking;
 

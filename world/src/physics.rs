@@ -9,10 +9,26 @@
 //! and lets rapier move the disc and resolve contacts. Doing the actuator
 //! model ourselves (rather than with rapier's damping) keeps the limits
 //! exact and the same as the planners' reference testkit.
+//!
+//! A unicycle robot (`kinematics = "unicycle"`) keeps a heading theta and a
+//! turn rate omega as world state (its collider does not rotate: a disc is
+//! the same at any angle). Each substep the world takes its forward speed
+//! as the velocity's component along the heading (any sideways velocity a
+//! contact gave it is dropped: wheels do not slip), moves v and omega
+//! towards the command's (v, omega) by the same first-order lag as a
+//! velocity command (ideal when `velocity_lag` = 0), clamps the
+//! accelerations to `max_accel` and `max_angular_accel`, then v to
+//! ±`max_speed` and omega to ±`max_angular_speed`, integrates
+//! theta += omega h, and gives rapier the velocity v (cos theta, sin theta)
+//! (semi-implicit Euler, like the holonomic model). A force command on a
+//! unicycle pushes along the heading only (a = (f.e - b v) / m, omega brought
+//! to 0), a velocity command u asks v = u.e and omega = 0 (e the heading's
+//! unit vector); a unicycle command on a holonomic robot brakes it. A
+//! unicycle starts facing its goal.
 
 use crate::motion::{Body, MotionError, MotionSetup, MotionState};
 use mrsim_proto::{BodyState, body_kind};
-use mrsim_scenario::Scenario;
+use mrsim_scenario::{Kinematics, RobotSpec, Scenario};
 use rapier2d::prelude::*;
 
 /// A command as the world applies it.
@@ -22,6 +38,8 @@ pub enum Applied {
     Force([f64; 2]),
     /// Velocity set-point.
     Velocity([f64; 2]),
+    /// A unicycle's forward speed and turn rate set-points.
+    Unicycle([f64; 2]),
 }
 
 impl Applied {
@@ -80,6 +98,10 @@ pub struct World {
     /// never removed, so the index alone names one).
     owners: Vec<Option<Owner>>,
     commands: Vec<Applied>,
+    /// Each robot's heading, rad (unicycles turn it; 0 for the others).
+    headings: Vec<f64>,
+    /// Each robot's turn rate, rad/s.
+    turn_rates: Vec<f64>,
     states: Vec<BodyState>,
     /// Pairs in contact after the last substep, sorted.
     touching: Vec<(Owner, Owner)>,
@@ -182,6 +204,57 @@ fn initial_states(scenario: &Scenario) -> Vec<BodyState> {
         .collect()
 }
 
+/// A unicycle's heading at its start: towards its goal (0 if they
+/// coincide); 0 for a holonomic robot.
+fn initial_heading(r: &RobotSpec) -> f64 {
+    let d = [r.goal[0] - r.start[0], r.goal[1] - r.start[1]];
+    if r.kinematics == Kinematics::Unicycle && (d[0] != 0.0 || d[1] != 0.0) {
+        d[1].atan2(d[0])
+    } else {
+        0.0
+    }
+}
+
+/// One substep of the unicycle model (module documentation): from the
+/// body's velocity `v`, heading `theta` and turn rate `omega`, the command,
+/// the limits of `spec` and the substep `h`, the new velocity, heading and
+/// turn rate.
+pub fn unicycle_substep(
+    spec: &RobotSpec,
+    cmd: Applied,
+    v: [f64; 2],
+    theta: f64,
+    omega: f64,
+    h: f64,
+) -> ([f64; 2], f64, f64) {
+    let (s, c) = theta.sin_cos();
+    let speed = v[0] * c + v[1] * s;
+    let lag = if spec.velocity_lag > 0.0 {
+        spec.velocity_lag
+    } else {
+        h
+    };
+    // A NaN set-point asks for 0 (the world never lets one through; a last
+    // line, as in `clamp_norm`).
+    let z = |x: f64| if x.is_nan() { 0.0 } else { x };
+    let (accel, omega_cmd) = match cmd {
+        Applied::Unicycle([vc, wc]) => ((z(vc) - speed) / lag, z(wc)),
+        Applied::Velocity(u) => ((u[0] * c + u[1] * s - speed) / lag, 0.0),
+        Applied::Force(f) => (
+            (f[0] * c + f[1] * s - spec.damping * speed) / spec.mass,
+            0.0,
+        ),
+    };
+    let finite = |x: f64| if x.is_nan() { 0.0 } else { x };
+    let accel = finite(accel).clamp(-spec.max_accel, spec.max_accel);
+    let speed = (speed + accel * h).clamp(-spec.max_speed, spec.max_speed);
+    let alpha =
+        finite((omega_cmd - omega) / lag).clamp(-spec.max_angular_accel, spec.max_angular_accel);
+    let omega = (omega + alpha * h).clamp(-spec.max_angular_speed, spec.max_angular_speed);
+    let theta = theta + omega * h;
+    ([speed * theta.cos(), speed * theta.sin()], theta, omega)
+}
+
 fn v2(p: [f64; 2]) -> Vector {
     Vector::new(p[0] as f32, p[1] as f32)
 }
@@ -256,6 +329,8 @@ impl World {
             bodies: Vec::with_capacity(scenario.robots.len() + scenario.obstacles.len()),
             owners,
             commands: vec![Applied::BRAKE; scenario.robots.len()],
+            headings: scenario.robots.iter().map(initial_heading).collect(),
+            turn_rates: vec![0.0; scenario.robots.len()],
             states: initial_states(scenario),
             touching: Vec::new(),
             touching_next: Vec::new(),
@@ -338,6 +413,20 @@ impl World {
                 };
                 let lv = body.linvel();
                 let v = [lv.x as f64, lv.y as f64];
+                if spec.kinematics == Kinematics::Unicycle {
+                    let (nv, theta, omega) = unicycle_substep(
+                        spec,
+                        self.commands[i],
+                        v,
+                        self.headings[i],
+                        self.turn_rates[i],
+                        h,
+                    );
+                    self.headings[i] = theta;
+                    self.turn_rates[i] = omega;
+                    body.set_linvel(v2(nv), true);
+                    continue;
+                }
                 // The actuator model: acceleration from the command.
                 let mut a = match self.commands[i] {
                     // Force: m r'' + b r' = f.
@@ -354,6 +443,15 @@ impl World {
                             h
                         };
                         [(vc[0] - v[0]) / t, (vc[1] - v[1]) / t]
+                    }
+                    // Not a holonomic command: brake.
+                    Applied::Unicycle(_) => {
+                        let t = if spec.velocity_lag > 0.0 {
+                            spec.velocity_lag
+                        } else {
+                            h
+                        };
+                        [-v[0] / t, -v[1] / t]
                     }
                 };
                 a = clamp_norm(a, spec.max_accel);
@@ -478,6 +576,14 @@ impl World {
                 .unwrap_or((Vector::ZERO, Vector::ZERO));
             s.position = [p.x as f64, p.y as f64];
             s.velocity = [v.x as f64, v.y as f64];
+        }
+        for (s, (th, w)) in self
+            .states
+            .iter_mut()
+            .zip(self.headings.iter().zip(&self.turn_rates))
+        {
+            s.heading = *th;
+            s.angular_velocity = *w;
         }
         for (s, m) in self.states[n..].iter_mut().zip(&self.motions) {
             s.position = m.position;

@@ -51,6 +51,29 @@ enum Msg {
     Event(String),
 }
 
+/// What trajectory.csv holds besides its usual columns, and scan.csv.
+#[derive(Default)]
+pub struct Extras {
+    /// Append a `theta` column (every body's heading): only when the
+    /// scenario has a unicycle robot, so other runs' files stay the same.
+    pub theta: bool,
+    /// The scans to record, if any robot asks.
+    pub scans: Option<crate::scan::ScanWriter>,
+}
+
+impl Extras {
+    /// What `scenario` asks for, scan.csv created in `dir` if needed.
+    pub fn of(dir: &Path, scenario: &mrsim_scenario::Scenario) -> std::io::Result<Self> {
+        Ok(Self {
+            theta: scenario
+                .robots
+                .iter()
+                .any(|r| r.kinematics == mrsim_scenario::Kinematics::Unicycle),
+            scans: crate::scan::ScanWriter::create(dir, scenario)?,
+        })
+    }
+}
+
 /// The recording thread's handle.
 pub struct Recorder {
     batches: Batcher<Ticks, Msg>,
@@ -61,13 +84,28 @@ impl Recorder {
     /// Creates trajectory.csv and events.jsonl in `dir` and starts the
     /// thread. `names[i]` is body i's name; `tracker` takes in every tick's
     /// states, in order.
-    pub fn start(dir: &Path, names: Vec<String>, mut tracker: Tracker) -> std::io::Result<Self> {
+    pub fn start(dir: &Path, names: Vec<String>, tracker: Tracker) -> std::io::Result<Self> {
+        Self::start_with(dir, names, tracker, Extras::default())
+    }
+
+    /// [`Self::start`] with the `extras` a scenario asks for.
+    pub fn start_with(
+        dir: &Path,
+        names: Vec<String>,
+        mut tracker: Tracker,
+        extras: Extras,
+    ) -> std::io::Result<Self> {
+        let Extras { theta, mut scans } = extras;
         let mut traj = BufWriter::with_capacity(
             1 << 16,
             File::create(dir.join(mrsim_runfolder::TRAJECTORY_FILE))?,
         );
         let mut events = BufWriter::new(File::create(dir.join(mrsim_runfolder::EVENTS_FILE))?);
-        writeln!(traj, "tick,time,body,kind,x,y,vx,vy")?;
+        writeln!(
+            traj,
+            "tick,time,body,kind,x,y,vx,vy{}",
+            if theta { ",theta" } else { "" }
+        )?;
         traj.flush()?;
         let (tx, rx) = bounded::<Msg>(256);
         let (back_tx, recycled) = unbounded();
@@ -109,9 +147,16 @@ impl Recorder {
                                         block.push(b',');
                                         push_fixed6(&mut block, v);
                                     }
+                                    if theta {
+                                        block.push(b',');
+                                        push_fixed6(&mut block, b.heading);
+                                    }
                                     block.push(b'\n');
                                 }
                                 traj.write_all(&block)?;
+                                if let Some(s) = &mut scans {
+                                    s.write(tick, bodies)?;
+                                }
                             }
                             let _ = back_tx.send(batch);
                         }
@@ -124,12 +169,18 @@ impl Recorder {
                     }
                     if last_flush.elapsed() >= period {
                         traj.flush()?;
+                        if let Some(s) = &mut scans {
+                            s.flush()?;
+                        }
                         events.flush()?;
                         last_flush = Instant::now();
                     }
                 }
                 traj.flush()?;
                 events.flush()?;
+                if let Some(s) = &mut scans {
+                    s.flush()?;
+                }
                 Ok(tracker)
             })?;
         Ok(Self {

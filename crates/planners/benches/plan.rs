@@ -39,6 +39,9 @@ fn zhu_loh(c: &mut Criterion) {
         damping: 0.5,
         max_speed: 2.0,
         max_accel: 5.0,
+        heading: 0.0,
+        angular_velocity: 0.0,
+        kinematics: mrsim_planners::Kinematics::Holonomic,
     };
     // (obstacles, horizon steps)
     let cases = [(4, 20), (16, 20), (64, 20), (16, 10), (16, 40)];
@@ -61,6 +64,7 @@ fn zhu_loh(c: &mut Criterion) {
                 others: &others,
                 walls: &[],
                 path: None,
+                scan: None,
             };
             let mut params = Params::new();
             params.insert("horizon".into(), ParamValue::Number(steps as f64 * dt));
@@ -93,6 +97,9 @@ fn bench(c: &mut Criterion) {
             damping: 0.5,
             max_speed: 2.0,
             max_accel: 5.0,
+            heading: 0.0,
+            angular_velocity: 0.0,
+            kinematics: mrsim_planners::Kinematics::Holonomic,
         },
         goal: Vec2::new(20.0, 1.0),
         goal_tolerance: 0.2,
@@ -100,6 +107,7 @@ fn bench(c: &mut Criterion) {
         others: &others,
         walls: &[],
         path: None,
+        scan: None,
     };
     let mut g = c.benchmark_group("plan_64_bodies");
     for info in PLANNERS {
@@ -146,6 +154,9 @@ fn bench_designated_path(c: &mut Criterion) {
             damping: 0.0,
             max_speed: 0.5,
             max_accel: 0.5,
+            heading: 0.0,
+            angular_velocity: 0.0,
+            kinematics: mrsim_planners::Kinematics::Holonomic,
         },
         goal: Vec2::new(6.0, 3.0),
         goal_tolerance: 0.1,
@@ -153,6 +164,7 @@ fn bench_designated_path(c: &mut Criterion) {
         others: &others,
         walls: &[],
         path: Some(&path),
+        scan: None,
     };
     let mut params = Params::new();
     params.insert("subgoal_spacing".into(), ParamValue::Number(0.5));
@@ -197,6 +209,9 @@ fn bench_orca_crowd(c: &mut Criterion) {
             damping: 0.0,
             max_speed: 2.0,
             max_accel: 1e9,
+            heading: 0.0,
+            angular_velocity: 0.0,
+            kinematics: mrsim_planners::Kinematics::Holonomic,
         },
         goal: Vec2::new(200.0, 0.0),
         goal_tolerance: 1.5,
@@ -204,6 +219,7 @@ fn bench_orca_crowd(c: &mut Criterion) {
         others: &others,
         walls: &[],
         path: None,
+        scan: None,
     };
     let mut g = c.benchmark_group("orca_circle_250");
     if let Ok(mut p) = build("orca", &Params::new()) {

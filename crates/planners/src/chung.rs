@@ -191,6 +191,9 @@ mod tests {
             damping: 0.5,
             max_speed: 5.0,
             max_accel: 5.0,
+            heading: 0.0,
+            angular_velocity: 0.0,
+            kinematics: crate::Kinematics::Holonomic,
         }
     }
 

@@ -728,6 +728,9 @@ mod tests {
             damping: 0.0,
             max_speed: MAX_SPEED,
             max_accel: MAX_ACCEL,
+            heading: 0.0,
+            angular_velocity: 0.0,
+            kinematics: crate::Kinematics::Holonomic,
         }
     }
 
@@ -748,6 +751,7 @@ mod tests {
             others,
             walls: &[],
             path,
+            scan: None,
         }
     }
 

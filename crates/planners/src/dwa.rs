@@ -54,8 +54,23 @@
 //! quoted from the published article); `samples` = 11 per axis and
 //! `horizon` = 3 s are our choices (the paper discretises its window
 //! without fixing a resolution).
+//!
+//! **On a unicycle robot** (`kinematics = "unicycle"`) the planner searches
+//! the paper's own space, (v, omega), and answers [`Command::Unicycle`]
+//! (the `dwa_unicycle` module beside this one): the window is
+//! [v_c - a dt, v_c + a dt] x [omega_c - alpha dt, omega_c + alpha dt]
+//! within 0 <= v <= max_speed, |omega| <= max_angular_speed (section 3.1,
+//! forward motion only as in the paper); each candidate's curvature is the
+//! circular arc it drives (eq 8's approximation: v and omega held), checked
+//! against every body moving at its sensed velocity in steps of dt / 2 up
+//! to `horizon`; admissible when v <= sqrt(2 dist(v, omega) a_max) with
+//! dist the arc length to the first contact (section 3.1, V_a); heading is
+//! 1 - |angle to the goal from the pose predicted after dt| / pi (section
+//! 3.2), clearance and speed as above.
 
-use crate::{Command, Observation, ParamError, ParamReader, Params, Planner, Segment, Vec2};
+use crate::{
+    Command, Kinematics, Observation, ParamError, ParamReader, Params, Planner, Segment, Vec2,
+};
 
 /// Dynamic window approach for a holonomic disc.
 #[derive(Debug, Clone)]
@@ -87,7 +102,7 @@ impl Default for Dwa {
 /// Smallest t >= 0 with |p + v t| <= r, for a point at `p` moving at `v`
 /// relative to a disc of radius `r` at the origin; `None` if never. A point
 /// already inside counts as a contact at 0 only while it moves inwards.
-fn time_to_disc(p: Vec2, v: Vec2, r: f64) -> Option<f64> {
+pub(crate) fn time_to_disc(p: Vec2, v: Vec2, r: f64) -> Option<f64> {
     let c = p.norm_squared() - r * r;
     let b = p.dot(&v);
     if c <= 0.0 {
@@ -106,7 +121,7 @@ fn time_to_disc(p: Vec2, v: Vec2, r: f64) -> Option<f64> {
 
 /// Time until a disc of radius `r` at `p` moving at `v` first touches the
 /// static segment `s`; `None` if never.
-fn time_to_segment(p: Vec2, v: Vec2, r: f64, s: &Segment) -> Option<f64> {
+pub(crate) fn time_to_segment(p: Vec2, v: Vec2, r: f64, s: &Segment) -> Option<f64> {
     let closest = s.closest_point(p);
     let gap = p - closest;
     if gap.norm() <= r {
@@ -220,6 +235,13 @@ impl Dwa {
 
 impl Planner for Dwa {
     fn plan(&mut self, obs: &Observation) -> Command {
+        if let Kinematics::Unicycle {
+            max_angular_speed,
+            max_angular_accel,
+        } = obs.me.kinematics
+        {
+            return crate::dwa_unicycle::plan(self, obs, max_angular_speed, max_angular_accel);
+        }
         let me = &obs.me;
         let to_goal = obs.goal - me.position;
         let d_goal = to_goal.norm();
@@ -291,6 +313,9 @@ mod tests {
                 damping: 0.0,
                 max_speed: 1.0,
                 max_accel: 2.0,
+                heading: 0.0,
+                angular_velocity: 0.0,
+                kinematics: crate::Kinematics::Holonomic,
             },
             goal: Vec2::new(10.0, 0.0),
             goal_tolerance: 0.1,
@@ -298,6 +323,7 @@ mod tests {
             others,
             walls,
             path: None,
+            scan: None,
         }
     }
 

@@ -509,6 +509,9 @@ mod tests {
             damping: 0.0,
             max_speed: 1.0,
             max_accel: 2.0,
+            heading: 0.0,
+            angular_velocity: 0.0,
+            kinematics: crate::Kinematics::Holonomic,
         }
     }
 

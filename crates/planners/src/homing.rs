@@ -72,6 +72,9 @@ mod tests {
                 damping: 0.1,
                 max_speed: 10.0,
                 max_accel: 100.0,
+                heading: 0.0,
+                angular_velocity: 0.0,
+                kinematics: crate::Kinematics::Holonomic,
             },
             goal: Vec2::new(10.0, 0.0),
             goal_tolerance: 0.1,
@@ -79,6 +82,7 @@ mod tests {
             others: &[],
             walls: &[],
             path: None,
+            scan: None,
         }
     }
 

@@ -513,6 +513,9 @@ mod tests {
                 damping: 0.0,
                 max_speed: 5.0,
                 max_accel: 20.0,
+                heading: 0.0,
+                angular_velocity: 0.0,
+                kinematics: crate::Kinematics::Holonomic,
             },
             goal,
             goal_tolerance: 0.05,
@@ -520,6 +523,7 @@ mod tests {
             others,
             walls,
             path: None,
+            scan: None,
         }
     }
 

@@ -38,19 +38,23 @@ mod registry;
 pub mod chung;
 pub mod designated_path;
 pub mod dwa;
+mod dwa_unicycle;
 pub mod estimate;
 pub mod free_space;
 pub mod homing;
 pub mod hydro;
 pub mod khatib;
+pub mod lidar;
 pub mod orca;
 pub mod prediction;
 pub mod social_force;
 #[cfg(any(test, feature = "testkit"))]
 pub mod testkit;
 pub mod trajectory_guided;
+pub mod unicycle;
 pub mod vdf;
 
+pub use lidar::LaserScan;
 pub use params::{ParamError, ParamReader, ParamValue, Params};
 pub use registry::{
     BuildError, EXTERNAL, Entry, Factory, FromParams, PLANNERS, PlannerInfo, RegisterError,
@@ -88,6 +92,22 @@ pub struct Sensed {
     pub radius: f64,
 }
 
+/// How the robot moves: the world's model and its limits.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Kinematics {
+    /// Force or velocity in any direction (the disc model).
+    Holonomic,
+    /// Differential drive: forward speed along the heading and a turn rate
+    /// ([`Command::Unicycle`]); `max_speed` and `max_accel` of
+    /// [`SelfState`] bound the forward speed and its rate of change.
+    Unicycle {
+        /// Turn-rate limit, rad/s.
+        max_angular_speed: f64,
+        /// Angular-acceleration limit, rad/s².
+        max_angular_accel: f64,
+    },
+}
+
 /// The robot's own state and physical limits.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SelfState {
@@ -107,6 +127,13 @@ pub struct SelfState {
     pub max_speed: f64,
     /// Acceleration limit the world enforces.
     pub max_accel: f64,
+    /// Heading, rad counter-clockwise from +x (a unicycle's body
+    /// orientation; 0 for a holonomic robot, which has none).
+    pub heading: f64,
+    /// Turn rate, rad/s (0 for a holonomic robot).
+    pub angular_velocity: f64,
+    /// The robot's motion model.
+    pub kinematics: Kinematics,
 }
 
 /// A static wall segment.
@@ -166,6 +193,8 @@ pub struct Observation<'a> {
     pub walls: &'a [Segment],
     /// The robot's designated path, if its scenario entry has one.
     pub path: Option<&'a DesignatedPath>,
+    /// This tick's laser scan, if the robot has a lidar.
+    pub scan: Option<&'a LaserScan>,
 }
 
 /// A planner's output for one tick.
@@ -175,13 +204,23 @@ pub enum Command {
     Force(Vec2),
     /// A velocity set-point, tracked by the world's first-order lag.
     Velocity(Vec2),
+    /// A unicycle robot's set-points: forward speed `v` and turn rate
+    /// `omega` (rad/s), tracked within its limits.
+    Unicycle {
+        /// Forward speed along the heading.
+        v: f64,
+        /// Turn rate, rad/s, counter-clockwise.
+        omega: f64,
+    },
 }
 
 impl Command {
-    /// The command's vector, whatever its kind.
+    /// The command's vector, whatever its kind ((v, omega) for a unicycle
+    /// command).
     pub fn vector(&self) -> Vec2 {
         match *self {
             Command::Force(v) | Command::Velocity(v) => v,
+            Command::Unicycle { v, omega } => Vec2::new(v, omega),
         }
     }
 }

@@ -162,6 +162,9 @@ mod tests {
                 damping: 0.5,
                 max_speed: 2.0,
                 max_accel: 10.0,
+                heading: 0.0,
+                angular_velocity: 0.0,
+                kinematics: crate::Kinematics::Holonomic,
             },
             goal: Vec2::new(10.0, 0.0),
             goal_tolerance: 0.1,
@@ -169,6 +172,7 @@ mod tests {
             others,
             walls,
             path: None,
+            scan: None,
         }
     }
 

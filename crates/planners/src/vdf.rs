@@ -360,6 +360,9 @@ mod tests {
             damping: 0.0,
             max_speed: 30.0,
             max_accel: 500.0,
+            heading: 0.0,
+            angular_velocity: 0.0,
+            kinematics: crate::Kinematics::Holonomic,
         }
     }
 

@@ -18,8 +18,10 @@ use iceoryx2::prelude::ZeroCopySend;
 /// last answer wakes the world; the doorbell names the world that made it
 /// (process id and start time) and an agent goes on only if that world is
 /// running (ARCHITECTURE.md, "Channels" and "Ownership"; how each came
-/// about is in the git log).
-pub const PROTOCOL_VERSION: u32 = 6;
+/// about is in the git log). Version 7: a [`BodyState`] carries the body's
+/// heading and angular velocity, and a unicycle robot is driven by
+/// [`command_kind::UNICYCLE`] commands (forward speed, turn rate).
+pub const PROTOCOL_VERSION: u32 = 7;
 
 /// Longest robot name, in bytes, that fits a [`JoinRequest`].
 pub const MAX_NAME_LEN: usize = 64;
@@ -61,6 +63,11 @@ pub struct BodyState {
     pub velocity: [f64; 2],
     /// Disc radius (0 for a point robot).
     pub radius: f64,
+    /// Heading, rad, counter-clockwise from +x: a unicycle robot's body
+    /// orientation; 0 for holonomic robots and obstacles (they have none).
+    pub heading: f64,
+    /// Turn rate, rad/s (0 for holonomic robots and obstacles).
+    pub angular_velocity: f64,
 }
 
 /// Header of every snapshot: one per tick, followed by a slice of
@@ -94,6 +101,10 @@ pub mod command_kind {
     /// (sent once after joining; the world starts the clock only when every
     /// agent is ready, so the first ticks are not lost to start-up).
     pub const READY: u32 = 2;
+    /// A unicycle robot's set-points: `value` is (forward speed v, turn
+    /// rate omega in rad/s), tracked within the robot's speed and
+    /// acceleration limits (since protocol 7).
+    pub const UNICYCLE: u32 = 3;
 }
 
 /// One agent's answer to one tick.
@@ -109,7 +120,8 @@ pub struct CommandMsg {
     pub token: u64,
     /// The tick this command answers.
     pub tick: u64,
-    /// Force (N in scenario units) or velocity.
+    /// Force (N in scenario units), velocity, or (v, omega) for
+    /// [`command_kind::UNICYCLE`].
     pub value: [f64; 2],
     /// Time the agent spent in its planner, ns.
     pub compute_ns: u64,

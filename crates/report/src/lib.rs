@@ -13,6 +13,7 @@ mod palette;
 mod plot;
 mod replay;
 mod run;
+mod sensing;
 
 pub use palette::{COLLISION, PALETTE, hex, robot_color};
 pub use plot::{PLOT_WIDTH, plot_size, write_plots};

@@ -84,7 +84,15 @@ impl ReplayView {
 
 /// Writes `replay.html` for `run` into `dir`.
 pub fn write_replay(run: &RunData, dir: &Path) -> Result<(), RenderError> {
-    let data = replay_data(run);
+    let mut data = replay_data(run);
+    let unicycles: Vec<&str> = run
+        .scenario
+        .robots
+        .iter()
+        .filter(|r| r.kinematics == mrsim_scenario::Kinematics::Unicycle)
+        .map(|r| r.name.as_str())
+        .collect();
+    crate::sensing::add(&mut data, dir, &run.trajectory.ticks, &unicycles);
     // `<` only occurs inside JSON strings, where \u003c means the same:
     // no `</script>` can end the data block early.
     let json = data.to_string().replace('<', "\\u003c");

@@ -227,7 +227,7 @@ impl Sim {
         }
         for (&i, c) in self.learners.iter().zip(commands) {
             let v = match *c {
-                Applied::Force(v) | Applied::Velocity(v) => v,
+                Applied::Force(v) | Applied::Velocity(v) | Applied::Unicycle(v) => v,
             };
             if !v.iter().all(|x| x.is_finite()) {
                 return Err(SimError::NonFinite {
@@ -258,11 +258,14 @@ impl Sim {
             let cmd = match b.planner.plan(&obs) {
                 Command::Force(f) => Applied::Force([f.x, f.y]),
                 Command::Velocity(v) => Applied::Velocity([v.x, v.y]),
+                Command::Unicycle { v, omega } => Applied::Unicycle([v, omega]),
             };
             // A planner's NaN brakes its robot, as the world does with an
             // agent's non-finite command.
             let cmd = match cmd {
-                Applied::Force(v) | Applied::Velocity(v) if !v.iter().all(|x| x.is_finite()) => {
+                Applied::Force(v) | Applied::Velocity(v) | Applied::Unicycle(v)
+                    if !v.iter().all(|x| x.is_finite()) =>
+                {
                     Applied::BRAKE
                 }
                 c => c,

@@ -1,7 +1,9 @@
 //! The scenario file as written: every key optional and spanned, unknown
 //! keys refused. `resolve` turns it into the types of `types.rs`.
 
-use crate::types::{LengthUnit, MissPolicy, Mode, ParamValue, UnknownCells, VelocitySource};
+use crate::types::{
+    Kinematics, LengthUnit, MissPolicy, Mode, ParamValue, UnknownCells, VelocitySource,
+};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use toml::Spanned;
@@ -98,6 +100,23 @@ pub(crate) struct RawRobot {
     pub position_noise: Option<S<f64>>,
     pub path: Option<S<Vec<Pt>>>,
     pub boundary: Option<S<f64>>,
+    pub kinematics: Option<S<Kinematics>>,
+    pub max_angular_speed: Option<S<f64>>,
+    pub max_angular_accel: Option<S<f64>>,
+    pub lookahead: Option<S<f64>>,
+    pub sensor: Option<S<RawSensor>>,
+}
+
+/// `sensor = { kind = "lidar", beams, fov_deg, range, noise, record }`.
+#[derive(Debug, Default, Clone, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub(crate) struct RawSensor {
+    pub kind: Option<S<String>>,
+    pub beams: Option<S<u32>>,
+    pub fov_deg: Option<S<f64>>,
+    pub range: Option<S<f64>>,
+    pub noise: Option<S<f64>>,
+    pub record: Option<S<bool>>,
 }
 
 /// One `[[obstacle]]`.

@@ -31,6 +31,13 @@ impl Rng {
         Rng(r.next_u64())
     }
 
+    /// The lidar noise of robot `robot` at tick `tick`: a fresh stream per
+    /// robot and tick, so the agent's scan and the world's recorded one
+    /// draw the same numbers whatever ticks either skipped.
+    pub fn lidar(seed: u64, robot: u64, tick: u64) -> Self {
+        Self::stream(seed, "lidar-noise", (robot << 40) ^ tick)
+    }
+
     /// The next 64 random bits.
     pub fn next_u64(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);

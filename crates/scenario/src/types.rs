@@ -122,6 +122,36 @@ pub enum VelocitySource {
     Differenced,
 }
 
+/// How a robot moves (the `kinematics` robot key).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Kinematics {
+    /// A disc driven by a force or a velocity in any direction (default).
+    #[default]
+    Holonomic,
+    /// A differential drive: forward speed v along its heading and turn
+    /// rate omega, never sideways.
+    Unicycle,
+}
+
+/// A robot's laser scanner (`sensor = { kind = "lidar", ... }`): `beams`
+/// rays spread evenly over `fov_deg` centred on the robot's heading, each
+/// giving the distance to the first surface within `range` (ROS
+/// LaserScan's meanings).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Lidar {
+    /// Rays per scan, >= 1.
+    pub beams: u32,
+    /// Angle covered, degrees in (0, 360].
+    pub fov_deg: f64,
+    /// Longest range, > 0; a ray that hits nothing reads +infinity.
+    pub range: f64,
+    /// Standard deviation of Gaussian noise on each hit's range (0 = none).
+    pub noise: f64,
+    /// Write every scan to scan.csv (default false).
+    pub record: bool,
+}
+
 /// One robot, all defaults applied.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RobotSpec {
@@ -163,6 +193,41 @@ pub struct RobotSpec {
     pub path: Vec<[f64; 2]>,
     /// Half-width of the corridor around `path`.
     pub boundary: Option<f64>,
+    /// Holonomic (default) or unicycle.
+    #[serde(default)]
+    pub kinematics: Kinematics,
+    /// Unicycle: turn-rate limit enforced by the world, rad/s, > 0.
+    #[serde(default = "default_angular_speed")]
+    pub max_angular_speed: f64,
+    /// Unicycle: angular-acceleration limit enforced by the world, rad/s²,
+    /// > 0.
+    #[serde(default = "default_angular_accel")]
+    pub max_angular_accel: f64,
+    /// Unicycle: distance ahead of the centre of the point a holonomic
+    /// planner's velocity is applied to (the look-ahead controller,
+    /// `mrsim_planners::unicycle`), > 0.
+    #[serde(default = "default_lookahead")]
+    pub lookahead: f64,
+    /// The robot's laser scanner, if it has one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sensor: Option<Lidar>,
+}
+
+/// Built-in `max_angular_speed`, rad/s.
+pub const DEFAULT_MAX_ANGULAR_SPEED: f64 = 2.0;
+/// Built-in `max_angular_accel`, rad/s².
+pub const DEFAULT_MAX_ANGULAR_ACCEL: f64 = 4.0;
+/// Built-in `lookahead`, scenario units.
+pub const DEFAULT_LOOKAHEAD: f64 = 0.2;
+
+fn default_angular_speed() -> f64 {
+    DEFAULT_MAX_ANGULAR_SPEED
+}
+fn default_angular_accel() -> f64 {
+    DEFAULT_MAX_ANGULAR_ACCEL
+}
+fn default_lookahead() -> f64 {
+    DEFAULT_LOOKAHEAD
 }
 
 /// How a scripted obstacle moves.

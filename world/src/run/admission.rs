@@ -309,7 +309,10 @@ impl Admission {
             // world looked.
             return Verdict::Late { robot: i };
         }
-        if cmd.kind != command_kind::FORCE && cmd.kind != command_kind::VELOCITY {
+        if !matches!(
+            cmd.kind,
+            command_kind::FORCE | command_kind::VELOCITY | command_kind::UNICYCLE
+        ) {
             self.garbage[i] = true;
             return reject("unknown command kind");
         }

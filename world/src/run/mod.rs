@@ -425,10 +425,10 @@ impl<'a> Loop<'a> {
             );
             match (agent, got) {
                 (Agent::Live { .. }, Some(c)) => {
-                    let applied = if c.kind == command_kind::VELOCITY {
-                        Applied::Velocity(c.value)
-                    } else {
-                        Applied::Force(c.value)
+                    let applied = match c.kind {
+                        command_kind::VELOCITY => Applied::Velocity(c.value),
+                        command_kind::UNICYCLE => Applied::Unicycle(c.value),
+                        _ => Applied::Force(c.value),
                     };
                     self.world.set_command(i, applied);
                 }
@@ -573,8 +573,9 @@ fn run_with_clock(
     )
     .map_err(|e| out_err("setup")(e.into()))?;
     let tracker = Tracker::new(&scenario, world.walls());
-    let rec =
-        Recorder::start(&dir, body_names(&scenario), tracker).map_err(out_err(TRAJECTORY_FILE))?;
+    let extras = crate::record::Extras::of(&dir, &scenario).map_err(out_err(TRAJECTORY_FILE))?;
+    let rec = Recorder::start_with(&dir, body_names(&scenario), tracker, extras)
+        .map_err(out_err(TRAJECTORY_FILE))?;
     link.publish_setup(&setup)?;
     let timings = TimingRecorder::start(n).map_err(out_err(METRICS_FILE))?;
     let mut lp = Loop::new(world, link, clock, opts, rec, timings);

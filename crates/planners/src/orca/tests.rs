@@ -18,6 +18,9 @@ fn me(position: Vec2, velocity: Vec2, radius: f64) -> SelfState {
         damping: 0.0,
         max_speed: 2.0,
         max_accel: 1e9,
+        heading: 0.0,
+        angular_velocity: 0.0,
+        kinematics: crate::Kinematics::Holonomic,
     }
 }
 
@@ -38,6 +41,7 @@ fn obs<'a>(
         others,
         walls,
         path: None,
+        scan: None,
     }
 }
 

@@ -99,6 +99,9 @@ impl Sim {
                 damping,
                 max_speed,
                 max_accel,
+                heading: 0.0,
+                angular_velocity: 0.0,
+                kinematics: crate::Kinematics::Holonomic,
             },
             goal,
             velocity_lag: 0.0,
@@ -161,6 +164,7 @@ impl Sim {
                 others: &others,
                 walls: &self.walls,
                 path: r.path.as_ref(),
+                scan: None,
             };
             let cmd = r.planner.plan(&obs);
             r.command = cmd;
@@ -178,6 +182,9 @@ impl Sim {
                             (v - s.velocity) / h
                         }
                     }
+                    // The testkit's robots are holonomic: a unicycle
+                    // command brakes them (the world's rule).
+                    Command::Unicycle { .. } => -s.velocity / h,
                 };
                 if a.norm() > s.max_accel {
                     a *= s.max_accel / a.norm();
@@ -230,5 +237,6 @@ pub fn observation<'a>(me: SelfState, goal: Vec2, others: &'a [Sensed]) -> Obser
         others,
         walls: &[],
         path: None,
+        scan: None,
     }
 }

@@ -69,6 +69,11 @@ fn robot(name: &str, start: [f64; 2], goal: [f64; 2]) -> RobotSpec {
         position_noise: 0.0,
         path: vec![],
         boundary: None,
+        kinematics: Default::default(),
+        max_angular_speed: mrsim_scenario::DEFAULT_MAX_ANGULAR_SPEED,
+        max_angular_accel: mrsim_scenario::DEFAULT_MAX_ANGULAR_ACCEL,
+        lookahead: mrsim_scenario::DEFAULT_LOOKAHEAD,
+        sensor: None,
     }
 }
 

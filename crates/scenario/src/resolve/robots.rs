@@ -5,7 +5,7 @@
 use super::checks::{Rule, builtin, check, de_fail, point, points};
 use crate::error::{Fail, Spans};
 use crate::overrides::{RobotPatch, set_path};
-use crate::raw::{P, RawParams, RawRobot, S};
+use crate::raw::{P, RawParams, RawRobot, RawSensor, S};
 use crate::types::*;
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -160,6 +160,10 @@ pub(super) fn resolve_robot(
         Some((v, _)) => *v.get_ref(),
         None => builtin::GOAL_HOLD_TICKS,
     };
+    let sensor = match pick(layers, |r| &r.sensor) {
+        Some((raw, what)) => Some(lidar(raw, what)?),
+        None => None,
+    };
     let spec = RobotSpec {
         name,
         start,
@@ -236,6 +240,30 @@ pub(super) fn resolve_robot(
         )?,
         path,
         boundary,
+        kinematics: pick(layers, |r| &r.kinematics)
+            .map_or(Kinematics::Holonomic, |(k, _)| *k.get_ref()),
+        max_angular_speed: pick_num(
+            layers,
+            |r| &r.max_angular_speed,
+            "max_angular_speed",
+            Rule::Pos,
+            DEFAULT_MAX_ANGULAR_SPEED,
+        )?,
+        max_angular_accel: pick_num(
+            layers,
+            |r| &r.max_angular_accel,
+            "max_angular_accel",
+            Rule::Pos,
+            DEFAULT_MAX_ANGULAR_ACCEL,
+        )?,
+        lookahead: pick_num(
+            layers,
+            |r| &r.lookahead,
+            "lookahead",
+            Rule::Pos,
+            DEFAULT_LOOKAHEAD,
+        )?,
+        sensor,
     };
     let spans = RobotSpans {
         table,
@@ -243,6 +271,51 @@ pub(super) fn resolve_robot(
         goal: goal_span,
     };
     Ok((spec, spans, placed))
+}
+
+/// A `sensor` table: only `kind = "lidar"` is known; each key is checked
+/// and defaults to beams 360, fov_deg 360, range 10, noise 0, record false.
+fn lidar(raw: &S<RawSensor>, what: &str) -> Result<Lidar, Fail> {
+    let r = raw.get_ref();
+    match &r.kind {
+        Some(k) if k.get_ref() == "lidar" => {}
+        Some(k) => {
+            return Err(Fail::new(
+                Some(k.span()),
+                what,
+                format!("unknown sensor kind `{}` (known: lidar)", k.get_ref()),
+            ));
+        }
+        None => {
+            return Err(Fail::new(
+                Some(raw.span()),
+                what,
+                "sensor needs `kind` (known: lidar)",
+            ));
+        }
+    }
+    let num = |v: &Option<S<f64>>, key: &str, rule: Rule, default: f64| match v {
+        Some(v) => check(v, key, rule, what),
+        None => Ok(default),
+    };
+    let beams = match &r.beams {
+        Some(b) if *b.get_ref() == 0 => {
+            return Err(Fail::new(
+                Some(b.span()),
+                what,
+                "sensor beams must be >= 1, got 0",
+            ));
+        }
+        Some(b) => *b.get_ref(),
+        None => 360,
+    };
+    Ok(Lidar {
+        beams,
+        fov_deg: num(&r.fov_deg, "sensor fov_deg", Rule::Degrees, 360.0)?,
+        range: num(&r.range, "sensor range", Rule::Pos, 10.0)?,
+        noise: num(&r.noise, "sensor noise", Rule::NonNeg, 0.0)?,
+        record: r.record.as_ref().is_some_and(|b| *b.get_ref()),
+    })
 }
 
 /// The overrides that select a generated robot, as a robot table.

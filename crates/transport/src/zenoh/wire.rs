@@ -112,7 +112,7 @@ pub fn decode_slice<H: Wire, T: Wire>(
 }
 
 impl Wire for BodyState {
-    const LEN: usize = 4 * 4 + 5 * 8;
+    const LEN: usize = 4 * 4 + 7 * 8;
     fn put(&self, o: &mut Vec<u8>) {
         put_u32(self.id, o);
         put_u32(self.kind, o);
@@ -122,6 +122,8 @@ impl Wire for BodyState {
             put_f64(*v, o);
         }
         put_f64(self.radius, o);
+        put_f64(self.heading, o);
+        put_f64(self.angular_velocity, o);
     }
     fn get(r: &mut Reader<'_>) -> Self {
         Self {
@@ -132,6 +134,8 @@ impl Wire for BodyState {
             position: [r.f64(), r.f64()],
             velocity: [r.f64(), r.f64()],
             radius: r.f64(),
+            heading: r.f64(),
+            angular_velocity: r.f64(),
         }
     }
 }
