@@ -1,7 +1,9 @@
 //! The scenario file as written: every key optional and spanned, unknown
 //! keys refused. `resolve` turns it into the types of `types.rs`.
 
-use crate::types::{LengthUnit, MissPolicy, Mode, ParamValue, UnknownCells, VelocitySource};
+use crate::types::{
+    LengthUnit, MissPolicy, Mode, ParamValue, TrajectoryFormat, UnknownCells, VelocitySource,
+};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use toml::Spanned;
@@ -42,6 +44,15 @@ pub(crate) struct RawDoc {
     pub wall: Vec<S<RawWall>>,
     pub generate: Option<S<RawGenerate>>,
     pub map: Option<S<RawMap>>,
+    pub output: Option<S<RawOutput>>,
+}
+
+/// `[output]`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub(crate) struct RawOutput {
+    pub trajectory: Option<S<TrajectoryFormat>>,
+    pub every: Option<S<i64>>,
 }
 
 /// `[map]`.

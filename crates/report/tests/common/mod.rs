@@ -139,6 +139,7 @@ pub fn scenario(n: usize) -> Scenario {
             segment: [[-1.0, -5.0], [-1.0, -4.0]],
         }],
         map: None,
+        output: Default::default(),
     }
 }
 

@@ -9,6 +9,7 @@
 //! across every body (`scene`).
 
 mod obstacles;
+mod output;
 mod world;
 
 pub(crate) mod checks;
@@ -180,6 +181,7 @@ pub(crate) fn resolve(
         obstacles,
         walls,
         map: None,
+        output: output::resolve_output(raw.output.as_ref())?,
     };
     if let Some(m) = &raw.map {
         crate::map::attach(
