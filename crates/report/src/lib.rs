@@ -17,7 +17,7 @@ mod replay;
 mod run;
 
 pub use palette::{COLLISION, PALETTE, hex, robot_color};
-pub use plot::{PLOT_WIDTH, plot_size, write_plots};
+pub use plot::{MAX_PLOT_POINTS, PLOT_WIDTH, plot_every, plot_size, write_plots};
 pub use replay::{
     MAP_HEIGHT, MAP_WIDTH, MAX_REPLAY_POSITIONS, ReplayView, STRIP_HEIGHT, replay_every,
     write_replay,
