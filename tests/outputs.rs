@@ -66,9 +66,13 @@ fn motion(dir: &Path) -> Vec<(String, serde_json::Value)> {
 fn parquet_holds_the_same_rows_as_the_csv_of_the_same_run() {
     let csv = crossing("out-csv", &[]);
     let pq = crossing("out-parquet", &["output.trajectory=parquet"]);
-    assert!(!pq.join("trajectory.csv").exists(), "a parquet run wrote a CSV too");
-    let table = mrsim_runfolder::trajectory::read_parquet_trajectory(&pq.join("trajectory.parquet"))
-        .expect("reads back");
+    assert!(
+        !pq.join("trajectory.csv").exists(),
+        "a parquet run wrote a CSV too"
+    );
+    let table =
+        mrsim_runfolder::trajectory::read_parquet_trajectory(&pq.join("trajectory.parquet"))
+            .expect("reads back");
     let lines = csv_lines(&csv);
     assert_eq!(lines[0], "tick,time,body,kind,x,y,vx,vy");
     assert_eq!(table.len(), lines.len() - 1, "row count");
@@ -103,7 +107,11 @@ fn every_kth_tick_keeps_those_rows_and_the_last_and_the_metrics_see_every_tick()
         .iter()
         .enumerate()
         .filter(|(i, l)| {
-            let tick: u64 = l.split(',').next().and_then(|t| t.parse().ok()).unwrap_or(0);
+            let tick: u64 = l
+                .split(',')
+                .next()
+                .and_then(|t| t.parse().ok())
+                .unwrap_or(0);
             *i == 0 || tick % 7 == 0 || tick == last_tick
         })
         .map(|(_, l)| l)
@@ -120,7 +128,10 @@ fn without_a_trajectory_the_metrics_are_the_same_and_the_report_draws_the_scene(
     assert!(!none.join("trajectory.csv").exists());
     assert!(!none.join("trajectory.parquet").exists());
     assert_eq!(motion(&all), motion(&none));
-    assert_eq!(metrics(&none)["robots"].as_object().map(|r| r.len()), Some(8));
+    assert_eq!(
+        metrics(&none)["robots"].as_object().map(|r| r.len()),
+        Some(8)
+    );
     let out = mrsim().arg("report").arg(&none).output().expect("report");
     assert_ok(&out);
     assert!(none.join("plot.svg").exists() && none.join("replay.html").exists());

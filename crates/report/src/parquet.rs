@@ -1,8 +1,8 @@
 //! Reading `trajectory.parquet` (the run folder crate's schema) into the
 //! same tracks as `trajectory.csv`.
 
-use crate::run::{Sample, Tracks, Trajectory};
 use crate::RenderError;
+use crate::run::{Sample, Tracks, Trajectory};
 use mrsim_runfolder::trajectory::{TrajectoryError, read_parquet_trajectory};
 use std::path::Path;
 

@@ -438,8 +438,7 @@ fn draw_diagnostics<DB: DrawingBackend>(
         }
         let panel = panel.titled(&title, (FAMILY, 16)).map_err(err)?;
         // One series per robot, in colour order.
-        let mut by_robot: std::collections::BTreeMap<usize, Vec<(f64, f64)>> =
-            Default::default();
+        let mut by_robot: std::collections::BTreeMap<usize, Vec<(f64, f64)>> = Default::default();
         for d in diagnostics.iter().filter(|d| &d.name == name) {
             if !(d.time.is_finite() && d.value.is_finite()) {
                 continue;

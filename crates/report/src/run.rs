@@ -274,8 +274,12 @@ impl RunData {
     /// Robot names in colour order: the scenario's, then any other robot in
     /// the trajectory.
     pub fn robot_names(&self) -> Vec<String> {
-        let listed: std::collections::HashSet<&str> =
-            self.scenario.robots.iter().map(|r| r.name.as_str()).collect();
+        let listed: std::collections::HashSet<&str> = self
+            .scenario
+            .robots
+            .iter()
+            .map(|r| r.name.as_str())
+            .collect();
         let mut names: Vec<String> = self
             .scenario
             .robots

@@ -36,7 +36,11 @@ fn a_big_run_replay_keeps_within_the_position_budget_and_ends_at_the_last_tick()
         .map(|t| t.as_u64().unwrap())
         .collect();
     assert_eq!(shown.first(), Some(&0));
-    assert_eq!(shown.last(), Some(&ticks), "the last tick is always a frame");
+    assert_eq!(
+        shown.last(),
+        Some(&ticks),
+        "the last tick is always a frame"
+    );
     assert!(shown.windows(2).all(|w| w[1] - w[0] <= every as u64));
     let robots = data["robots"].as_array().unwrap();
     assert_eq!(robots.len(), n, "every robot is in the page");
@@ -44,7 +48,10 @@ fn a_big_run_replay_keeps_within_the_position_budget_and_ends_at_the_last_tick()
         .iter()
         .map(|r| r["x"].as_array().unwrap().len())
         .sum();
-    assert!(positions <= MAX_REPLAY_POSITIONS + n, "{positions} positions");
+    assert!(
+        positions <= MAX_REPLAY_POSITIONS + n,
+        "{positions} positions"
+    );
     assert_eq!(data["decimation"]["ticksRecorded"], ticks + 1);
     // Each position costs two numbers of a few characters: the page's size
     // follows the budget, not the run.

@@ -332,7 +332,12 @@ pub fn read_parquet_trajectory(path: &Path) -> Result<TrajectoryTable, Trajector
                             let text = cell.as_utf8().map_err(pq)?;
                             table.strings.push(text.to_string());
                         }
-                        if k == 2 { &mut table.body } else { &mut table.kind }.push(id);
+                        if k == 2 {
+                            &mut table.body
+                        } else {
+                            &mut table.kind
+                        }
+                        .push(id);
                     }
                 }
                 (1 | 4..=7, C::DoubleColumnReader(mut r)) => {

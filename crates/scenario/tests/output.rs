@@ -52,7 +52,11 @@ fn an_unknown_format_is_refused_at_its_line() {
 fn every_below_one_is_refused_at_its_line() {
     for bad in ["0", "-3"] {
         let src = with_output(&format!("every = {bad}"));
-        refused_at(&src, "every =", "every must be a whole number of ticks >= 1");
+        refused_at(
+            &src,
+            "every =",
+            "every must be a whole number of ticks >= 1",
+        );
     }
 }
 

@@ -13,16 +13,13 @@ pub(super) fn resolve_output(o: Option<&S<RawOutput>>) -> Result<OutputConfig, F
     let every = match &raw.every {
         Some(e) => {
             let k = *e.get_ref();
-            u32::try_from(k)
-                .ok()
-                .filter(|&k| k >= 1)
-                .ok_or_else(|| {
-                    Fail::new(
-                        Some(e.span()),
-                        "output",
-                        format!("every must be a whole number of ticks >= 1, got {k}"),
-                    )
-                })?
+            u32::try_from(k).ok().filter(|&k| k >= 1).ok_or_else(|| {
+                Fail::new(
+                    Some(e.span()),
+                    "output",
+                    format!("every must be a whole number of ticks >= 1, got {k}"),
+                )
+            })?
         }
         None => 1,
     };
