@@ -3,7 +3,10 @@
 //! A folder that is not a run's (missing files, malformed lines) is refused
 //! like a bad scenario (exit 2, the file and line on stderr); a run cut
 //! short (no metrics.json, a last line cut mid-way) is drawn as far as it
-//! was recorded, with a note.
+//! was recorded, with a note. A run whose `[output] trajectory = "none"`
+//! is drawn without tracks (walls, starts and goals; the replay page says
+//! the run has no trajectory), also with a note; a Parquet trajectory is
+//! read like the CSV.
 
 use anyhow::Result;
 use mrsim_report::RenderError;
@@ -20,6 +23,14 @@ pub fn main(dir: &Path) -> Result<i32> {
                     mrsim_runfolder::METRICS_FILE
                 );
             }
+            if !dir.join(mrsim_runfolder::TRAJECTORY_FILE).exists()
+                && !dir.join(mrsim_runfolder::TRAJECTORY_PARQUET_FILE).exists()
+            {
+                eprintln!(
+                    "note: {} has no trajectory (output.trajectory = \"none\"): drew the scene without tracks",
+                    dir.display()
+                );
+            }
             println!(
                 "wrote {0}/plot.svg, {0}/plot.png, {0}/replay.html",
                 dir.display()
@@ -30,6 +41,7 @@ pub fn main(dir: &Path) -> Result<i32> {
             e @ (RenderError::NotADirectory { .. }
             | RenderError::Missing { .. }
             | RenderError::Parse { .. }
+            | RenderError::Parquet(_)
             | RenderError::Json { .. }),
         ) => Err(crate::exit::invalid(format!(
             "cannot report on {}: {e}",

@@ -24,8 +24,12 @@ use ratatui::style::{Color, Modifier, Style};
 use ratatui::symbols::Marker;
 use ratatui::text::{Line, Span};
 use ratatui::widgets::canvas::{Canvas, Circle, Line as Segment, Points};
-use ratatui::widgets::{Block, Borders, Cell, Paragraph, Row, Table};
+use ratatui::widgets::{Block, Borders, Paragraph};
 use std::io::IsTerminal;
+use table::table_width;
+pub use table::{Order, TableView, summary_lines, worst_first};
+
+mod table;
 use std::time::{Duration, Instant};
 
 /// Time between two screen updates.
@@ -331,99 +335,15 @@ fn color_of(b: &BodyState) -> Color {
     robot_color(b.id as usize)
 }
 
-/// Width of the name column: the longest name, 5 to 24 characters.
-fn name_width(m: &TopModel) -> u16 {
-    let longest = m
-        .scenario
-        .robots
-        .iter()
-        .map(|r| r.name.chars().count())
-        .max()
-        .unwrap_or(0);
-    longest.clamp(5, 24) as u16
-}
-
-/// Width of the table: its columns, the gaps between them and the border.
-fn table_width(m: &TopModel) -> u16 {
-    name_width(m) + (17 + 7 + 8 + 8 + 6 + 5 + 8) + 7 + 2
-}
-
-fn draw_table(f: &mut Frame, area: Rect, m: &TopModel) {
-    let header = Row::new(
-        [
-            "robot", "planner", "agent", "p50 µs", "p99 µs", "misses", "coll", "pid",
-        ]
-        .map(|h| Cell::from(h).style(Style::default().add_modifier(Modifier::BOLD))),
-    );
-    let visible = usize::from(area.height.saturating_sub(3));
-    let n = m.scenario.robots.len();
-    let shown = if n > visible {
-        visible.saturating_sub(1)
-    } else {
-        n
-    };
-    let mut rows: Vec<Row> = m
-        .scenario
-        .robots
-        .iter()
-        .enumerate()
-        .take(shown)
-        .map(|(i, r)| {
-            let st = m.robots.get(i).copied().unwrap_or_default();
-            let state = m.state_of(i);
-            let state_style = match state {
-                "lost" => Style::default().fg(Color::Red),
-                "at goal" => Style::default().fg(Color::Green),
-                "waiting" | "?" => Style::default().fg(Color::Yellow),
-                _ => Style::default(),
-            };
-            let misses_style = if st.deadline_misses > 0 {
-                Style::default().fg(Color::Red)
-            } else {
-                Style::default()
-            };
-            Row::new(vec![
-                Cell::from(r.name.clone()).style(Style::default().fg(robot_color(i))),
-                Cell::from(r.planner.clone()),
-                Cell::from(state).style(state_style),
-                Cell::from(micros(st.latency_p50_us, st.commands)),
-                Cell::from(micros(st.latency_p99_us, st.commands)),
-                Cell::from(st.deadline_misses.to_string()).style(misses_style),
-                Cell::from(st.collisions.to_string()),
-                Cell::from(if st.agent_pid == 0 {
-                    "-".to_string()
-                } else {
-                    st.agent_pid.to_string()
-                }),
-            ])
-        })
-        .collect();
-    if shown < n {
-        rows.push(Row::new(vec![Cell::from(format!(
-            "... {} more",
-            n - shown
-        ))]));
-    }
-    let widths = [
-        Constraint::Length(name_width(m)),
-        Constraint::Length(17),
-        Constraint::Length(7),
-        Constraint::Length(8),
-        Constraint::Length(8),
-        Constraint::Length(6),
-        Constraint::Length(5),
-        Constraint::Length(8),
-    ];
-    let table = Table::new(rows, widths)
-        .header(header)
-        .column_spacing(1)
-        .block(Block::default().borders(Borders::ALL).title(" agents "));
-    f.render_widget(table, area);
-}
-
-/// Draws the dashboard: a status line, the map, one row per robot, and the
-/// keys. Side by side on a wide screen, map above table on a narrow one.
+/// Draws the dashboard with the table at its start: a status line, the map,
+/// the robots' table, and the keys. Side by side on a wide screen, map above
+/// table on a narrow one.
 pub fn draw(f: &mut Frame, m: &TopModel) {
+    draw_with(f, m, &TableView::default());
+}
+
+/// [`draw`] with the table scrolled and ordered as `view` says.
+pub fn draw_with(f: &mut Frame, m: &TopModel, view: &TableView) {
     let [status, body, keys] = Layout::default()
         .direction(Direction::Vertical)
         .constraints([
@@ -440,17 +360,17 @@ pub fn draw(f: &mut Frame, m: &TopModel) {
             .constraints([Constraint::Min(30), Constraint::Length(table_width)])
             .areas(body)
     } else {
-        let rows = (m.scenario.robots.len() as u16 + 3).min(body.height / 2);
+        let rows = (m.scenario.robots.len() as u16 + 6).min(body.height / 2);
         Layout::default()
             .direction(Direction::Vertical)
             .constraints([Constraint::Min(4), Constraint::Length(rows)])
             .areas(body)
     };
     draw_map(f, map, m);
-    draw_table(f, table, m);
+    table::draw_table(f, table, m, view);
     f.render_widget(
         Paragraph::new(Line::from(Span::styled(
-            " q quit   latency: snapshot published -> command received at the world",
+            " q quit   PgUp/PgDn/↑/↓/Home/End scroll   s order   latency: snapshot published -> command received at the world",
             Style::default().fg(Color::DarkGray),
         ))),
         keys,
@@ -511,11 +431,12 @@ pub fn run(run_id: &str, timeout: f64, zenoh: Option<ZenohOptions>) -> Result<i3
     mrsim_sys::signal::catch_termination();
     let mut terminal = ratatui::try_init().context("cannot take over the terminal")?;
     let guard = TerminalGuard;
+    let mut view = TableView::default();
     use ratatui::crossterm::event::{self, Event, KeyCode, KeyEventKind, KeyModifiers};
     let end = loop {
         model.poll(obs.as_mut())?;
         terminal
-            .draw(|f| draw(f, &model))
+            .draw(|f| draw_with(f, &model, &view))
             .context("cannot draw on the terminal")?;
         if model.finished() {
             break Ok(0);
@@ -537,6 +458,25 @@ pub fn run(run_id: &str, timeout: f64, zenoh: Option<ZenohOptions>) -> Result<i3
                 || (k.code == KeyCode::Char('c') && k.modifiers.contains(KeyModifiers::CONTROL));
             if quit {
                 break Ok(0);
+            }
+            let n = model.scenario.robots.len();
+            let page = terminal.size().map_or(20, |s| s.height.saturating_sub(10)) as isize;
+            match k.code {
+                KeyCode::PageDown | KeyCode::Char(' ') => view.scroll(page.max(1), n),
+                KeyCode::PageUp => view.scroll(-page.max(1), n),
+                KeyCode::Down | KeyCode::Char('j') => view.scroll(1, n),
+                KeyCode::Up | KeyCode::Char('k') => view.scroll(-1, n),
+                KeyCode::Home | KeyCode::Char('g') => view.offset = 0,
+                KeyCode::End | KeyCode::Char('G') => view.scroll(n as isize, n),
+                KeyCode::Char('s') => {
+                    let worst = match view.order {
+                        Order::Auto => n as isize > page,
+                        Order::Scenario => false,
+                        Order::Worst => true,
+                    };
+                    view.toggle_order(worst);
+                }
+                _ => {}
             }
         }
     };

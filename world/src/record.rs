@@ -1,4 +1,4 @@
-//! Recording off the tick loop: trajectory.csv and events.jsonl are written
+//! Recording off the tick loop: the trajectory and events.jsonl are written
 //! by their own thread, fed through a crossbeam channel, flushed about once
 //! a second (also when no tick comes), so a crash loses at most the last
 //! second and the tick loop never waits on the disk. A tick's rows and an
@@ -9,13 +9,18 @@
 //! is pending after [`BATCH_AGE`]), so the loop does not pay a futex wake
 //! of the thread each tick. Batch buffers are returned to the loop for reuse.
 //!
-//! The same thread computes the robots' motion metrics from the states it
-//! writes ([`crate::tracking`]) and hands them back at the end.
+//! The trajectory is trajectory.csv, trajectory.parquet or nothing, of
+//! every tick or every K-th (`[output]`); the same thread
+//! computes the robots' motion metrics from every tick's states whatever
+//! it writes ([`crate::tracking`]) and hands them back at the end.
 
 use crate::batch::{Batch, Batcher};
 use crate::tracking::Tracker;
 use crossbeam::channel::{RecvTimeoutError, bounded, unbounded};
 use mrsim_proto::{BodyState, body_kind};
+use mrsim_runfolder::trajectory::{BodyCells, ParquetTrajectoryWriter};
+use mrsim_runfolder::{TRAJECTORY_FILE, TRAJECTORY_PARQUET_FILE};
+use mrsim_scenario::{OutputConfig, TrajectoryFormat};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::Path;
@@ -80,33 +85,156 @@ pub struct Recorder {
     thread: Option<JoinHandle<std::io::Result<Tracker>>>,
 }
 
-impl Recorder {
-    /// Creates trajectory.csv and events.jsonl in `dir` and starts the
-    /// thread. `names[i]` is body i's name; `tracker` takes in every tick's
-    /// states, in order.
-    pub fn start(dir: &Path, names: Vec<String>, tracker: Tracker) -> std::io::Result<Self> {
-        Self::start_with(dir, names, tracker, Extras::default())
+/// Where the trajectory's rows go (`[output] trajectory`).
+enum Sink {
+    /// trajectory.csv; `true`: with a `theta` column.
+    Csv(BufWriter<File>, bool),
+    Parquet(Box<ParquetTrajectoryWriter>),
+    None,
+}
+
+impl Sink {
+    /// Creates the trajectory file `output` asks for in `dir` (and removes
+    /// one of another format a previous run left there, so that the folder
+    /// holds only this run's).
+    fn create(dir: &Path, output: OutputConfig, theta: bool) -> std::io::Result<Self> {
+        let csv = dir.join(TRAJECTORY_FILE);
+        let parquet = dir.join(TRAJECTORY_PARQUET_FILE);
+        for (path, keep) in [
+            (&csv, output.trajectory == TrajectoryFormat::Csv),
+            (&parquet, output.trajectory == TrajectoryFormat::Parquet),
+        ] {
+            if !keep && path.exists() {
+                std::fs::remove_file(path)?;
+            }
+        }
+        Ok(match output.trajectory {
+            TrajectoryFormat::Csv => {
+                let mut traj = BufWriter::with_capacity(1 << 16, File::create(csv)?);
+                writeln!(traj, "{CSV_HEADER}{}", if theta { ",theta" } else { "" })?;
+                traj.flush()?;
+                Sink::Csv(traj, theta)
+            }
+            TrajectoryFormat::Parquet => Sink::Parquet(Box::new(
+                ParquetTrajectoryWriter::create(&parquet).map_err(std::io::Error::other)?,
+            )),
+            TrajectoryFormat::None => Sink::None,
+        })
     }
 
-    /// [`Self::start`] with the `extras` a scenario asks for.
+    /// Writes one tick's rows.
+    fn write_tick(
+        &mut self,
+        labels: &mut Labels,
+        names: &[String],
+        block: &mut Vec<u8>,
+        tick: (u64, f64),
+        bodies: &[BodyState],
+    ) -> std::io::Result<()> {
+        match self {
+            Sink::Csv(traj, theta) => {
+                csv_rows(block, labels, names, tick, bodies, *theta);
+                traj.write_all(block)
+            }
+            Sink::Parquet(w) => parquet_rows(w, labels, names, tick, bodies),
+            Sink::None => Ok(()),
+        }
+    }
+
+    /// Puts what is buffered on the disk (the Parquet file's row groups go
+    /// when full, its footer at [`Sink::finish`]).
+    fn flush(&mut self) -> std::io::Result<()> {
+        match self {
+            Sink::Csv(traj, _) => traj.flush(),
+            Sink::Parquet(_) | Sink::None => Ok(()),
+        }
+    }
+
+    /// Writes what is left and closes the file.
+    fn finish(self) -> std::io::Result<()> {
+        match self {
+            Sink::Csv(mut traj, _) => traj.flush(),
+            Sink::Parquet(w) => w.finish().map_err(std::io::Error::other),
+            Sink::None => Ok(()),
+        }
+    }
+}
+
+/// trajectory.csv's header.
+const CSV_HEADER: &str = "tick,time,body,kind,x,y,vx,vy";
+
+/// Fills `block` with one tick's CSV rows, in one piece, so the file only
+/// ever ends after a whole tick. `tick,time,` is the same on every row;
+/// `theta` appends each body's heading.
+fn csv_rows(
+    block: &mut Vec<u8>,
+    labels: &mut Labels,
+    names: &[String],
+    (tick, time): (u64, f64),
+    bodies: &[BodyState],
+    theta: bool,
+) {
+    block.clear();
+    push_u64(block, tick);
+    block.push(b',');
+    push_fixed6(block, time);
+    block.push(b',');
+    let prefix = block.len();
+    for (k, b) in bodies.iter().enumerate() {
+        if k > 0 {
+            block.extend_from_within(..prefix);
+        }
+        // tick,time,body,kind,x,y,vx,vy
+        block.extend_from_slice(&labels.of(b, names).csv);
+        for v in [b.position, b.velocity].into_iter().flatten() {
+            block.push(b',');
+            push_fixed6(block, v);
+        }
+        if theta {
+            block.push(b',');
+            push_fixed6(block, b.heading);
+        }
+        block.push(b'\n');
+    }
+}
+
+/// Adds one tick's rows to the Parquet file (the CSV's columns, typed).
+fn parquet_rows(
+    w: &mut ParquetTrajectoryWriter,
+    labels: &mut Labels,
+    names: &[String],
+    (tick, time): (u64, f64),
+    bodies: &[BodyState],
+) -> std::io::Result<()> {
+    for b in bodies {
+        let state = [b.position[0], b.position[1], b.velocity[0], b.velocity[1]];
+        w.push(tick, time, &labels.of(b, names).cells, state)
+            .map_err(std::io::Error::other)?;
+    }
+    Ok(())
+}
+
+impl Recorder {
+    /// [`Recorder::start_with`] the default output (trajectory.csv, every
+    /// tick) and no extras.
+    pub fn start(dir: &Path, names: Vec<String>, tracker: Tracker) -> std::io::Result<Self> {
+        Self::start_with(dir, names, tracker, OutputConfig::default(), Extras::default())
+    }
+
+    /// Creates the trajectory file `output` asks for (with the `extras` the
+    /// scenario asks for) and events.jsonl in `dir` and starts the thread.
+    /// `names[i]` is body i's name; `tracker` takes in every tick's states,
+    /// in order, whatever `output` records.
     pub fn start_with(
         dir: &Path,
         names: Vec<String>,
         mut tracker: Tracker,
+        output: OutputConfig,
         extras: Extras,
     ) -> std::io::Result<Self> {
         let Extras { theta, mut scans } = extras;
-        let mut traj = BufWriter::with_capacity(
-            1 << 16,
-            File::create(dir.join(mrsim_runfolder::TRAJECTORY_FILE))?,
-        );
+        let mut sink = Sink::create(dir, output, theta)?;
         let mut events = BufWriter::new(File::create(dir.join(mrsim_runfolder::EVENTS_FILE))?);
-        writeln!(
-            traj,
-            "tick,time,body,kind,x,y,vx,vy{}",
-            if theta { ",theta" } else { "" }
-        )?;
-        traj.flush()?;
         let (tx, rx) = bounded::<Msg>(256);
         let (back_tx, recycled) = unbounded();
         let thread = std::thread::Builder::new()
@@ -117,6 +245,10 @@ impl Recorder {
                 let mut last_flush = Instant::now();
                 let mut block = Vec::with_capacity(1 << 12);
                 let mut labels = Labels::default();
+                // The last tick taken in if `every` skipped it: written at
+                // the end, so the trajectory ends where the run did.
+                let mut skipped: Option<(u64, f64)> = None;
+                let mut skipped_bodies = Vec::new();
                 loop {
                     // Wake at least once a period, so rows reach the disk
                     // even while the tick loop waits (a lockstep stall).
@@ -128,34 +260,22 @@ impl Recorder {
                                 let bodies = &batch.bodies[from..from + count];
                                 from += count;
                                 tracker.track(bodies);
-                                // A tick's rows go to the buffer in one piece, so
-                                // the file only ever ends after a whole tick.
-                                // `tick,time,` is the same on every row of it.
-                                block.clear();
-                                push_u64(&mut block, tick);
-                                block.push(b',');
-                                push_fixed6(&mut block, time);
-                                block.push(b',');
-                                let prefix = block.len();
-                                for (k, b) in bodies.iter().enumerate() {
-                                    if k > 0 {
-                                        block.extend_from_within(..prefix);
+                                if output.records(tick) {
+                                    skipped = None;
+                                    sink.write_tick(
+                                        &mut labels,
+                                        &names,
+                                        &mut block,
+                                        (tick, time),
+                                        bodies,
+                                    )?;
+                                    if let Some(s) = &mut scans {
+                                        s.write(tick, bodies)?;
                                     }
-                                    // tick,time,body,kind,x,y,vx,vy
-                                    block.extend_from_slice(labels.of(b, &names));
-                                    for v in [b.position, b.velocity].into_iter().flatten() {
-                                        block.push(b',');
-                                        push_fixed6(&mut block, v);
-                                    }
-                                    if theta {
-                                        block.push(b',');
-                                        push_fixed6(&mut block, b.heading);
-                                    }
-                                    block.push(b'\n');
-                                }
-                                traj.write_all(&block)?;
-                                if let Some(s) = &mut scans {
-                                    s.write(tick, bodies)?;
+                                } else {
+                                    skipped = Some((tick, time));
+                                    skipped_bodies.clear();
+                                    skipped_bodies.extend_from_slice(bodies);
                                 }
                             }
                             let _ = back_tx.send(batch);
@@ -168,7 +288,7 @@ impl Recorder {
                         Err(RecvTimeoutError::Disconnected) => break,
                     }
                     if last_flush.elapsed() >= period {
-                        traj.flush()?;
+                        sink.flush()?;
                         if let Some(s) = &mut scans {
                             s.flush()?;
                         }
@@ -176,7 +296,10 @@ impl Recorder {
                         last_flush = Instant::now();
                     }
                 }
-                traj.flush()?;
+                if let Some(tick) = skipped {
+                    sink.write_tick(&mut labels, &names, &mut block, tick, &skipped_bodies)?;
+                }
+                sink.finish()?;
                 events.flush()?;
                 if let Some(s) = &mut scans {
                     s.flush()?;
@@ -188,7 +311,6 @@ impl Recorder {
             thread: Some(thread),
         })
     }
-
     /// Queues one tick's bodies; they go to the thread with the batch.
     pub fn tick(&mut self, tick: u64, time: f64, bodies: &[BodyState]) {
         let pending = self.batches.pending();
@@ -232,31 +354,52 @@ impl Recorder {
     }
 }
 
-/// Each body's `name,kind` as its rows spell it, made once per body.
+/// A body's cells as the trajectory writes them, made once per body.
+struct Label {
+    /// The kind it was made for.
+    kind: u32,
+    /// `name,kind` as a CSV row spells it.
+    csv: Vec<u8>,
+    /// The Parquet file's `body` and `kind` cells.
+    cells: BodyCells,
+}
+
+/// Each body's [`Label`].
 #[derive(Default)]
 struct Labels {
-    /// By body id: the kind it was made for, and the bytes.
-    by_id: Vec<Option<(u32, Vec<u8>)>>,
+    /// By body id; an id not seen yet has kind [`Labels::UNSET`].
+    by_id: Vec<Label>,
 }
 
 impl Labels {
-    /// `name,kind` of `b` (`?` for an id without a name).
-    fn of(&mut self, b: &BodyState, names: &[String]) -> &[u8] {
+    /// The kind of a label not made yet (no body has it).
+    const UNSET: u32 = u32::MAX;
+
+    /// The label of `b` (name `?` for an id without a name).
+    fn of(&mut self, b: &BodyState, names: &[String]) -> &Label {
         let id = b.id as usize;
         if self.by_id.len() <= id {
-            self.by_id.resize(id + 1, None);
+            self.by_id.resize_with(id + 1, || Label {
+                kind: Self::UNSET,
+                csv: Vec::new(),
+                cells: BodyCells::new("", ""),
+            });
         }
-        let slot = &mut self.by_id[id];
-        if slot.as_ref().is_none_or(|(kind, _)| *kind != b.kind) {
+        let label = &mut self.by_id[id];
+        if label.kind != b.kind {
             let name = names.get(id).map_or("?", String::as_str);
             let kind = if b.kind == body_kind::ROBOT {
                 "robot"
             } else {
                 "obstacle"
             };
-            *slot = Some((b.kind, format!("{name},{kind}").into_bytes()));
+            *label = Label {
+                kind: b.kind,
+                csv: format!("{name},{kind}").into_bytes(),
+                cells: BodyCells::new(name, kind),
+            };
         }
-        slot.as_ref().map_or(&[], |(_, bytes)| bytes.as_slice())
+        label
     }
 }
 

@@ -1,6 +1,7 @@
 //! Seeing a run: reads a finished run's folder and draws it.
 //!
-//! [`RunData::load`] reads `scenario.json`, `trajectory.csv`, `events.jsonl`,
+//! [`RunData::load`] reads `scenario.json`, the trajectory (`trajectory.csv`,
+//! `trajectory.parquet`, or none), `events.jsonl`,
 //! `metrics.json` and the optional `diagnostics.csv`; [`write_plots`] draws
 //! `plot.svg` and `plot.png` (map with trajectories, speeds, diagnostics);
 //! [`write_replay`] writes `replay.html`, one self-contained page that
@@ -10,14 +11,18 @@
 
 pub mod bench_plot;
 mod palette;
+mod parquet;
 mod plot;
 mod replay;
 mod run;
 mod sensing;
 
 pub use palette::{COLLISION, PALETTE, hex, robot_color};
-pub use plot::{PLOT_WIDTH, plot_size, write_plots};
-pub use replay::{MAP_HEIGHT, MAP_WIDTH, ReplayView, STRIP_HEIGHT, write_replay};
+pub use plot::{MAX_PLOT_POINTS, PLOT_WIDTH, plot_every, plot_size, write_plots};
+pub use replay::{
+    MAP_HEIGHT, MAP_WIDTH, MAX_REPLAY_POSITIONS, ReplayView, STRIP_HEIGHT, replay_every,
+    write_replay,
+};
 pub use run::{
     BodyKind, BodyTrack, DIAGNOSTICS_FILE, DiagnosticSample, EVENTS_FILE, Event, EventKind,
     METRICS_FILE, Metrics, Percentiles, RobotMetrics, RunData, SCENARIO_FILE, Sample,
@@ -36,7 +41,9 @@ pub enum RenderError {
         path: PathBuf,
     },
     /// A required file is missing.
-    #[error("{path}: missing (a run folder needs scenario.json, trajectory.csv and events.jsonl)")]
+    #[error(
+        "{path}: missing (a run folder needs scenario.json, events.jsonl and the trajectory its [output] names)"
+    )]
     Missing {
         /// The file that should be there.
         path: PathBuf,
@@ -49,12 +56,14 @@ pub enum RenderError {
         /// The OS error.
         source: std::io::Error,
     },
-    /// A line of a CSV or JSONL file is malformed.
+    /// A line of a CSV or JSONL file (a row of a Parquet file) is
+    /// malformed.
     #[error("{path}:{line}: {reason}")]
     Parse {
         /// The file.
         path: PathBuf,
-        /// 1-based line number (the header is line 1).
+        /// 1-based line number (the header is line 1); in a Parquet file,
+        /// the 1-based row.
         line: usize,
         /// What is wrong with it.
         reason: String,
@@ -67,6 +76,9 @@ pub enum RenderError {
         /// serde_json's error.
         source: serde_json::Error,
     },
+    /// `trajectory.parquet` is not a readable trajectory.
+    #[error(transparent)]
+    Parquet(mrsim_runfolder::trajectory::TrajectoryError),
     /// plotters failed to draw.
     #[error("{path}: drawing failed: {reason}")]
     Plot {

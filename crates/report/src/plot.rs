@@ -12,6 +12,7 @@ use crate::palette::{COLLISION, robot_color};
 use crate::{BodyKind, RenderError, RunData, write_file};
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
@@ -116,15 +117,49 @@ fn unit(run: &RunData) -> &'static str {
 
 /// Robots' tracks with their colour index, in colour order.
 fn robot_tracks(run: &RunData) -> Vec<(usize, &crate::BodyTrack)> {
+    let index: HashMap<String, usize> = run
+        .robot_names()
+        .into_iter()
+        .enumerate()
+        .map(|(i, n)| (n, i))
+        .collect();
     let mut out: Vec<(usize, &crate::BodyTrack)> = run
         .trajectory
         .bodies
         .iter()
         .filter(|b| b.kind == BodyKind::Robot)
-        .filter_map(|b| run.robot_index(&b.name).map(|i| (i, b)))
+        .filter_map(|b| index.get(&b.name).map(|&i| (i, b)))
         .collect();
     out.sort_by_key(|(i, _)| *i);
     out
+}
+
+/// At most this many robot samples are drawn per panel: a bigger run's
+/// tracks are drawn through every k-th sample (and the last), so a
+/// 10,000-robot plot stays small and quick to draw.
+pub const MAX_PLOT_POINTS: usize = 200_000;
+
+/// Every how many samples a track is drawn through (1 unless the robots'
+/// samples together exceed [`MAX_PLOT_POINTS`]).
+pub fn plot_every(run: &RunData) -> usize {
+    let samples: usize = run
+        .trajectory
+        .bodies
+        .iter()
+        .filter(|b| b.kind == BodyKind::Robot)
+        .map(|b| b.samples.len())
+        .sum();
+    samples.div_ceil(MAX_PLOT_POINTS).max(1)
+}
+
+/// Every `every`-th sample of `samples`, and the last.
+fn thinned(samples: &[crate::Sample], every: usize) -> impl Iterator<Item = &crate::Sample> {
+    let last = samples.len().saturating_sub(1);
+    samples
+        .iter()
+        .enumerate()
+        .filter(move |(i, _)| i % every == 0 || *i == last)
+        .map(|(_, s)| s)
 }
 
 fn draw<DB: DrawingBackend>(run: &RunData, root: &DrawingArea<DB, Shift>) -> Result<(), String> {
@@ -240,11 +275,10 @@ fn draw_map<DB: DrawingBackend>(
     }
 
     let width = if n_robots > 64 { 1 } else { 2 };
+    let every = plot_every(run);
     for (index, body) in &robots {
         let c = rgb(robot_color(*index));
-        let points = body
-            .samples
-            .iter()
+        let points = thinned(&body.samples, every)
             .filter(|s| s.x.is_finite() && s.y.is_finite())
             .map(|s| (s.x, s.y));
         chart
@@ -253,19 +287,30 @@ fn draw_map<DB: DrawingBackend>(
     }
     // Starts (circles of the robot's radius, at least 4 px), goals
     // (crosses) and names, for every robot of the scenario.
+    let specs: HashMap<&str, &mrsim_scenario::RobotSpec> = run
+        .scenario
+        .robots
+        .iter()
+        .map(|r| (r.name.as_str(), r))
+        .collect();
+    let tracks: HashMap<&str, &crate::BodyTrack> = run
+        .trajectory
+        .bodies
+        .iter()
+        .map(|b| (b.name.as_str(), b))
+        .collect();
     for (index, name) in run.robot_names().iter().enumerate() {
         let c = rgb(robot_color(index));
-        let spec = run.scenario.robots.iter().find(|r| &r.name == name);
-        let first = run
-            .trajectory
-            .body(name)
+        let spec = specs.get(name.as_str()).copied();
+        let first = tracks
+            .get(name.as_str())
             .and_then(|t| t.samples.first())
             .map(|s| [s.x, s.y]);
         let Some(start) = spec.map(|s| s.start).or(first) else {
             continue;
         };
         let start = (start[0], start[1]);
-        let r = px(run.radius_of(name)).max(4);
+        let r = px(spec.map_or(0.0, |s| s.radius)).max(4);
         chart
             .draw_series(std::iter::once(Circle::new(start, r, c.stroke_width(2))))
             .map_err(err)?;
@@ -336,11 +381,10 @@ fn draw_speeds<DB: DrawingBackend>(
         .light_line_style(RGBColor(242, 242, 242))
         .draw()
         .map_err(err)?;
+    let every = plot_every(run);
     for (index, body) in &robots {
         let c = rgb(robot_color(*index));
-        let points = body
-            .samples
-            .iter()
+        let points = thinned(&body.samples, every)
             .map(|s| (s.time, s.speed()))
             .filter(|(t, v)| t.is_finite() && v.is_finite());
         let series = chart
@@ -378,6 +422,12 @@ fn draw_diagnostics<DB: DrawingBackend>(
         return Ok(());
     }
     let panels = area.split_evenly((shown, 1));
+    let robot_names = run.robot_names();
+    let colour: HashMap<&str, usize> = robot_names
+        .iter()
+        .enumerate()
+        .map(|(i, n)| (n.as_str(), i))
+        .collect();
     for (k, (name, panel)) in names.iter().zip(panels.iter()).enumerate() {
         let mut title = format!("diagnostic: {name}");
         if k + 1 == shown && names.len() > shown {
@@ -388,18 +438,15 @@ fn draw_diagnostics<DB: DrawingBackend>(
         }
         let panel = panel.titled(&title, (FAMILY, 16)).map_err(err)?;
         // One series per robot, in colour order.
-        let mut series: Vec<(usize, Vec<(f64, f64)>)> = Vec::new();
+        let mut by_robot: std::collections::BTreeMap<usize, Vec<(f64, f64)>> = Default::default();
         for d in diagnostics.iter().filter(|d| &d.name == name) {
             if !(d.time.is_finite() && d.value.is_finite()) {
                 continue;
             }
-            let index = run.robot_index(&d.robot).unwrap_or(usize::MAX);
-            match series.iter_mut().find(|(i, _)| *i == index) {
-                Some((_, points)) => points.push((d.time, d.value)),
-                None => series.push((index, vec![(d.time, d.value)])),
-            }
+            let index = colour.get(d.robot.as_str()).copied().unwrap_or(usize::MAX);
+            by_robot.entry(index).or_default().push((d.time, d.value));
         }
-        series.sort_by_key(|(i, _)| *i);
+        let series: Vec<(usize, Vec<(f64, f64)>)> = by_robot.into_iter().collect();
         let all = series.iter().flat_map(|(_, p)| p.iter());
         let (mut t0, mut t1, mut v0, mut v1) = (
             f64::INFINITY,

@@ -18,7 +18,7 @@
 use crate::palette::{COLLISION, hex, robot_color};
 use crate::{BodyKind, EventKind, RenderError, RunData, write_file};
 use serde_json::{Value, json};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 
 /// Width of the replay's map canvas, CSS px.
@@ -31,6 +31,10 @@ pub const STRIP_HEIGHT: u32 = 120;
 const MARGIN: f64 = 12.0;
 /// The event list shows at most this many events.
 const MAX_LISTED_EVENTS: usize = 500;
+/// At most this many positions (bodies x frames) go into the page: a
+/// bigger run is shown at every k-th recorded tick (and its last), so a
+/// 10,000-robot page stays a few MB and opens in a few seconds.
+pub const MAX_REPLAY_POSITIONS: usize = 1_000_000;
 
 const TEMPLATE: &str = include_str!("replay.html");
 const PLACEHOLDER: &str = "__MRSIM_DATA__";
@@ -100,6 +104,20 @@ pub fn write_replay(run: &RunData, dir: &Path) -> Result<(), RenderError> {
     write_file(&dir.join("replay.html"), page.as_bytes())
 }
 
+/// Every how many recorded ticks the page shows a frame: 1 unless bodies
+/// x ticks exceeds [`MAX_REPLAY_POSITIONS`].
+pub fn replay_every(run: &RunData) -> usize {
+    let bodies = run.robot_names().len()
+        + run
+            .trajectory
+            .bodies
+            .iter()
+            .filter(|b| b.kind == BodyKind::Obstacle)
+            .count();
+    let positions = bodies.max(1) * run.trajectory.ticks.len();
+    positions.div_ceil(MAX_REPLAY_POSITIONS).max(1)
+}
+
 /// Rounds to `decimals` places (NaN and infinities become null).
 fn round(v: f64, decimals: i32) -> Value {
     if !v.is_finite() {
@@ -113,12 +131,37 @@ fn replay_data(run: &RunData) -> Value {
     let view = ReplayView::of(run);
     // Positions to about 1/20 px: keeps the page small for big runs.
     let decimals = (20.0 * view.scale).log10().ceil().clamp(0.0, 9.0) as i32;
-    let ticks = &run.trajectory.ticks;
+    let every = replay_every(run);
+    let recorded = &run.trajectory.ticks;
+    let mut picked: Vec<usize> = (0..recorded.len()).step_by(every).collect();
+    if let Some(last) = recorded.len().checked_sub(1)
+        && picked.last() != Some(&last)
+    {
+        picked.push(last);
+    }
+    let ticks: Vec<u64> = picked.iter().map(|&i| recorded[i]).collect();
+    let times: Vec<Value> = picked
+        .iter()
+        .map(|&i| round(run.trajectory.times[i], 6))
+        .collect();
+    let ticks = &ticks;
     let frame_of = |tick: u64| ticks.partition_point(|&t| t <= tick).saturating_sub(1);
     let names = run.robot_names();
+    let by_name: HashMap<&str, &crate::BodyTrack> = run
+        .trajectory
+        .bodies
+        .iter()
+        .map(|b| (b.name.as_str(), b))
+        .collect();
+    let specs: HashMap<&str, &mrsim_scenario::RobotSpec> = run
+        .scenario
+        .robots
+        .iter()
+        .map(|r| (r.name.as_str(), r))
+        .collect();
 
     let track = |name: &str| -> (Vec<Value>, Vec<Value>) {
-        match run.trajectory.body(name) {
+        match by_name.get(name) {
             Some(body) => ticks
                 .iter()
                 .map(|&t| match body.at(t) {
@@ -137,12 +180,12 @@ fn replay_data(run: &RunData) -> Value {
         .iter()
         .enumerate()
         .map(|(i, name)| {
-            let spec = run.scenario.robots.iter().find(|r| &r.name == name);
+            let spec = specs.get(name.as_str());
             let (x, y) = track(name);
             json!({
                 "name": name,
                 "color": hex(robot_color(i)),
-                "radius": run.radius_of(name),
+                "radius": spec.map_or(0.0, |s| s.radius),
                 "planner": spec.map(|s| s.planner.clone()),
                 "goal": spec.map(|s| [round(s.goal[0], decimals), round(s.goal[1], decimals)]),
                 "x": x,
@@ -167,7 +210,12 @@ fn replay_data(run: &RunData) -> Value {
         .map(|w| json!([w[0][0], w[0][1], w[1][0], w[1][1]]))
         .collect();
 
-    let robot_of = |name: &str| names.iter().position(|n| n == name);
+    let index: HashMap<&str, usize> = names
+        .iter()
+        .enumerate()
+        .map(|(i, n)| (n.as_str(), i))
+        .collect();
+    let robot_of = |name: &str| index.get(name).copied();
     let mut collisions = Vec::new();
     let mut misses = Vec::new();
     let mut goals = Vec::new();
@@ -249,7 +297,8 @@ fn replay_data(run: &RunData) -> Value {
         "strip": { "height": STRIP_HEIGHT },
         "collisionColor": hex(COLLISION),
         "ticks": ticks,
-        "times": run.trajectory.times.iter().map(|&t| round(t, 6)).collect::<Vec<_>>(),
+        "times": times,
+        "decimation": { "every": every, "ticksRecorded": recorded.len() },
         "walls": walls,
         "robots": robots,
         "obstacles": obstacles,

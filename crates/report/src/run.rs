@@ -10,8 +10,9 @@ use std::path::{Path, PathBuf};
 
 pub use mrsim_runfolder::{
     DIAGNOSTICS_FILE, EVENTS_FILE, METRICS_FILE, Percentiles, RobotMetrics, SCENARIO_FILE,
-    TRAJECTORY_FILE,
+    TRAJECTORY_FILE, TRAJECTORY_PARQUET_FILE,
 };
+use mrsim_scenario::TrajectoryFormat;
 
 /// `metrics.json`, the run folder crate's schema (the name this crate has
 /// always used for it).
@@ -191,7 +192,9 @@ pub struct RunData {
 }
 
 impl RunData {
-    /// Reads a run folder. `scenario.json`, `trajectory.csv` and
+    /// Reads a run folder. `scenario.json`, the trajectory its `[output]`
+    /// names (`trajectory.csv`, `trajectory.parquet`, or none at all for
+    /// `trajectory = "none"`: then [`RunData::trajectory`] is empty) and
     /// `events.jsonl` are required; `metrics.json` and `diagnostics.csv` are
     /// read when present. Errors name the file and, for CSV and JSONL, the
     /// line.
@@ -209,12 +212,19 @@ impl RunData {
                     source,
                 }
             })?;
-        let trajectory_path = dir.join(TRAJECTORY_FILE);
-        let trajectory = cut_short(
-            &trajectory_path,
-            &read_required(&trajectory_path)?,
-            parse_trajectory,
-        )?;
+        let trajectory = match scenario.output.trajectory {
+            TrajectoryFormat::Csv => {
+                let trajectory_path = dir.join(TRAJECTORY_FILE);
+                cut_short(
+                    &trajectory_path,
+                    &read_required(&trajectory_path)?,
+                    parse_trajectory,
+                )?
+            }
+            TrajectoryFormat::Parquet => crate::parquet::load(&dir.join(TRAJECTORY_PARQUET_FILE))?,
+            // Nothing was recorded: the pictures show the scene alone.
+            TrajectoryFormat::None => Trajectory::default(),
+        };
         let events_path = dir.join(EVENTS_FILE);
         let events = cut_short(&events_path, &read_required(&events_path)?, parse_events)?;
         let metrics_path = dir.join(METRICS_FILE);
@@ -264,6 +274,12 @@ impl RunData {
     /// Robot names in colour order: the scenario's, then any other robot in
     /// the trajectory.
     pub fn robot_names(&self) -> Vec<String> {
+        let listed: std::collections::HashSet<&str> = self
+            .scenario
+            .robots
+            .iter()
+            .map(|r| r.name.as_str())
+            .collect();
         let mut names: Vec<String> = self
             .scenario
             .robots
@@ -271,7 +287,7 @@ impl RunData {
             .map(|r| r.name.clone())
             .collect();
         for b in &self.trajectory.bodies {
-            if b.kind == BodyKind::Robot && self.scenario.robot_index(&b.name).is_none() {
+            if b.kind == BodyKind::Robot && !listed.contains(b.name.as_str()) {
                 names.push(b.name.clone());
             }
         }
@@ -404,74 +420,89 @@ fn parse_trajectory(path: &Path, text: &str) -> Result<Trajectory, RenderError> 
     const COLUMNS: [&str; 8] = ["tick", "time", "body", "kind", "x", "y", "vx", "vy"];
     let mut lines = numbered_lines(text);
     let csv = Csv::new(path, lines.next().map(|(_, l)| l), &COLUMNS)?;
-    let mut bodies: Vec<BodyTrack> = Vec::new();
-    let mut index: HashMap<String, usize> = HashMap::new();
-    let mut tick_times: BTreeMap<u64, f64> = BTreeMap::new();
+    let mut tracks = Tracks::default();
     for (line_no, line) in lines {
         let f = csv.fields(line_no, line)?;
         let tick = csv.tick(line_no, f[0])?;
         let time = csv.number(line_no, "time", f[1])?;
-        let name = f[2];
-        if name.is_empty() {
-            return Err(parse_error(path, line_no, "column `body` is empty".into()));
-        }
-        let kind = match f[3] {
-            "robot" => BodyKind::Robot,
-            "obstacle" => BodyKind::Obstacle,
-            other => {
-                return Err(parse_error(
-                    path,
-                    line_no,
-                    format!("column `kind`: `{other}` is neither robot nor obstacle"),
-                ));
-            }
-        };
         let mut v = [0.0; 4];
         for (k, col) in ["x", "y", "vx", "vy"].iter().enumerate() {
             v[k] = csv.number(line_no, col, f[4 + k])?;
         }
-        let i = match index.get(name) {
-            Some(&i) => i,
-            None => {
-                index.insert(name.to_string(), bodies.len());
-                bodies.push(BodyTrack {
-                    name: name.to_string(),
-                    kind,
-                    samples: Vec::new(),
-                });
-                bodies.len() - 1
-            }
-        };
-        if bodies[i].kind != kind {
-            return Err(parse_error(
-                path,
-                line_no,
-                format!(
-                    "body `{name}` was a {:?} on an earlier line",
-                    bodies[i].kind
-                )
-                .to_lowercase(),
-            ));
-        }
-        tick_times.entry(tick).or_insert(time);
-        bodies[i].samples.push(Sample {
+        let sample = Sample {
             tick,
             time,
             x: v[0],
             y: v[1],
             vx: v[2],
             vy: v[3],
-        });
+        };
+        tracks
+            .push(f[2], f[3], sample)
+            .map_err(|reason| parse_error(path, line_no, reason))?;
     }
-    for b in &mut bodies {
-        b.samples.sort_by_key(|s| s.tick);
-        b.samples.dedup_by_key(|s| s.tick);
+    Ok(tracks.finish())
+}
+
+/// A trajectory's rows grouped into tracks, whatever file they come from.
+#[derive(Default)]
+pub(crate) struct Tracks {
+    bodies: Vec<BodyTrack>,
+    index: HashMap<String, usize>,
+    tick_times: BTreeMap<u64, f64>,
+}
+
+impl Tracks {
+    /// Adds one row; the error says what is wrong with it.
+    pub(crate) fn push(&mut self, name: &str, kind: &str, sample: Sample) -> Result<(), String> {
+        if name.is_empty() {
+            return Err("column `body` is empty".into());
+        }
+        let kind = match kind {
+            "robot" => BodyKind::Robot,
+            "obstacle" => BodyKind::Obstacle,
+            other => {
+                return Err(format!(
+                    "column `kind`: `{other}` is neither robot nor obstacle"
+                ));
+            }
+        };
+        let i = match self.index.get(name) {
+            Some(&i) => i,
+            None => {
+                self.index.insert(name.to_string(), self.bodies.len());
+                self.bodies.push(BodyTrack {
+                    name: name.to_string(),
+                    kind,
+                    samples: Vec::new(),
+                });
+                self.bodies.len() - 1
+            }
+        };
+        if self.bodies[i].kind != kind {
+            return Err(format!(
+                "body `{name}` was a {:?} on an earlier line",
+                self.bodies[i].kind
+            )
+            .to_lowercase());
+        }
+        self.tick_times.entry(sample.tick).or_insert(sample.time);
+        self.bodies[i].samples.push(sample);
+        Ok(())
     }
-    Ok(Trajectory {
-        ticks: tick_times.keys().copied().collect(),
-        times: tick_times.values().copied().collect(),
-        bodies,
-    })
+
+    /// The tracks, each sorted by tick without repeats.
+    pub(crate) fn finish(mut self) -> Trajectory {
+        for b in &mut self.bodies {
+            b.samples.sort_by_key(|s| s.tick);
+            b.samples.dedup_by_key(|s| s.tick);
+        }
+        Trajectory {
+            ticks: self.tick_times.keys().copied().collect(),
+            times: self.tick_times.values().copied().collect(),
+            bodies: self.bodies,
+        }
+    }
 }
 
 fn parse_events(path: &Path, text: &str) -> Result<Vec<Event>, RenderError> {

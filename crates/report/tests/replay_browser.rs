@@ -325,3 +325,28 @@ fn without_a_tick_the_page_plays_to_the_last_tick() {
         "not paused at the end"
     );
 }
+
+#[test]
+fn a_ten_thousand_robot_replay_stays_within_its_budget_and_draws_every_robot() {
+    let Some(chromium) = chromium() else { return };
+    let dir = temp_dir("browser-10k");
+    // 10,000 robots x 201 ticks: two million positions, twice the budget.
+    let run = big_run(&dir, 10_000, 200);
+    write_replay(&run, &dir).unwrap();
+    let bytes = std::fs::metadata(dir.join("replay.html")).unwrap().len();
+    assert!(
+        bytes < 24 * mrsim_report::MAX_REPLAY_POSITIONS as u64,
+        "replay.html is {bytes} bytes"
+    );
+    let every = mrsim_report::replay_every(&run);
+    assert!(every > 1);
+    let frames = 200 / every as u64 + 1 + u64::from(200 % every as u64 != 0);
+    let dom = run_chromium(&chromium, &page_url(&dir, 200), &["--dump-dom".to_string()]);
+    let want = format!("10000 robots drawn, {frames} frames (1 in {every} of 201 recorded ticks)");
+    assert!(
+        dom.contains(&want),
+        "expected `{want}` in:\n{}",
+        dom.lines().find(|l| l.contains("drawn")).unwrap_or("")
+    );
+    assert!(dom.contains("tick 200 ("), "not at the last tick");
+}

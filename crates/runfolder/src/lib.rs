@@ -12,10 +12,15 @@
 //! is ignored) so that a folder written by an older world, or a hand-made
 //! one in a test, still reads; writing is exact (every field, in the order
 //! declared, `null` for an absent value).
+//!
+//! The trajectory is `trajectory.csv`, `trajectory.parquet` ([`trajectory`]
+//! has its schema, a writer and a reader) or absent, as the scenario's
+//! `[output]` says.
 #![warn(missing_docs)]
 
 pub mod bench;
 pub mod metrics;
+pub mod trajectory;
 pub mod usage;
 
 pub use metrics::{Percentiles, RobotMetrics, RunMetrics, TimingMetrics};
@@ -24,8 +29,12 @@ use std::path::{Path, PathBuf};
 
 /// The resolved scenario, as the world ran it.
 pub const SCENARIO_FILE: &str = "scenario.json";
-/// Every body's state at every tick.
+/// Every body's state at every recorded tick (`[output] trajectory = "csv"`,
+/// the default): `tick,time,body,kind,x,y,vx,vy`, numbers to six decimals.
 pub const TRAJECTORY_FILE: &str = "trajectory.csv";
+/// The same rows as [`TRAJECTORY_FILE`], typed, as Parquet (`[output]
+/// trajectory = "parquet"`; schema in [`trajectory`]).
+pub const TRAJECTORY_PARQUET_FILE: &str = "trajectory.parquet";
 /// One JSON object per line: joins, losses, contacts, goals, rejections.
 pub const EVENTS_FILE: &str = "events.jsonl";
 /// The run's metrics ([`metrics::RunMetrics`]).

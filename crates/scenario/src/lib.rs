@@ -17,6 +17,11 @@
 //! Precedence, lowest first: built-in defaults, `[defaults]`, `[generate]`'s
 //! own keys (for generated robots), the robot's own keys, overrides (in the
 //! order given). `params` are merged key by key through the same layers.
+//!
+//! `[output]` says what the world writes of the trajectory
+//! ([`OutputConfig`]): `trajectory = "csv" | "parquet" | "none"` (default
+//! csv) and `every = K` (record ticks 0, K, 2K, ... and the last; default
+//! 1, whole number >= 1).
 #![warn(missing_docs)]
 
 mod error;

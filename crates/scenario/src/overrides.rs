@@ -5,7 +5,8 @@
 //! planner, generated ones included), `world.KEY`, `defaults.KEY...`,
 //! `generate.KEY...`, `robot.NAME.KEY...` (a robot by name, generated ones
 //! included), `robot.*.KEY...` (every robot), `obstacle.NAME.KEY...`,
-//! `obstacle.*.KEY...`, `wall.INDEX.KEY...` (0-based, file order).
+//! `obstacle.*.KEY...`, `wall.INDEX.KEY...` (0-based, file order),
+//! `map.KEY`, `output.KEY`.
 //!
 //! The VALUE is TOML text (`0.2`, `"orca"`, `[1, 2]`, `{ a = 1 }`); a bare
 //! word that is not TOML (`orca`) is taken as a string, so `planner=orca`
@@ -53,7 +54,7 @@ impl RobotPatch<'_> {
 }
 
 const TARGETS: &str = "name, description, length_unit, planner, world.KEY, defaults.KEY, \
-     robot.NAME.KEY, robot.*.KEY, obstacle.NAME.KEY, obstacle.*.KEY, wall.INDEX.KEY, generate.KEY, map.KEY";
+     robot.NAME.KEY, robot.*.KEY, obstacle.NAME.KEY, obstacle.*.KEY, wall.INDEX.KEY, generate.KEY, map.KEY, output.KEY";
 
 /// Applies every override to `doc`; returns those that (also) select robots,
 /// for the generated robots.
@@ -85,7 +86,7 @@ pub(crate) fn apply<'i>(
                 });
             }
             ("name" | "description" | "length_unit", 1)
-            | ("world" | "defaults" | "generate" | "map", 2..) => {
+            | ("world" | "defaults" | "generate" | "map" | "output", 2..) => {
                 set_path(doc, &segs, value, &span).map_err(&fail)?;
             }
             ("robot", 3..) => {

@@ -2,7 +2,8 @@
 //! keys refused. `resolve` turns it into the types of `types.rs`.
 
 use crate::types::{
-    Kinematics, LengthUnit, MissPolicy, Mode, ParamValue, UnknownCells, VelocitySource,
+    Kinematics, LengthUnit, MissPolicy, Mode, ParamValue, TrajectoryFormat, UnknownCells,
+    VelocitySource,
 };
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -44,6 +45,15 @@ pub(crate) struct RawDoc {
     pub wall: Vec<S<RawWall>>,
     pub generate: Option<S<RawGenerate>>,
     pub map: Option<S<RawMap>>,
+    pub output: Option<S<RawOutput>>,
+}
+
+/// `[output]`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub(crate) struct RawOutput {
+    pub trajectory: Option<S<TrajectoryFormat>>,
+    pub every: Option<S<i64>>,
 }
 
 /// `[map]`.

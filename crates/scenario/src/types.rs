@@ -358,6 +358,57 @@ pub struct Scenario {
     /// The map the last walls come from, if the scenario has one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub map: Option<MapInfo>,
+    /// The `[output]` table (left out of the JSON when it is the default,
+    /// so a default run's scenario.json is what it always was).
+    #[serde(default, skip_serializing_if = "OutputConfig::is_default")]
+    pub output: OutputConfig,
+}
+
+/// The trajectory file a run writes (`[output] trajectory`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum TrajectoryFormat {
+    /// `trajectory.csv` (default).
+    #[default]
+    Csv,
+    /// `trajectory.parquet`: the same columns, typed.
+    Parquet,
+    /// No trajectory file (metrics.json and events.jsonl still complete).
+    None,
+}
+
+/// The `[output]` table: what the world writes of the trajectory. The
+/// metrics (metrics.json) see every tick and every robot whatever it says.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct OutputConfig {
+    /// The trajectory's file format (default csv).
+    pub trajectory: TrajectoryFormat,
+    /// Record every `every`-th tick (ticks 0, K, 2K, ... and the last);
+    /// default 1, every tick.
+    pub every: u32,
+}
+
+impl Default for OutputConfig {
+    fn default() -> Self {
+        Self {
+            trajectory: TrajectoryFormat::Csv,
+            every: 1,
+        }
+    }
+}
+
+impl OutputConfig {
+    /// Every field at its default.
+    pub fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
+
+    /// Is tick `tick` one the trajectory records (the run's last tick
+    /// aside, which it always does)?
+    pub fn records(&self, tick: u64) -> bool {
+        tick.is_multiple_of(u64::from(self.every.max(1)))
+    }
 }
 
 impl Scenario {

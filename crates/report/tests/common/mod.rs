@@ -144,6 +144,7 @@ pub fn scenario(n: usize) -> Scenario {
             segment: [[-1.0, -5.0], [-1.0, -4.0]],
         }],
         map: None,
+        output: Default::default(),
     }
 }
 
@@ -293,4 +294,55 @@ pub fn decode_png(path: &Path) -> (u32, u32, Vec<[u8; 3]>) {
 /// Whether two colours differ by at most `tol` in every channel.
 pub fn near(a: [u8; 3], b: [u8; 3], tol: u8) -> bool {
     a.iter().zip(b.iter()).all(|(x, y)| x.abs_diff(*y) <= tol)
+}
+
+/// A big run in memory: `n` robots on the antipodal circle of
+/// [`scenario`], moving in straight lines over ticks 0..=`ticks`, no
+/// obstacle track, no events.
+pub fn big_run(dir: &Path, n: usize, ticks: u64) -> mrsim_report::RunData {
+    let mut sc = scenario(n);
+    sc.world.duration = ticks as f64 * DT;
+    let bodies = (0..n)
+        .map(|i| {
+            let (s, g) = start_goal(i, n);
+            let samples = (0..=ticks)
+                .map(|tick| {
+                    let k = tick as f64 / ticks as f64;
+                    mrsim_report::Sample {
+                        tick,
+                        time: tick as f64 * DT,
+                        x: s[0] + (g[0] - s[0]) * k,
+                        y: s[1] + (g[1] - s[1]) * k,
+                        vx: (g[0] - s[0]) / (ticks as f64 * DT),
+                        vy: (g[1] - s[1]) / (ticks as f64 * DT),
+                    }
+                })
+                .collect();
+            mrsim_report::BodyTrack {
+                name: format!("r{i}"),
+                kind: mrsim_report::BodyKind::Robot,
+                samples,
+            }
+        })
+        .collect();
+    mrsim_report::RunData {
+        dir: dir.to_path_buf(),
+        scenario: sc,
+        trajectory: mrsim_report::Trajectory {
+            ticks: (0..=ticks).collect(),
+            times: (0..=ticks).map(|t| t as f64 * DT).collect(),
+            bodies,
+        },
+        events: vec![],
+        metrics: None,
+        diagnostics: None,
+    }
+}
+
+/// The JSON a replay page embeds.
+pub fn replay_json(dir: &Path) -> serde_json::Value {
+    let page = std::fs::read_to_string(dir.join("replay.html")).unwrap();
+    let start = page.find(r#"type="application/json">"#).unwrap() + 24;
+    let end = start + page[start..].find("</script>").unwrap();
+    serde_json::from_str(&page[start..end]).unwrap()
 }

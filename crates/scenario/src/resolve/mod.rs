@@ -9,6 +9,7 @@
 //! across every body (`scene`).
 
 mod obstacles;
+mod output;
 mod world;
 
 pub(crate) mod checks;
@@ -180,6 +181,7 @@ pub(crate) fn resolve(
         obstacles,
         walls,
         map: None,
+        output: output::resolve_output(raw.output.as_ref())?,
     };
     if let Some(m) = &raw.map {
         crate::map::attach(
@@ -191,6 +193,25 @@ pub(crate) fn resolve(
         )?;
     }
     check_scene(&scenario, &robot_spans, &obstacle_spans, &raw)?;
+    // trajectory.parquet's schema has no heading column yet: a unicycle's
+    // theta would be lost, so the pair is refused rather than half-written.
+    if scenario.output.trajectory == crate::types::TrajectoryFormat::Parquet
+        && let Some(r) = scenario
+            .robots
+            .iter()
+            .find(|r| r.kinematics == crate::types::Kinematics::Unicycle)
+    {
+        let span = raw.output.as_ref().map(|o| o.span());
+        return Err(Fail::new(
+            span,
+            "output",
+            format!(
+                "trajectory = \"parquet\" does not record headings yet, and robot `{}` is a \
+                 unicycle: use trajectory = \"csv\" (which adds a theta column)",
+                r.name
+            ),
+        ));
+    }
     Ok(Resolved {
         scenario,
         file_robots,

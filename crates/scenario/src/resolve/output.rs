@@ -1,0 +1,33 @@
+//! The `[output]` table: the trajectory's format and how often it records.
+
+use crate::error::Fail;
+use crate::raw::{RawOutput, S};
+use crate::types::{OutputConfig, TrajectoryFormat};
+
+/// Checks `[output]`: `every` is a whole number of ticks, at least 1.
+pub(super) fn resolve_output(o: Option<&S<RawOutput>>) -> Result<OutputConfig, Fail> {
+    let Some(o) = o else {
+        return Ok(OutputConfig::default());
+    };
+    let raw = o.get_ref();
+    let every = match &raw.every {
+        Some(e) => {
+            let k = *e.get_ref();
+            u32::try_from(k).ok().filter(|&k| k >= 1).ok_or_else(|| {
+                Fail::new(
+                    Some(e.span()),
+                    "output",
+                    format!("every must be a whole number of ticks >= 1, got {k}"),
+                )
+            })?
+        }
+        None => 1,
+    };
+    Ok(OutputConfig {
+        trajectory: raw
+            .trajectory
+            .as_ref()
+            .map_or(TrajectoryFormat::Csv, |t| *t.get_ref()),
+        every,
+    })
+}

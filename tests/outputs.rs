@@ -1,0 +1,140 @@
+//! `[output]`: the trajectory as CSV, Parquet or not at all, every tick or
+//! every K-th, on real runs; the metrics and the report whatever it says.
+
+mod common;
+
+use common::*;
+use std::path::{Path, PathBuf};
+
+/// Runs the lockstep crossing scene (8 robots, 5 s) in-process with
+/// `extra` settings; returns its folder.
+fn crossing(tag: &str, extra: &[&str]) -> PathBuf {
+    let dir = fresh_dir(tag);
+    let mut args = vec![
+        "--transport",
+        "inproc",
+        "--quiet",
+        "--set",
+        "world.duration=5",
+    ];
+    for s in extra {
+        args.extend(["--set", s]);
+    }
+    let out = run(
+        &root().join("scenarios/crossing.toml"),
+        &dir,
+        &run_id(tag),
+        &args,
+    );
+    assert_ok(&out);
+    dir
+}
+
+fn csv_lines(dir: &Path) -> Vec<String> {
+    std::fs::read_to_string(dir.join("trajectory.csv"))
+        .expect("trajectory.csv")
+        .lines()
+        .map(str::to_string)
+        .collect()
+}
+
+/// The motion metrics of every robot: the ones that do not depend on the
+/// wall clock.
+fn motion(dir: &Path) -> Vec<(String, serde_json::Value)> {
+    let m = metrics(dir);
+    let robots = m["robots"].as_object().expect("robots");
+    robots
+        .iter()
+        .map(|(name, r)| {
+            let keep: serde_json::Map<_, _> = [
+                "reached_goal",
+                "time_to_goal",
+                "path_length",
+                "collisions",
+                "min_clearance",
+                "max_speed",
+            ]
+            .iter()
+            .map(|k| (k.to_string(), r[*k].clone()))
+            .collect();
+            (name.clone(), serde_json::Value::Object(keep))
+        })
+        .collect()
+}
+
+#[test]
+fn parquet_holds_the_same_rows_as_the_csv_of_the_same_run() {
+    let csv = crossing("out-csv", &[]);
+    let pq = crossing("out-parquet", &["output.trajectory=parquet"]);
+    assert!(
+        !pq.join("trajectory.csv").exists(),
+        "a parquet run wrote a CSV too"
+    );
+    let table =
+        mrsim_runfolder::trajectory::read_parquet_trajectory(&pq.join("trajectory.parquet"))
+            .expect("reads back");
+    let lines = csv_lines(&csv);
+    assert_eq!(lines[0], "tick,time,body,kind,x,y,vx,vy");
+    assert_eq!(table.len(), lines.len() - 1, "row count");
+    // Value for value: the CSV is the Parquet file's numbers to six decimals.
+    for (row, line) in table.rows().zip(&lines[1..]) {
+        let written = format!(
+            "{},{:.6},{},{},{:.6},{:.6},{:.6},{:.6}",
+            row.tick, row.time, row.body, row.kind, row.x, row.y, row.vx, row.vy
+        );
+        assert_eq!(&written, line);
+    }
+    assert_eq!(motion(&csv), motion(&pq));
+    // The report reads it: plots and a replay page with the same ticks.
+    let out = mrsim().arg("report").arg(&pq).output().expect("report");
+    assert_ok(&out);
+    let page = std::fs::read_to_string(pq.join("replay.html")).expect("replay.html");
+    assert!(page.contains(r#""ticksRecorded":51"#), "51 ticks in 5 s");
+}
+
+#[test]
+fn every_kth_tick_keeps_those_rows_and_the_last_and_the_metrics_see_every_tick() {
+    let all = crossing("out-every1", &[]);
+    let some = crossing("out-every7", &["output.every=7"]);
+    let full = csv_lines(&all);
+    let last_tick: u64 = full
+        .last()
+        .and_then(|l| l.split(',').next())
+        .and_then(|t| t.parse().ok())
+        .expect("last tick");
+    assert_eq!(last_tick, 50);
+    let expected: Vec<&String> = full
+        .iter()
+        .enumerate()
+        .filter(|(i, l)| {
+            let tick: u64 = l
+                .split(',')
+                .next()
+                .and_then(|t| t.parse().ok())
+                .unwrap_or(0);
+            *i == 0 || tick.is_multiple_of(7) || tick == last_tick
+        })
+        .map(|(_, l)| l)
+        .collect();
+    let got = csv_lines(&some);
+    assert_eq!(got.iter().collect::<Vec<_>>(), expected);
+    assert_eq!(motion(&all), motion(&some), "metrics from every tick");
+}
+
+#[test]
+fn without_a_trajectory_the_metrics_are_the_same_and_the_report_draws_the_scene() {
+    let all = crossing("out-all", &[]);
+    let none = crossing("out-none", &["output.trajectory=none"]);
+    assert!(!none.join("trajectory.csv").exists());
+    assert!(!none.join("trajectory.parquet").exists());
+    assert_eq!(motion(&all), motion(&none));
+    assert_eq!(
+        metrics(&none)["robots"].as_object().map(|r| r.len()),
+        Some(8)
+    );
+    let out = mrsim().arg("report").arg(&none).output().expect("report");
+    assert_ok(&out);
+    assert!(none.join("plot.svg").exists() && none.join("replay.html").exists());
+    let page = std::fs::read_to_string(none.join("replay.html")).expect("replay.html");
+    assert!(page.contains(r#""ticksRecorded":0"#));
+}
