@@ -58,10 +58,16 @@ struct Row {
     values: Vec<Diagnostic>,
 }
 
-/// The writer thread of one agent's part file.
+/// The writer thread of one agent's part file, started with the first
+/// batch of values (a planner that reports nothing costs no thread: a
+/// process driving thousands of robots would otherwise hold a thread each).
 pub struct DiagnosticsWriter {
+    /// The part file and the robot's name, until the thread starts.
+    target: Option<(PathBuf, String)>,
     tx: Option<Sender<Vec<Row>>>,
     thread: Option<JoinHandle<std::io::Result<()>>>,
+    /// Why the thread could not be started, told at `finish`.
+    spawn_error: Option<std::io::Error>,
     /// Rows not yet handed over: the thread gets them in batches, so it
     /// wakes about twice a second rather than every tick (with hundreds of
     /// agents a wake-up per agent per tick was a context switch each).
@@ -75,22 +81,17 @@ const BATCH_ROWS: usize = 64;
 const BATCH_AGE: Duration = Duration::from_millis(500);
 
 impl DiagnosticsWriter {
-    /// Starts the thread that writes robot `robot` (id `robot_id`)'s values
-    /// into its part file in `dir`. The file is created on the first value.
+    /// A writer of robot `robot` (id `robot_id`)'s values into its part
+    /// file in `dir`. The thread starts, and the file is created, with the
+    /// first values.
     pub fn start(dir: &Path, robot_id: usize, robot: &str) -> std::io::Result<Self> {
         let path = dir.join(part_file_name(robot_id, std::process::id()));
-        let robot = robot.to_string();
-        let (tx, rx) = channel::<Vec<Row>>();
-        let thread = std::thread::Builder::new()
-            .name("diagnostics".into())
-            .spawn(move || {
-                mrsim_sys::sched::background_thread();
-                write_rows(&path, &robot, rx)
-            })?;
         Ok(Self {
-            tx: Some(tx),
-            thread: Some(thread),
-            batch: Vec::with_capacity(BATCH_ROWS),
+            target: Some((path, robot.to_string())),
+            tx: None,
+            thread: None,
+            spawn_error: None,
+            batch: Vec::new(),
             batch_started: Instant::now(),
         })
     }
@@ -113,6 +114,21 @@ impl DiagnosticsWriter {
         if self.batch.is_empty() {
             return;
         }
+        if let Some((path, robot)) = self.target.take() {
+            let (tx, rx) = channel::<Vec<Row>>();
+            match std::thread::Builder::new()
+                .name("diagnostics".into())
+                .spawn(move || {
+                    mrsim_sys::sched::background_thread();
+                    write_rows(&path, &robot, rx)
+                }) {
+                Ok(thread) => {
+                    self.tx = Some(tx);
+                    self.thread = Some(thread);
+                }
+                Err(e) => self.spawn_error = Some(e),
+            }
+        }
         let rows = std::mem::replace(&mut self.batch, Vec::with_capacity(BATCH_ROWS));
         if let Some(tx) = &self.tx {
             // The thread only stops early on an I/O error, which `finish`
@@ -129,6 +145,9 @@ impl DiagnosticsWriter {
     fn stop(&mut self) -> std::io::Result<()> {
         self.hand_over();
         self.tx.take();
+        if let Some(e) = self.spawn_error.take() {
+            return Err(e);
+        }
         match self.thread.take().map(JoinHandle::join) {
             Some(Ok(r)) => r,
             Some(Err(_)) => Err(std::io::Error::other("diagnostics thread panicked")),

@@ -11,16 +11,19 @@
 
 pub mod diagnostics;
 pub mod fault;
+pub mod group;
 pub mod observe;
+
+pub use group::{join_group, run_group};
 
 use mrsim_planners::{Command, DesignatedPath, Planner, Segment, Vec2};
 use mrsim_proto::{
-    BodyState, CommandMsg, FixedStr, JoinRequest, PROTOCOL_VERSION, SnapshotHeader, command_kind,
+    BodyState, CommandMsg, PROTOCOL_VERSION, SnapshotHeader, command_kind,
     now_ns,
 };
 use mrsim_scenario::RobotSpec;
 use mrsim_transport::{AgentTransport, TransportError};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// Why an agent stopped with an error.
 #[derive(Debug, thiserror::Error)]
@@ -143,66 +146,7 @@ const STOP_CHECK_EVERY_NS: u64 = 50_000_000;
 /// Joins the run as `opts.robot` and drives it until the world ends the
 /// run, the process is asked to stop, or something fails.
 pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentExit, AgentError> {
-    let Some(mut driver) = join(link, opts)? else {
-        return Ok(AgentExit::Interrupted);
-    };
-    link.send_command(&driver.ready())?;
-    link.joined();
-    // Where a transport that cannot lend its snapshot copies it.
-    let mut scratch = (
-        SnapshotHeader::default(),
-        Vec::<BodyState>::with_capacity(driver.capacity),
-    );
-    // When the last snapshot came (the clock read as the agent woke for
-    // it: one clock read a tick fewer).
-    let mut last_heard = now_ns();
-    // A snapshot has come (after it, a wake-up without one is spurious).
-    let mut heard_one = false;
-    let check_after = u64::try_from(opts.world_check_after.as_nanos()).unwrap_or(u64::MAX);
-    // When the agent last asked whether it is to stop (over iceoryx2 the
-    // question takes a process-wide lock: asked every few ticks, not
-    // every tick).
-    let mut asked_to_stop_at = 0;
-    let mut woke = last_heard;
-    loop {
-        if woke.saturating_sub(asked_to_stop_at) >= STOP_CHECK_EVERY_NS {
-            asked_to_stop_at = woke;
-            if link.termination_requested() {
-                return driver.finish(AgentExit::Interrupted);
-            }
-        }
-        link.wait(Duration::from_millis(100))?;
-        woke = now_ns();
-        let (mut finished, mut failed) = (false, None);
-        let got = link.with_latest_snapshot(&mut scratch, &mut |header, bodies, send| {
-            heard_one = true;
-            if header.finished != 0 {
-                finished = true;
-            } else if let Err(e) = driver.on_snapshot(header, bodies, woke, send) {
-                failed = Some(e);
-            }
-        })?;
-        if !got {
-            if woke.saturating_sub(last_heard) > check_after && !link.world_alive() {
-                return Err(AgentError::WorldGone);
-            }
-            if !heard_one {
-                // Before the first snapshot a wake-up is the world's
-                // call to take up the tick's channels (this receive just
-                // did): say ready again, and the world starts the clock
-                // once every agent has (`WorldTransport::prepare_ticks`).
-                link.send_command(&driver.ready())?;
-            }
-            continue;
-        }
-        last_heard = woke;
-        if let Some(e) = failed {
-            return Err(e);
-        }
-        if finished {
-            return driver.finish(AgentExit::Finished);
-        }
-    }
+    group::run_group(link, std::slice::from_ref(opts))
 }
 
 /// Joins the run as `opts.robot` and reads the run's setup: the robot's
@@ -212,62 +156,19 @@ pub fn join(
     link: &mut dyn AgentTransport,
     opts: &AgentOptions,
 ) -> Result<Option<Driver>, AgentError> {
-    // Join: ask for the robot, re-asking until the world answers.
-    let nonce = now_ns() ^ ((std::process::id() as u64) << 20) ^ 0x6d72_7369_6d00_0000;
-    let req = JoinRequest {
-        protocol_version: opts.protocol_version,
-        pid: std::process::id(),
-        nonce,
-        robot: FixedStr::new(&opts.robot),
-    };
-    let start = Instant::now();
-    let mut last_ask: Option<Instant> = None;
-    let reply = loop {
-        if link.termination_requested() {
-            return Ok(None);
-        }
-        if last_ask.is_none_or(|t| t.elapsed() > Duration::from_millis(500)) {
-            if last_ask.is_none() && opts.fault == Some(fault::Fault::JoinTwice) {
-                link.request_join(&req)?;
-            }
-            link.request_join(&req)?;
-            last_ask = Some(Instant::now());
-        }
-        if let Some(r) = link.poll_join_reply(nonce)? {
-            break r;
-        }
-        if start.elapsed() > opts.join_timeout {
-            return Err(AgentError::Timeout {
-                what: "join reply",
-                secs: opts.join_timeout.as_secs_f64(),
-            });
-        }
-        link.wait(Duration::from_millis(50))?;
-    };
-    if reply.accepted == 0 {
-        return Err(AgentError::Refused {
-            robot: opts.robot.clone(),
-            reason: reply.reason.as_str().to_string(),
-        });
-    }
+    Ok(group::join_group(link, std::slice::from_ref(opts))?.and_then(|mut d| d.pop()))
+}
 
-    // Setup: the resolved scenario, from the world.
-    let setup = loop {
-        if let Some(s) = link.setup()? {
-            break s;
-        }
-        if start.elapsed() > opts.join_timeout {
-            return Err(AgentError::Timeout {
-                what: "setup",
-                secs: opts.join_timeout.as_secs_f64(),
-            });
-        }
-        link.wait(Duration::from_millis(20))?;
-    };
+/// The [`Driver`] of robot `me` of the run whose setup is `view`, joined
+/// with `reply` under `opts`.
+fn driver(
+    view: &SetupView<'_>,
+    walls: &std::sync::Arc<[Segment]>,
+    reply: &mrsim_proto::JoinReply,
+    opts: &AgentOptions,
+) -> Result<Driver, AgentError> {
+    let scenario = &view.scenario;
     let me = reply.robot_id as usize;
-    let view: SetupView =
-        serde_json::from_slice(&setup).map_err(|e| AgentError::BadSetup(e.to_string()))?;
-    let scenario = view.scenario;
     let spec: RobotSpec = scenario
         .robots
         .get(me)
@@ -279,14 +180,6 @@ pub fn join(
         robot: spec.name.clone(),
         source,
     })?;
-    let walls: Vec<Segment> =
-        mrsim_scenario::walls_and_arena(&scenario.walls, scenario.world.arena)
-            .iter()
-            .map(|w| Segment {
-                a: Vec2::new(w[0][0], w[0][1]),
-                b: Vec2::new(w[1][0], w[1][1]),
-            })
-            .collect();
     let path = (!spec.path.is_empty()).then(|| DesignatedPath {
         points: spec.path.iter().map(|p| Vec2::new(p[0], p[1])).collect(),
         boundary: spec.boundary.unwrap_or(f64::INFINITY),
@@ -298,6 +191,7 @@ pub fn join(
     // the world's folder is reachable from here (same machine).
     let diag = view
         .out_dir
+        .as_deref()
         .map(std::path::PathBuf::from)
         .filter(|d| d.is_dir())
         .and_then(
@@ -309,7 +203,7 @@ pub fn join(
                 }
             },
         );
-    Ok(Some(Driver {
+    Ok(Driver {
         me,
         claim: opts.impersonate.unwrap_or(me as u32),
         token: reply.token,
@@ -317,14 +211,26 @@ pub fn join(
         capacity,
         spec,
         planner,
-        walls,
+        walls: walls.clone(),
         path,
         observer,
         diag,
         answered: None,
         injector: opts.fault.map(fault::Injector::new),
         hung: false,
-    }))
+    })
+}
+
+/// The walls every robot of the run whose setup is `view` sees (its
+/// `[[wall]]`s, map and arena), shared by the drivers of one process.
+fn walls(view: &SetupView<'_>) -> std::sync::Arc<[Segment]> {
+    mrsim_scenario::walls_and_arena(&view.scenario.walls, view.scenario.world.arena)
+        .iter()
+        .map(|w| Segment {
+            a: Vec2::new(w[0][0], w[0][1]),
+            b: Vec2::new(w[1][0], w[1][1]),
+        })
+        .collect()
 }
 
 /// The part of the world's setup an agent reads. Only its own robot's
@@ -383,7 +289,7 @@ pub struct Driver {
     capacity: usize,
     spec: RobotSpec,
     planner: Box<dyn Planner>,
-    walls: Vec<Segment>,
+    walls: std::sync::Arc<[Segment]>,
     path: Option<DesignatedPath>,
     observer: observe::Observer,
     diag: Option<diagnostics::DiagnosticsWriter>,

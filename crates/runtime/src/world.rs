@@ -97,6 +97,7 @@ pub fn serve(
         &ns,
         Capacity {
             robots: scenario.robots.len(),
+            group: scenario.world.robots_per_agent.max(1) as usize,
         },
         bodies,
         setup_len,

@@ -100,8 +100,12 @@ pub fn run_scenario(
     } else {
         Duration::ZERO
     };
+    // The agents join in a few groups, each a thread with one side that
+    // reads the setup once (a thread and a setup per robot cost O(n²) at
+    // start: every agent read the whole setup).
+    let groups = join_groups(n, cpus);
     let (mut link, sides, pool_sides) =
-        mrsim_transport::inproc::pooled_channels(n, workers, stop, spin);
+        mrsim_transport::inproc::pooled_channels(groups.len(), workers, stop, spin);
     let reach = scenario
         .robots
         .iter()
@@ -129,35 +133,22 @@ pub fn run_scenario(
             })?;
         worker_handles.push(handle);
     }
-    let mut handles = Vec::with_capacity(n);
-    for (i, (robot, mut side)) in scenario.robots.iter().zip(sides).enumerate() {
-        let opts = mrsim_agents::AgentOptions::new(&robot.name);
+    let mut handles = Vec::with_capacity(groups.len());
+    for (range, mut side) in groups.into_iter().zip(sides) {
+        let opts: Vec<_> = scenario.robots[range.clone()]
+            .iter()
+            .map(|r| mrsim_agents::AgentOptions::new(&r.name))
+            .collect();
         let pool = pool.clone();
+        let first = range.start;
         let handle = std::thread::Builder::new()
-            .name(format!("agent-{}", robot.name))
-            // Planners keep little on the stack; 1000 agents fit easily.
-            .stack_size(512 * 1024)
-            .spawn(move || match mrsim_agents::join(&mut side, &opts) {
-                Ok(Some(driver)) => {
-                    // Into the pool first, then ready: the world starts
-                    // the run once every robot is ready, and the first
-                    // snapshot must find every driver in the pool.
-                    let ready = driver.ready();
-                    let answer = pool.adopt(i, driver);
-                    std::iter::once(&ready)
-                        .chain(&answer)
-                        .try_for_each(|m| side.send_command(m))
-                        .err()
-                        .map(|e| e.to_string())
-                }
-                Ok(None) => None,
-                Err(e) => Some(e.to_string()),
-            })
+            .name(format!("join-{first}"))
+            .spawn(move || join_group(&mut side, &opts, &pool))
             .map_err(|error| InprocError::Spawn {
-                robot: robot.name.clone(),
+                robot: scenario.robots[first].name.clone(),
                 error,
             })?;
-        handles.push(handle);
+        handles.push((range, handle));
     }
     let opts = mrsim_world::RunOptions {
         out_dir: out_dir.to_path_buf(),
@@ -171,12 +162,15 @@ pub fn run_scenario(
     // waiting sees the world gone and ends (and the helper lets go of the
     // pool).
     drop(link);
-    let mut agent_errors = Vec::with_capacity(n);
-    for h in handles {
-        agent_errors.push(
-            h.join()
-                .unwrap_or_else(|_| Some("the agent thread panicked".to_string())),
-        );
+    let mut agent_errors = vec![None; n];
+    for (range, h) in handles {
+        let e = h
+            .join()
+            .unwrap_or_else(|_| Some("the agent thread panicked".to_string()));
+        if let Some(e) = e {
+            // The group's error is every robot's of the group.
+            agent_errors[range].fill(Some(e));
+        }
     }
     let mut exit = AgentExit::Finished;
     let mut cpu_s = 0.0;
@@ -222,6 +216,46 @@ pub fn run_scenario(
         agent_errors,
         agent_usage,
     })
+}
+
+/// The robots each join thread joins: consecutive ranges, a few per CPU
+/// (a thread waits for the world's replies most of the time).
+fn join_groups(n: usize, cpus: usize) -> Vec<std::ops::Range<usize>> {
+    let size = n.div_ceil((4 * cpus).max(1)).max(1);
+    (0..n)
+        .step_by(size)
+        .map(|s| s..(s + size).min(n))
+        .collect()
+}
+
+/// Joins the robots of `opts` over `side` and puts their drivers into
+/// `pool`, each followed by its ready (and, if a snapshot is being
+/// answered already, its answer to it). Returns the error that ended it.
+fn join_group(
+    side: &mut mrsim_transport::inproc::InprocAgent,
+    opts: &[mrsim_agents::AgentOptions],
+    pool: &Pool,
+) -> Option<String> {
+    let drivers = match mrsim_agents::join_group(side, opts) {
+        Ok(Some(d)) => d,
+        Ok(None) => return None,
+        Err(e) => return Some(e.to_string()),
+    };
+    for driver in drivers {
+        // Into the pool first, then ready: the world starts the run once
+        // every robot is ready, and the first snapshot must find every
+        // driver in the pool.
+        let ready = driver.ready();
+        let i = driver.robot_id();
+        let answer = pool.adopt(i, driver);
+        if let Err(e) = std::iter::once(&ready)
+            .chain(&answer)
+            .try_for_each(|m| side.send_command(m))
+        {
+            return Some(e.to_string());
+        }
+    }
+    None
 }
 
 /// Every robot's [`Driver`], in chunks of consecutive robots. For each
