@@ -288,21 +288,33 @@ impl Prepared {
             .stdin(Stdio::null())
             .spawn()
             .map_err(RunError::SpawnWorld)?;
-        let spawn = |robot: &str| -> Result<Child, RunError> {
-            Command::new(&exe)
-                .args(["agent", "--robot", robot, "--run", run_id, "--usage-out"])
-                .arg(usage_file(dir, robot))
+        // One process per group of `robots_per_agent` robots (the last
+        // takes the rest), named after the group's first robot.
+        let names: Vec<&str> = scenario.robots.iter().map(|r| r.name.as_str()).collect();
+        let k = (scenario.world.robots_per_agent as usize).max(1);
+        let groups: Vec<&[&str]> = names.chunks(k).collect();
+        let spawn = |group: &[&str]| -> Result<Child, RunError> {
+            let first = group.first().copied().unwrap_or_default();
+            let mut cmd = Command::new(&exe);
+            cmd.arg("agent");
+            if let [one] = group {
+                cmd.args(["--robot", one]);
+            } else {
+                cmd.arg("--robots").arg(group.join(","));
+            }
+            cmd.args(["--run", run_id, "--usage-out"])
+                .arg(usage_file(dir, first))
                 .args(["--timeout", &join_secs])
                 .stdin(Stdio::null())
                 .spawn()
                 .map_err(|source| RunError::SpawnAgent {
-                    robot: robot.to_string(),
+                    robot: group_name(group),
                     source,
                 })
         };
-        let mut agents: Vec<(&str, Child)> = Vec::with_capacity(scenario.robots.len());
-        for r in &scenario.robots {
-            agents.push((&r.name, spawn(&r.name)?));
+        let mut agents: Vec<(String, Child)> = Vec::with_capacity(groups.len());
+        for g in &groups {
+            agents.push((group_name(g), spawn(g)?));
         }
         let mut restarts = vec![0u32; agents.len()];
 
@@ -324,7 +336,7 @@ impl Prepared {
             if forwarded.is_some_and(|t| t.elapsed() > Duration::from_secs(5)) {
                 mrsim_sys::process::kill(world.id(), mrsim_sys::signal::SIGKILL);
             }
-            for ((name, a), n) in agents.iter_mut().zip(restarts.iter_mut()) {
+            for (((name, a), n), g) in agents.iter_mut().zip(restarts.iter_mut()).zip(&groups) {
                 let Ok(Some(status)) = a.try_wait() else {
                     continue;
                 };
@@ -342,7 +354,8 @@ impl Prepared {
                     how: describe(status),
                     restart: *n,
                 });
-                *a = spawn(name)?;
+                // A group's robots rejoin together, in one new process.
+                *a = spawn(g)?;
             }
             std::thread::sleep(Duration::from_millis(20));
         };
@@ -356,14 +369,22 @@ impl Prepared {
             pid: world.id(),
             how: describe(world_status),
         });
-        let usage: Vec<AgentUsage> = scenario
-            .robots
+        // A group's process used what its robots used together: each
+        // robot is given an equal share of its CPU time.
+        let usage: Vec<AgentUsage> = groups
             .iter()
-            .filter_map(|r| {
-                let f = usage_file(dir, &r.name);
+            .filter_map(|g| {
+                let f = usage_file(dir, g.first()?);
                 let u = crate::usage::read_agent(&f);
                 let _ = std::fs::remove_file(&f);
-                u
+                u.map(|u| (g.len(), u))
+            })
+            .flat_map(|(len, u)| {
+                let share = AgentUsage {
+                    cpu_s: u.cpu_s / len as f64,
+                    ..u
+                };
+                std::iter::repeat_n(share, len)
             })
             .collect();
         Ok(crate::finish::finish(Ending {
@@ -378,7 +399,7 @@ impl Prepared {
 
 /// Agents end on the world's last snapshot: gives them a moment, then stops
 /// them. Returns the ones that ended badly while the world did not.
-fn reap_agents(agents: &mut [(&str, Child)], world_status: ExitStatus) -> Vec<AgentFailure> {
+fn reap_agents(agents: &mut [(String, Child)], world_status: ExitStatus) -> Vec<AgentFailure> {
     let grace = Instant::now();
     let mut failures = Vec::new();
     for (name, a) in agents.iter_mut() {
@@ -402,7 +423,7 @@ fn reap_agents(agents: &mut [(&str, Child)], world_status: ExitStatus) -> Vec<Ag
         };
         if !status.success() && world_status.success() {
             failures.push(AgentFailure {
-                robot: name.to_string(),
+                robot: name.clone(),
                 what: describe(status),
             });
         }
@@ -410,7 +431,13 @@ fn reap_agents(agents: &mut [(&str, Child)], world_status: ExitStatus) -> Vec<Ag
     failures
 }
 
-/// Where the agent of `robot` writes what it used.
+/// A group's robots as messages name them: the first few and a count.
+fn group_name(group: &[&str]) -> String {
+    mrsim_world::names::first_few(group, 3)
+}
+
+/// Where the agent of `robot` (of the group it is first of) writes what
+/// it used.
 fn usage_file(dir: &Path, robot: &str) -> PathBuf {
     dir.join(mrsim_runfolder::agent_usage_file(robot))
 }
