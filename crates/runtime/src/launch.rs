@@ -244,15 +244,23 @@ impl Prepared {
         done.store(true, Ordering::SeqCst);
         let _ = watcher.join();
         let outcome = outcome?;
-        let agent_failures = scenario
-            .robots
-            .iter()
-            .zip(&outcome.agent_errors)
-            .filter_map(|(r, e)| {
-                e.as_ref().map(|e| AgentFailure {
-                    robot: r.name.clone(),
-                    what: format!("failed: {e}"),
-                })
+        // Robots that failed alike (a join group's, or every robot when
+        // the world went) are one failure naming the first few.
+        let mut alike: Vec<(&str, Vec<&str>)> = Vec::new();
+        let mut index = std::collections::HashMap::new();
+        for (r, e) in scenario.robots.iter().zip(&outcome.agent_errors) {
+            let Some(e) = e else { continue };
+            let k = *index.entry(e.as_str()).or_insert_with(|| {
+                alike.push((e.as_str(), Vec::new()));
+                alike.len() - 1
+            });
+            alike[k].1.push(&r.name);
+        }
+        let agent_failures = alike
+            .into_iter()
+            .map(|(e, names)| AgentFailure {
+                robot: group_name(&names),
+                what: format!("failed: {e}"),
             })
             .collect();
         Ok(crate::finish::finish(Ending {
