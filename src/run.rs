@@ -40,6 +40,9 @@ pub fn main(args: &RunArgs) -> Result<i32> {
             Event::Waiting => watch
                 .get_or_insert_with(|| RunWatch::new(&ns, max_ticks))
                 .update(),
+            Event::WaitingInproc(obs) => watch
+                .get_or_insert_with(|| RunWatch::new(&ns, max_ticks))
+                .update_from(obs.0),
             Event::WorldEnded => {
                 if let Some(w) = watch.take() {
                     w.finish();

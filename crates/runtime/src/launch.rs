@@ -69,6 +69,9 @@ pub enum Event<'a> {
     /// The launcher is waiting for its world (about every 20 ms): a moment
     /// to show progress.
     Waiting,
+    /// The same for an in-process run, with an observer of its live
+    /// statistics (a world process is observed over iceoryx2 instead).
+    WaitingInproc(Observing<'a>),
     /// The world process has ended.
     WorldEnded,
     /// An agent process died and was started again.
@@ -82,6 +85,15 @@ pub enum Event<'a> {
         /// This robot's restarts so far, this one included.
         restart: u32,
     },
+}
+
+/// An observer of a running in-process world.
+pub struct Observing<'a>(pub &'a mut dyn mrsim_transport::ObserverTransport);
+
+impl std::fmt::Debug for Observing<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Observing(..)")
+    }
 }
 
 /// Why a run failed.
@@ -211,12 +223,12 @@ impl Prepared {
     /// way.
     pub fn start(self, on_event: &mut dyn FnMut(Event<'_>)) -> Result<Outcome, RunError> {
         match self.request.transport {
-            Transport::Inproc => self.run_inproc(),
+            Transport::Inproc => self.run_inproc(on_event),
             Transport::Shm => self.run_processes(on_event),
         }
     }
 
-    fn run_inproc(self) -> Result<Outcome, RunError> {
+    fn run_inproc(self, on_event: &mut dyn FnMut(Event<'_>)) -> Result<Outcome, RunError> {
         let Prepared {
             validated,
             request,
@@ -240,7 +252,11 @@ impl Prepared {
                 }
             })
         };
-        let outcome = crate::inproc::run_scenario(&scenario, world, &dir, ns.run_id(), stop);
+        let outcome =
+            crate::inproc::run_scenario(&scenario, world, &dir, ns.run_id(), stop, &mut |obs| {
+                on_event(Event::WaitingInproc(Observing(obs)))
+            });
+        on_event(Event::WorldEnded);
         done.store(true, Ordering::SeqCst);
         let _ = watcher.join();
         let outcome = outcome?;

@@ -54,6 +54,9 @@ pub enum InprocError {
     /// The world loop failed.
     #[error("world: {0}")]
     Run(mrsim_world::run::RunError),
+    /// A thread of the run panicked.
+    #[error("{0} panicked")]
+    Panicked(&'static str),
     /// An agent or worker thread could not be started.
     #[error("cannot start the agent thread for {robot}: {error}")]
     Spawn {
@@ -76,16 +79,19 @@ pub struct InprocOutcome {
     pub agent_usage: Vec<AgentUsage>,
 }
 
-/// Runs `scenario` on `world` (built from it) with the world in this thread and one thread per agent,
-/// writing the outputs (trajectory.csv, events.jsonl, metrics.json,
-/// scenario.json) into `out_dir`, which must exist. `stop` ends the run
-/// early (the role SIGTERM plays for processes).
+/// Runs `scenario` on `world` (built from it) with the world loop in a
+/// thread and the agents in a pool of workers, writing the outputs
+/// (trajectory.csv, events.jsonl, metrics.json, scenario.json) into
+/// `out_dir`, which must exist. `stop` ends the run early (the role SIGTERM
+/// plays for processes). Meanwhile this thread calls `on_wait` about every
+/// 20 ms with an observer of the run's live statistics (for progress).
 pub fn run_scenario(
     scenario: &Scenario,
     world: mrsim_world::World,
     out_dir: &Path,
     run_id: &str,
     stop: Arc<AtomicBool>,
+    on_wait: &mut dyn FnMut(&mut dyn mrsim_transport::ObserverTransport),
 ) -> Result<InprocOutcome, InprocError> {
     let n = scenario.robots.len();
     let cpus = std::thread::available_parallelism().map_or(1, |p| p.get());
@@ -157,11 +163,33 @@ pub fn run_scenario(
         start_timeout: Some(Duration::from_secs(60)),
         verbose: std::env::var_os("MRSIM_VERBOSE").is_some(),
     };
-    let outcome = mrsim_world::run(world, &mut link, opts);
-    // Dropping the world's side disconnects the channels: an agent still
-    // waiting sees the world gone and ends (and the helper lets go of the
-    // pool).
-    drop(link);
+    // The world loop in a thread of its own, and this one shows progress
+    // (`on_wait`, about every 20 ms) until it ends.
+    let mut observer = link.observer();
+    let outcome = std::thread::scope(|s| {
+        let world = std::thread::Builder::new()
+            .name("world".to_string())
+            .spawn_scoped(s, move || {
+                let outcome = mrsim_world::run(world, &mut link, opts);
+                // Dropping the world's side disconnects the channels: an
+                // agent still waiting sees the world gone and ends (and the
+                // helper lets go of the pool).
+                drop(link);
+                outcome
+            })
+            .map_err(|error| InprocError::Spawn {
+                robot: "the world".to_string(),
+                error,
+            })?;
+        while !world.is_finished() {
+            on_wait(&mut observer);
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        on_wait(&mut observer);
+        world
+            .join()
+            .map_err(|_| InprocError::Panicked("the world thread"))
+    })?;
     let mut agent_errors = vec![None; n];
     for (range, h) in handles {
         let e = h

@@ -45,11 +45,13 @@
 
 mod agent;
 mod message;
+mod observer;
 mod poll;
 mod worker;
 mod world;
 
 pub use agent::InprocAgent;
+pub use observer::InprocObserver;
 pub use worker::{InprocWorker, WorkerEvent};
 pub use world::{Helper, InprocWorld};
 
@@ -95,6 +97,7 @@ pub fn channels(agents: usize, stop: Arc<AtomicBool>) -> (InprocWorld, Vec<Inpro
             poll: Poll::default(),
             helper: None,
             to_help: None,
+            stats: Default::default(),
         },
         sides,
     )
