@@ -25,10 +25,7 @@ pub fn main(args: &AgentArgs) -> Result<i32> {
         usage_out: args.usage_out.clone(),
     });
     if let (Some(e), Some(path)) = (&end.usage_error, &args.usage_out) {
-        eprintln!(
-            "warning: agent {who}: cannot write {}: {e}",
-            path.display()
-        );
+        eprintln!("warning: agent {who}: cannot write {}: {e}", path.display());
     }
     end.result.map_err(fail)?;
     Ok(0)

@@ -56,7 +56,10 @@ fn two_thousand_robots_in_process_each_have_every_row_and_their_metrics() {
     assert_eq!(robots.len(), n);
     let names: BTreeSet<String> = robots.keys().cloned().collect();
     for (name, r) in robots {
-        assert!(r["path_length"].as_f64().is_some_and(|l| l > 0.0), "{name}: {r}");
+        assert!(
+            r["path_length"].as_f64().is_some_and(|l| l > 0.0),
+            "{name}: {r}"
+        );
         assert_eq!(r["latency_us"]["count"], ticks, "{name}: {r}");
     }
     // Every robot has a row at every tick, and nothing else is a robot.
@@ -64,7 +67,10 @@ fn two_thousand_robots_in_process_each_have_every_row_and_their_metrics() {
     for row in trajectory(&out) {
         if row.kind == "robot" {
             assert!(
-                per_tick.entry(row.tick).or_default().insert(row.body.clone()),
+                per_tick
+                    .entry(row.tick)
+                    .or_default()
+                    .insert(row.body.clone()),
                 "two rows of {} at tick {}",
                 row.body,
                 row.tick
@@ -91,7 +97,9 @@ fn robots_in_eight_agent_processes_move_exactly_as_with_one_process_each() {
         let m = metrics(dir);
         let mut count = BTreeMap::new();
         for r in m["robots"].as_object().expect("robots").values() {
-            *count.entry(r["agent_pid"].as_u64().expect("pid")).or_default() += 1;
+            *count
+                .entry(r["agent_pid"].as_u64().expect("pid"))
+                .or_default() += 1;
         }
         count
     };

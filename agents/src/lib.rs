@@ -17,10 +17,7 @@ pub mod observe;
 pub use group::{join_group, run_group};
 
 use mrsim_planners::{Command, DesignatedPath, Planner, Segment, Vec2};
-use mrsim_proto::{
-    BodyState, CommandMsg, PROTOCOL_VERSION, SnapshotHeader, command_kind,
-    now_ns,
-};
+use mrsim_proto::{BodyState, CommandMsg, PROTOCOL_VERSION, SnapshotHeader, command_kind, now_ns};
 use mrsim_scenario::RobotSpec;
 use mrsim_transport::{AgentTransport, TransportError};
 use std::time::Duration;

@@ -130,10 +130,9 @@ pub fn run(req: &AgentRequest) -> AgentEnd {
         .as_ref()
         .and_then(|path| crate::usage::write_agent(path, &metered.usage()).err());
     AgentEnd {
-        result: result.map(|_| ()).map_err(|error| AgentError::Run {
-            robot,
-            error,
-        }),
+        result: result
+            .map(|_| ())
+            .map_err(|error| AgentError::Run { robot, error }),
         usage_error,
     }
 }

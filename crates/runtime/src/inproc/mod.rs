@@ -250,10 +250,7 @@ pub fn run_scenario(
 /// (a thread waits for the world's replies most of the time).
 fn join_groups(n: usize, cpus: usize) -> Vec<std::ops::Range<usize>> {
     let size = n.div_ceil((4 * cpus).max(1)).max(1);
-    (0..n)
-        .step_by(size)
-        .map(|s| s..(s + size).min(n))
-        .collect()
+    (0..n).step_by(size).map(|s| s..(s + size).min(n)).collect()
 }
 
 /// Joins the robots of `opts` over `side` and puts their drivers into
