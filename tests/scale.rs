@@ -320,7 +320,7 @@ fn ctrl_c_stops_a_run_of_hundreds_of_robots_in_process_and_keeps_its_outputs() {
     assert_eq!(m["interrupted"], true);
     assert_eq!(m["robots"].as_object().map(|r| r.len()), Some(n));
     let ticks = m["ticks"].as_u64().expect("ticks");
-    assert!(ticks >= 5 && ticks < 6000, "{ticks}");
+    assert!((5..6000).contains(&ticks), "{ticks}");
     // Every tick written whole, up to the last one run.
     let rows = trajectory(&out);
     assert_eq!(rows.iter().map(|r| r.tick).max(), Some(ticks));
