@@ -260,25 +260,13 @@ impl Prepared {
         done.store(true, Ordering::SeqCst);
         let _ = watcher.join();
         let outcome = outcome?;
-        // Robots that failed alike (a join group's, or every robot when
-        // the world went) are one failure naming the first few.
-        let mut alike: Vec<(&str, Vec<&str>)> = Vec::new();
-        let mut index = std::collections::HashMap::new();
-        for (r, e) in scenario.robots.iter().zip(&outcome.agent_errors) {
-            let Some(e) = e else { continue };
-            let k = *index.entry(e.as_str()).or_insert_with(|| {
-                alike.push((e.as_str(), Vec::new()));
-                alike.len() - 1
-            });
-            alike[k].1.push(&r.name);
-        }
-        let agent_failures = alike
-            .into_iter()
-            .map(|(e, names)| AgentFailure {
-                robot: group_name(&names),
-                what: format!("failed: {e}"),
-            })
-            .collect();
+        let agent_failures = alike(
+            scenario
+                .robots
+                .iter()
+                .zip(&outcome.agent_errors)
+                .filter_map(|(r, e)| Some((r.name.as_str(), format!("failed: {}", e.as_ref()?)))),
+        );
         Ok(crate::finish::finish(Ending {
             dir: &dir,
             world_failure: None,
@@ -385,7 +373,11 @@ impl Prepared {
         };
         on_event(Event::WorldEnded);
 
-        let agent_failures = reap_agents(&mut agents, world_status);
+        let agent_failures = alike(
+            reap_agents(&mut agents, world_status)
+                .iter()
+                .map(|f| (f.robot.as_str(), f.what.clone())),
+        );
         self.ns.remove_leftovers();
         // 130: the world was interrupted and wrote what it had (metrics.json).
         let interrupted = world_status.code() == Some(130);
@@ -455,6 +447,28 @@ fn reap_agents(agents: &mut [(String, Child)], world_status: ExitStatus) -> Vec<
     failures
 }
 
+/// Failures of robots (or groups) that failed alike (every robot when the
+/// world went, say) as one failure naming the first few: a run of 10,000
+/// robots prints a line, not 10,000.
+fn alike<'a>(failures: impl Iterator<Item = (&'a str, String)>) -> Vec<AgentFailure> {
+    let mut alike: Vec<(String, Vec<&str>)> = Vec::new();
+    let mut index = std::collections::HashMap::new();
+    for (name, what) in failures {
+        let k = *index.entry(what.clone()).or_insert_with(|| {
+            alike.push((what, Vec::new()));
+            alike.len() - 1
+        });
+        alike[k].1.push(name);
+    }
+    alike
+        .into_iter()
+        .map(|(what, names)| AgentFailure {
+            robot: group_name(&names),
+            what,
+        })
+        .collect()
+}
+
 /// A group's robots as messages name them: the first few and a count.
 fn group_name(group: &[&str]) -> String {
     mrsim_world::names::first_few(group, 3)
@@ -464,4 +478,29 @@ fn group_name(group: &[&str]) -> String {
 /// it used.
 fn usage_file(dir: &Path, robot: &str) -> PathBuf {
     dir.join(mrsim_runfolder::agent_usage_file(robot))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn robots_that_failed_alike_are_one_failure_naming_the_first_few() {
+        let names: Vec<String> = (0..1000).map(|i| format!("g{i}")).collect();
+        let failures = alike(
+            names
+                .iter()
+                .map(|n| (n.as_str(), "failed: the world is gone".to_string()))
+                .chain([("odd", "exited with status 1".to_string())]),
+        );
+        assert_eq!(failures.len(), 2);
+        assert_eq!(
+            failures[0].to_string(),
+            "agent for g0, g1, g2 and 997 more failed: the world is gone"
+        );
+        assert_eq!(
+            failures[1].to_string(),
+            "agent for odd exited with status 1"
+        );
+    }
 }
