@@ -8,8 +8,13 @@ use std::time::Duration;
 
 /// Runs `mrsim agent`; returns the exit status.
 pub fn main(args: &AgentArgs) -> Result<i32> {
+    let robots = match &args.robot {
+        Some(r) => vec![r.clone()],
+        None => args.robots.clone(),
+    };
+    let who = robots.join(",");
     let end = mrsim_runtime::agent::run(&AgentRequest {
-        robot: args.robot.clone(),
+        robots,
         run_id: args.run.clone(),
         timeout: Duration::from_secs_f64(args.timeout),
         misbehave: Misbehave {
@@ -21,11 +26,7 @@ pub fn main(args: &AgentArgs) -> Result<i32> {
         zenoh: (args.transport == LinkArg::Zenoh).then(|| args.zenoh.options(args.connect.clone())),
     });
     if let (Some(e), Some(path)) = (&end.usage_error, &args.usage_out) {
-        eprintln!(
-            "warning: agent {}: cannot write {}: {e}",
-            args.robot,
-            path.display()
-        );
+        eprintln!("warning: agent {who}: cannot write {}: {e}", path.display());
     }
     end.result.map_err(fail)?;
     Ok(0)

@@ -145,6 +145,10 @@ pub struct RunArgs {
     /// command line); it rejoins and drives its robot from where it is.
     #[arg(long)]
     pub restart_agents: bool,
+    /// Robots each agent process drives (shm; the scenario's
+    /// `[world] robots_per_agent`, default 1).
+    #[arg(long, value_name = "K")]
+    pub robots_per_agent: Option<u32>,
     /// World and agents as processes over iceoryx2 (shm), as threads
     /// of one process over crossbeam channels (inproc), or as processes
     /// over Zenoh on loopback (zenoh).
@@ -197,8 +201,12 @@ pub struct WorldArgs {
 #[derive(Debug, Clone, Args)]
 pub struct AgentArgs {
     /// The robot's name in the scenario.
-    #[arg(long)]
-    pub robot: String,
+    #[arg(long, required_unless_present = "robots", conflicts_with = "robots")]
+    pub robot: Option<String>,
+    /// Drive several robots from this one process, comma-separated (each
+    /// joins with its own token and plans on its own observation).
+    #[arg(long, value_delimiter = ',', value_name = "NAMES")]
+    pub robots: Vec<String>,
     /// The run id of the world.
     #[arg(long, default_value = "default")]
     pub run: String,

@@ -10,7 +10,13 @@ use mrsim_runtime::launch::{Event, MAX_RESTARTS, RunRequest};
 
 /// Runs `mrsim run`; returns the exit status.
 pub fn main(args: &RunArgs) -> Result<i32> {
-    let validated = Validated::new(args.scenario.source()).map_err(fail)?;
+    let mut source = args.scenario.source();
+    if let Some(k) = args.robots_per_agent {
+        // An override like any other: the world, the launcher and
+        // scenario.json all see the same group size.
+        source.set.push(format!("world.robots_per_agent={k}"));
+    }
+    let validated = Validated::new(source).map_err(fail)?;
     let max_ticks = validated.scenario().max_ticks();
     let prepared = mrsim_runtime::launch::prepare(
         validated,
@@ -45,6 +51,9 @@ pub fn main(args: &RunArgs) -> Result<i32> {
             Event::Waiting => watch
                 .get_or_insert_with(|| RunWatch::new(&ns, max_ticks))
                 .update(),
+            Event::WaitingInproc(obs) => watch
+                .get_or_insert_with(|| RunWatch::new(&ns, max_ticks))
+                .update_from(obs.0),
             Event::WorldEnded => {
                 if let Some(w) = watch.take() {
                     w.finish();

@@ -57,12 +57,30 @@ impl RunWatch {
         let Some(obs) = self.obs.as_mut() else {
             return;
         };
-        if !matches!(
+        if matches!(
             obs.latest_stats(&mut self.stats, &mut self.robots),
             Ok(true)
         ) {
+            self.show();
+        }
+    }
+
+    /// [`Self::update`] from `obs` (an in-process run's observer) instead
+    /// of the world's channels.
+    pub fn update_from(&mut self, obs: &mut dyn ObserverTransport) {
+        if self.progress.style() == Style::Off {
             return;
         }
+        if matches!(
+            obs.latest_stats(&mut self.stats, &mut self.robots),
+            Ok(true)
+        ) {
+            self.show();
+        }
+    }
+
+    /// Moves the progress to the statistics last read.
+    fn show(&mut self) {
         let s = self.stats;
         let n = self.robots.len();
         if s.phase == run_phase::JOINING {
@@ -87,7 +105,11 @@ impl RunWatch {
 
     /// Ends the progress display and lets go of the world's channels.
     pub fn finish(mut self) {
-        self.update_now();
+        // An in-process run's watch has no channels to read again (its
+        // last statistics came with its last update).
+        if self.obs.is_some() {
+            self.update_now();
+        }
         self.progress.finish();
         self.obs = None;
     }

@@ -27,7 +27,6 @@ use std::fs::File;
 use std::io::{BufRead, BufReader, BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, Sender, channel};
-use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 /// The merged file's name in a run folder.
@@ -58,40 +57,79 @@ struct Row {
     values: Vec<Diagnostic>,
 }
 
-/// The writer thread of one agent's part file.
+/// One robot's part file, written by the process's one writer thread
+/// (started with the first values anywhere in the process): a process
+/// driving thousands of robots (a group, the in-process pool) would
+/// otherwise start a thread per robot.
 pub struct DiagnosticsWriter {
-    tx: Option<Sender<Vec<Row>>>,
-    thread: Option<JoinHandle<std::io::Result<()>>>,
+    path: PathBuf,
+    robot: std::sync::Arc<str>,
+    /// Some values were handed to the writer (the file exists).
+    started: bool,
     /// Rows not yet handed over: the thread gets them in batches, so it
-    /// wakes about twice a second rather than every tick (with hundreds of
-    /// agents a wake-up per agent per tick was a context switch each).
+    /// wakes about twice a second per robot rather than every tick (with
+    /// hundreds of agents a wake-up per agent per tick was a context
+    /// switch each).
     batch: Vec<Row>,
     batch_started: Instant,
+    /// Why the writer could not take the rows, told at `finish`.
+    error: Option<std::io::Error>,
 }
 
 /// Rows per batch handed to the writer thread, at most.
 const BATCH_ROWS: usize = 64;
 /// Age of the oldest queued row after which the batch is handed over.
 const BATCH_AGE: Duration = Duration::from_millis(500);
+/// Part files the writer keeps open at most (more are closed and opened
+/// again to append): far below any limit on open files.
+const OPEN_FILES: usize = 256;
+
+/// What the process's writer thread is asked.
+enum Job {
+    /// Append these rows of `robot` to `path` (created by the first).
+    Rows {
+        path: PathBuf,
+        robot: std::sync::Arc<str>,
+        rows: Vec<Row>,
+    },
+    /// Close `path` and say whether all of it was written.
+    Close {
+        path: PathBuf,
+        done: Sender<std::io::Result<()>>,
+    },
+}
+
+/// The process's writer thread, started on first use.
+fn writer() -> std::io::Result<Sender<Job>> {
+    static WRITER: std::sync::Mutex<Option<Sender<Job>>> = std::sync::Mutex::new(None);
+    let mut w = WRITER
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    if let Some(tx) = w.as_ref() {
+        return Ok(tx.clone());
+    }
+    let (tx, rx) = channel::<Job>();
+    std::thread::Builder::new()
+        .name("diagnostics".into())
+        .spawn(move || {
+            mrsim_sys::sched::background_thread();
+            write_jobs(rx)
+        })?;
+    *w = Some(tx.clone());
+    Ok(tx)
+}
 
 impl DiagnosticsWriter {
-    /// Starts the thread that writes robot `robot` (id `robot_id`)'s values
-    /// into its part file in `dir`. The file is created on the first value.
+    /// A writer of robot `robot` (id `robot_id`)'s values into its part
+    /// file in `dir`. The file is created with the first values.
     pub fn start(dir: &Path, robot_id: usize, robot: &str) -> std::io::Result<Self> {
-        let path = dir.join(part_file_name(robot_id, std::process::id()));
-        let robot = robot.to_string();
-        let (tx, rx) = channel::<Vec<Row>>();
-        let thread = std::thread::Builder::new()
-            .name("diagnostics".into())
-            .spawn(move || {
-                mrsim_sys::sched::background_thread();
-                write_rows(&path, &robot, rx)
-            })?;
         Ok(Self {
-            tx: Some(tx),
-            thread: Some(thread),
-            batch: Vec::with_capacity(BATCH_ROWS),
+            path: dir.join(part_file_name(robot_id, std::process::id())),
+            robot: robot.into(),
+            started: false,
+            batch: Vec::new(),
             batch_started: Instant::now(),
+            error: None,
         })
     }
 
@@ -110,30 +148,47 @@ impl DiagnosticsWriter {
     }
 
     fn hand_over(&mut self) {
-        if self.batch.is_empty() {
+        if self.batch.is_empty() || self.error.is_some() {
             return;
         }
         let rows = std::mem::replace(&mut self.batch, Vec::with_capacity(BATCH_ROWS));
-        if let Some(tx) = &self.tx {
-            // The thread only stops early on an I/O error, which `finish`
-            // reports; values after it are dropped.
-            let _ = tx.send(rows);
+        let job = Job::Rows {
+            path: self.path.clone(),
+            robot: self.robot.clone(),
+            rows,
+        };
+        match writer().and_then(|tx| {
+            tx.send(job)
+                .map_err(|_| std::io::Error::other("the diagnostics writer is gone"))
+        }) {
+            Ok(()) => self.started = true,
+            Err(e) => self.error = Some(e),
         }
     }
 
-    /// Writes what is queued, flushes, and stops the thread.
+    /// Writes what is queued, flushes, and closes the file.
     pub fn finish(mut self) -> std::io::Result<()> {
         self.stop()
     }
 
     fn stop(&mut self) -> std::io::Result<()> {
         self.hand_over();
-        self.tx.take();
-        match self.thread.take().map(JoinHandle::join) {
-            Some(Ok(r)) => r,
-            Some(Err(_)) => Err(std::io::Error::other("diagnostics thread panicked")),
-            None => Ok(()),
+        if let Some(e) = self.error.take() {
+            return Err(e);
         }
+        if !std::mem::take(&mut self.started) {
+            return Ok(());
+        }
+        let (done, answer) = channel();
+        writer()?
+            .send(Job::Close {
+                path: self.path.clone(),
+                done,
+            })
+            .map_err(|_| std::io::Error::other("the diagnostics writer is gone"))?;
+        answer
+            .recv()
+            .unwrap_or_else(|_| Err(std::io::Error::other("the diagnostics writer is gone")))
     }
 }
 
@@ -143,30 +198,72 @@ impl Drop for DiagnosticsWriter {
     }
 }
 
-fn write_rows(path: &Path, robot: &str, rx: Receiver<Vec<Row>>) -> std::io::Result<()> {
-    // Blocks until a batch comes (at most about twice a second, see
-    // `BATCH_AGE`) and flushes after each, so the thread never wakes on a
-    // timer: with hundreds of agents, each one's writer waking once a
-    // second, all at about the same moment, stole a few milliseconds of
-    // both cores at once and made bursts of deadline misses every second.
-    let mut out: Option<BufWriter<File>> = None;
-    for rows in rx {
-        let w = match &mut out {
-            Some(w) => w,
-            None => out.insert(BufWriter::with_capacity(1 << 16, File::create(path)?)),
-        };
-        for row in &rows {
-            for d in &row.values {
-                writeln!(
-                    w,
-                    "{},{:.6},{robot},{},{}",
-                    row.tick, row.time, d.name, d.value
-                )?;
+/// The writer thread: blocks until a job comes (a robot's batch at most
+/// about twice a second, see `BATCH_AGE`) and flushes after each, so it
+/// never wakes on a timer: with hundreds of agents, each one's writer
+/// waking once a second, all at about the same moment, stole a few
+/// milliseconds of both cores at once and made bursts of deadline misses
+/// every second.
+fn write_jobs(rx: Receiver<Job>) {
+    use std::collections::{HashMap, HashSet};
+    let mut open: HashMap<PathBuf, BufWriter<File>> = HashMap::new();
+    let mut created: HashSet<PathBuf> = HashSet::new();
+    let mut failed: HashMap<PathBuf, std::io::Error> = HashMap::new();
+    for job in rx {
+        match job {
+            Job::Rows { path, robot, rows } => {
+                if failed.contains_key(&path) {
+                    continue;
+                }
+                if !open.contains_key(&path) && open.len() >= OPEN_FILES {
+                    for (p, mut w) in open.drain() {
+                        if let Err(e) = w.flush() {
+                            failed.insert(p, e);
+                        }
+                    }
+                }
+                let w = match open.entry(path.clone()) {
+                    std::collections::hash_map::Entry::Occupied(o) => o.into_mut(),
+                    std::collections::hash_map::Entry::Vacant(v) => {
+                        let file = if created.insert(path.clone()) {
+                            File::create(&path)
+                        } else {
+                            std::fs::OpenOptions::new().append(true).open(&path)
+                        };
+                        match file {
+                            Ok(f) => v.insert(BufWriter::with_capacity(1 << 14, f)),
+                            Err(e) => {
+                                failed.insert(path, e);
+                                continue;
+                            }
+                        }
+                    }
+                };
+                if let Err(e) = write_rows(w, &robot, &rows) {
+                    open.remove(&path);
+                    failed.insert(path, e);
+                }
+            }
+            Job::Close { path, done } => {
+                let flushed = open.remove(&path).map_or(Ok(()), |mut w| w.flush());
+                created.remove(&path);
+                let _ = done.send(failed.remove(&path).map_or(flushed, Err));
             }
         }
-        w.flush()?;
     }
-    Ok(())
+}
+
+fn write_rows(w: &mut BufWriter<File>, robot: &str, rows: &[Row]) -> std::io::Result<()> {
+    for row in rows {
+        for d in &row.values {
+            writeln!(
+                w,
+                "{},{:.6},{robot},{},{}",
+                row.tick, row.time, d.name, d.value
+            )?;
+        }
+    }
+    w.flush()
 }
 
 /// What [`merge`] did.

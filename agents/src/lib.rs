@@ -19,11 +19,13 @@
 
 pub mod diagnostics;
 pub mod fault;
+pub mod group;
 pub mod guard;
 pub mod live;
 pub mod observe;
 mod seat;
 
+pub use group::{join_group, run_group};
 pub use guard::{Halt, PlanFailure, PlanFault, plan_checked};
 pub use live::{Live, LiveAgent, Next, OwnedObservation, drive};
 

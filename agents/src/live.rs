@@ -13,7 +13,8 @@ use crate::guard::plan_checked;
 use crate::seat::{Seat, join_seat};
 use crate::{AgentError, AgentExit, AgentOptions};
 use mrsim_planners::{
-    Command, DesignatedPath, Observation, lidar::LaserScan, Params, Planner, Segment, SelfState, Sensed, Vec2,
+    Command, DesignatedPath, Observation, Params, Planner, Segment, SelfState, Sensed, Vec2,
+    lidar::LaserScan,
 };
 use mrsim_proto::{BodyState, SnapshotHeader, now_ns};
 use mrsim_transport::shm::ShmAgent;
@@ -23,7 +24,7 @@ use std::time::Duration;
 
 /// How often (at most) the loop asks its transport whether the process is
 /// to stop: 50 ms, so a stop is heard within that and one wait (100 ms).
-const STOP_CHECK_EVERY_NS: u64 = 50_000_000;
+pub(crate) const STOP_CHECK_EVERY_NS: u64 = 50_000_000;
 
 /// A robot's observation of one tick, owned: what a planner's
 /// [`Observation`] borrows, kept (sensing range, field of view, noise and

@@ -110,7 +110,9 @@ impl Observer {
         Self {
             me,
             dt: world.dt,
-            others: Vec::with_capacity(bodies),
+            // Grown to what the robot senses, not sized for every body: a
+            // run of n robots would hold n such buffers.
+            others: Vec::with_capacity(bodies.min(64)),
             estimator: spec
                 .is_some_and(|r| r.velocity_source == VelocitySource::Differenced)
                 .then(VelocityEstimator::new),

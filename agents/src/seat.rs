@@ -11,13 +11,10 @@ use crate::{AgentError, AgentExit, AgentOptions, diagnostics, fault, observe};
 use mrsim_planners::{
     Command, DesignatedPath, Diagnostic, Observation, Planner, Registry, Segment, Vec2,
 };
-use mrsim_proto::{
-    BodyState, CommandMsg, FixedStr, JoinRequest, SnapshotHeader, command_kind, now_ns,
-};
+use mrsim_proto::{BodyState, CommandMsg, JoinReply, SnapshotHeader, command_kind, now_ns};
 use mrsim_scenario::RobotSpec;
 use mrsim_transport::{AgentTransport, TransportError};
 use std::sync::Arc;
-use std::time::{Duration, Instant};
 
 /// One joined robot, without its planner.
 pub(crate) struct Seat {
@@ -43,67 +40,37 @@ pub(crate) struct Seat {
 }
 
 /// Joins the run as `opts.robot` and reads the run's setup. `None` if the
-/// process was asked to stop meanwhile.
+/// process was asked to stop meanwhile. (A group of robots joins through
+/// [`crate::group::join_seats`], which this is for one.)
 pub(crate) fn join_seat(
     link: &mut dyn AgentTransport,
     opts: &AgentOptions,
 ) -> Result<Option<Seat>, AgentError> {
-    // Join: ask for the robot, re-asking until the world answers.
-    let nonce = now_ns() ^ ((std::process::id() as u64) << 20) ^ 0x6d72_7369_6d00_0000;
-    let req = JoinRequest {
-        protocol_version: opts.protocol_version,
-        pid: std::process::id(),
-        nonce,
-        robot: FixedStr::new(&opts.robot),
-    };
-    let start = Instant::now();
-    let mut last_ask: Option<Instant> = None;
-    let reply = loop {
-        if link.termination_requested() {
-            return Ok(None);
-        }
-        if last_ask.is_none_or(|t| t.elapsed() > Duration::from_millis(500)) {
-            if last_ask.is_none() && opts.fault == Some(fault::Fault::JoinTwice) {
-                link.request_join(&req)?;
-            }
-            link.request_join(&req)?;
-            last_ask = Some(Instant::now());
-        }
-        if let Some(r) = link.poll_join_reply(nonce)? {
-            break r;
-        }
-        if start.elapsed() > opts.join_timeout {
-            return Err(AgentError::Timeout {
-                what: "join reply",
-                secs: opts.join_timeout.as_secs_f64(),
-            });
-        }
-        link.wait(Duration::from_millis(50))?;
-    };
-    if reply.accepted == 0 {
-        return Err(AgentError::Refused {
-            robot: opts.robot.clone(),
-            reason: reply.reason.as_str().to_string(),
-        });
-    }
+    Ok(crate::group::join_seats(link, std::slice::from_ref(opts))?.and_then(|mut s| s.pop()))
+}
 
-    // Setup: the resolved scenario, from the world.
-    let setup = loop {
-        if let Some(s) = link.setup()? {
-            break s;
-        }
-        if start.elapsed() > opts.join_timeout {
-            return Err(AgentError::Timeout {
-                what: "setup",
-                secs: opts.join_timeout.as_secs_f64(),
-            });
-        }
-        link.wait(Duration::from_millis(20))?;
-    };
+/// The walls every robot of the run whose setup is `view` sees (its
+/// `[[wall]]`s, map and arena), shared by the seats of one process.
+pub(crate) fn walls(view: &SetupView<'_>) -> Arc<[Segment]> {
+    mrsim_scenario::walls_and_arena(&view.scenario.walls, view.scenario.world.arena)
+        .iter()
+        .map(|w| Segment {
+            a: Vec2::new(w[0][0], w[0][1]),
+            b: Vec2::new(w[1][0], w[1][1]),
+        })
+        .collect()
+}
+
+/// The seat of the robot the world gave `reply` in the run whose setup is
+/// `view`, joined under `opts`.
+pub(crate) fn seat_of(
+    view: &SetupView<'_>,
+    walls: &Arc<[Segment]>,
+    reply: &JoinReply,
+    opts: &AgentOptions,
+) -> Result<Seat, AgentError> {
     let me = reply.robot_id as usize;
-    let view: SetupView =
-        serde_json::from_slice(&setup).map_err(|e| AgentError::BadSetup(e.to_string()))?;
-    let scenario = view.scenario;
+    let scenario = &view.scenario;
     let spec: RobotSpec = scenario
         .robots
         .get(me)
@@ -111,14 +78,7 @@ pub(crate) fn join_seat(
         .and_then(|raw| {
             serde_json::from_str(raw.get()).map_err(|e| AgentError::BadSetup(e.to_string()))
         })?;
-    let walls: Arc<[Segment]> =
-        mrsim_scenario::walls_and_arena(&scenario.walls, scenario.world.arena)
-            .iter()
-            .map(|w| Segment {
-                a: Vec2::new(w[0][0], w[0][1]),
-                b: Vec2::new(w[1][0], w[1][1]),
-            })
-            .collect();
+    let walls = walls.clone();
     let path = (!spec.path.is_empty()).then(|| {
         Arc::new(DesignatedPath {
             points: spec.path.iter().map(|p| Vec2::new(p[0], p[1])).collect(),
@@ -128,8 +88,8 @@ pub(crate) fn join_seat(
     let robot_count = scenario.robots.len();
     let capacity = robot_count + scenario.obstacles;
     let observer = observe::Observer::for_robot(&scenario.world, Some(&spec), me, capacity);
-    let diag = start_diagnostics(view.out_dir, me, &spec.name);
-    Ok(Some(Seat {
+    let diag = start_diagnostics(view.out_dir.as_deref(), me, &spec.name);
+    Ok(Seat {
         me,
         claim: opts.impersonate.unwrap_or(me as u32),
         token: reply.token,
@@ -146,13 +106,13 @@ pub(crate) fn join_seat(
         hung: false,
         halt: opts.halt.clone(),
         failed: None,
-    }))
+    })
 }
 
 /// The planner's diagnostics go to a part file in the run's folder, when
 /// the world's folder is reachable from here (same machine).
 fn start_diagnostics(
-    out_dir: Option<String>,
+    out_dir: Option<&str>,
     me: usize,
     robot: &str,
 ) -> Option<diagnostics::DiagnosticsWriter> {
@@ -173,7 +133,7 @@ fn start_diagnostics(
 /// thousand agents each building all thousand robots' specs cost O(n²) at
 /// join, seconds on two cores.
 #[derive(serde::Deserialize)]
-struct SetupView<'a> {
+pub(crate) struct SetupView<'a> {
     #[serde(borrow)]
     scenario: ScenarioView<'a>,
     #[serde(default)]
@@ -182,7 +142,7 @@ struct SetupView<'a> {
 
 /// [`mrsim_scenario::Scenario`] as an agent needs it.
 #[derive(serde::Deserialize)]
-struct ScenarioView<'a> {
+pub(crate) struct ScenarioView<'a> {
     world: mrsim_scenario::WorldConfig,
     #[serde(borrow)]
     robots: Vec<&'a serde_json::value::RawValue>,
@@ -218,11 +178,10 @@ impl Seat {
         &self,
         registry: &Registry,
     ) -> Result<Box<dyn Planner>, AgentError> {
-        crate::build_planner_in(registry, &self.spec)
-            .map_err(|source| AgentError::Planner {
-                robot: self.spec.name.clone(),
-                source,
-            })
+        crate::build_planner_in(registry, &self.spec).map_err(|source| AgentError::Planner {
+            robot: self.spec.name.clone(),
+            source,
+        })
     }
 
     /// The message telling the world this robot's agent is ready.

@@ -218,7 +218,13 @@ impl Recorder {
     /// [`Recorder::start_with`] the default output (trajectory.csv, every
     /// tick) and no extras.
     pub fn start(dir: &Path, names: Vec<String>, tracker: Tracker) -> std::io::Result<Self> {
-        Self::start_with(dir, names, tracker, OutputConfig::default(), Extras::default())
+        Self::start_with(
+            dir,
+            names,
+            tracker,
+            OutputConfig::default(),
+            Extras::default(),
+        )
     }
 
     /// Creates the trajectory file `output` asks for (with the `extras` the

@@ -1,4 +1,5 @@
-//! One robot's agent process (`mrsim agent`), over iceoryx2.
+//! One agent process (`mrsim agent`), over iceoryx2: one robot, or a group
+//! of robots driven from one process (`--robots a0,a1,...`).
 
 use crate::error::{Invalid, Refusal};
 use crate::usage::{Metered, Scope};
@@ -19,11 +20,11 @@ pub struct Misbehave {
     pub protocol_version: Option<u32>,
 }
 
-/// Which robot of which run, and how.
+/// Which robots of which run, and how.
 #[derive(Debug, Clone, Default)]
 pub struct AgentRequest {
-    /// The robot's name in the scenario.
-    pub robot: String,
+    /// The robots' names in the scenario (one, or a group).
+    pub robots: Vec<String>,
     /// The run id of the world.
     pub run_id: String,
     /// How long to wait for the world and for the join.
@@ -95,7 +96,12 @@ pub fn run(req: &AgentRequest) -> AgentEnd {
         Ok(ns) => ns,
         Err(e) => return fail(Invalid(e.to_string()).into()),
     };
-    let node_name = format!("mrsim-agent-{}", req.robot);
+    let robot = mrsim_world::names::first_few(&req.robots, 3);
+    let node_name = match req.robots.as_slice() {
+        [one] => format!("mrsim-agent-{one}"),
+        [first, ..] => format!("mrsim-agent-{first}-{}", req.robots.len()),
+        [] => "mrsim-agent".to_string(),
+    };
     let link: Result<Box<dyn AgentTransport>, _> = match &req.zenoh {
         None => ShmAgent::connect(&ns, &node_name, req.timeout).map(|a| Box::new(a) as _),
         Some(z) => ZenohAgent::connect(&ns, z, req.timeout).map(|a| Box::new(a) as _),
@@ -104,30 +110,36 @@ pub fn run(req: &AgentRequest) -> AgentEnd {
         Ok(l) => l,
         Err(source) => {
             return fail(AgentError::Connect {
-                robot: req.robot.clone(),
+                robot: robot.clone(),
                 run_id: req.run_id.clone(),
                 source,
             });
         }
     };
-    let mut opts = mrsim_agents::AgentOptions::new(&req.robot);
-    opts.join_timeout = req.timeout;
-    opts.impersonate = req.misbehave.impersonate;
-    opts.fault = req.misbehave.fault;
-    if let Some(v) = req.misbehave.protocol_version {
-        opts.protocol_version = v;
-    }
+    let opts: Vec<_> = req
+        .robots
+        .iter()
+        .map(|r| {
+            let mut opts = mrsim_agents::AgentOptions::new(r);
+            opts.join_timeout = req.timeout;
+            opts.impersonate = req.misbehave.impersonate;
+            opts.fault = req.misbehave.fault;
+            if let Some(v) = req.misbehave.protocol_version {
+                opts.protocol_version = v;
+            }
+            opts
+        })
+        .collect();
     let mut metered = Metered::new(link.as_mut(), Scope::Process);
-    let result = mrsim_agents::run(&mut metered, &opts);
+    let result = mrsim_agents::run_group(&mut metered, &opts);
     let usage_error = req
         .usage_out
         .as_ref()
         .and_then(|path| crate::usage::write_agent(path, &metered.usage()).err());
     AgentEnd {
-        result: result.map(|_| ()).map_err(|error| AgentError::Run {
-            robot: req.robot.clone(),
-            error,
-        }),
+        result: result
+            .map(|_| ())
+            .map_err(|error| AgentError::Run { robot, error }),
         usage_error,
     }
 }

@@ -77,6 +77,9 @@ pub enum Event<'a> {
     /// The launcher is waiting for its world (about every 20 ms): a moment
     /// to show progress.
     Waiting,
+    /// The same for an in-process run, with an observer of its live
+    /// statistics (a world process is observed over iceoryx2 instead).
+    WaitingInproc(Observing<'a>),
     /// The world process has ended.
     WorldEnded,
     /// An agent process died and was started again.
@@ -90,6 +93,15 @@ pub enum Event<'a> {
         /// This robot's restarts so far, this one included.
         restart: u32,
     },
+}
+
+/// An observer of a running in-process world.
+pub struct Observing<'a>(pub &'a mut dyn mrsim_transport::ObserverTransport);
+
+impl std::fmt::Debug for Observing<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Observing(..)")
+    }
 }
 
 /// Why a run failed.
@@ -231,7 +243,7 @@ pub fn run_in_process(req: &InProcess) -> Result<RunResult, RunError> {
         ns,
         applied: Applied::default(),
     };
-    let outcome = prepared.run_inproc()?;
+    let outcome = prepared.run_inproc(&mut |_| {})?;
     let metrics = outcome.metrics.ok_or_else(|| {
         RunError::Finish(FinishError::ReadMetrics {
             path: outcome.dir.join(mrsim_runfolder::METRICS_FILE),
@@ -323,12 +335,12 @@ impl Prepared {
     /// way.
     pub fn start(self, on_event: &mut dyn FnMut(Event<'_>)) -> Result<Outcome, RunError> {
         match self.request.transport {
-            Transport::Inproc => self.run_inproc(),
+            Transport::Inproc => self.run_inproc(on_event),
             Transport::Shm | Transport::Zenoh => self.run_processes(on_event),
         }
     }
 
-    fn run_inproc(self) -> Result<Outcome, RunError> {
+    fn run_inproc(self, on_event: &mut dyn FnMut(Event<'_>)) -> Result<Outcome, RunError> {
         let Prepared {
             validated,
             request,
@@ -358,22 +370,26 @@ impl Prepared {
                 }
             })
         };
-        let outcome =
-            crate::inproc::run_scenario(&scenario, world, &dir, ns.run_id(), stop, &agents);
+        let outcome = crate::inproc::run_scenario(
+            &scenario,
+            world,
+            &dir,
+            ns.run_id(),
+            stop,
+            &agents,
+            &mut |obs| on_event(Event::WaitingInproc(Observing(obs))),
+        );
+        on_event(Event::WorldEnded);
         done.store(true, Ordering::SeqCst);
         let _ = watcher.join();
         let outcome = outcome?;
-        let agent_failures = scenario
-            .robots
-            .iter()
-            .zip(&outcome.agent_errors)
-            .filter_map(|(r, e)| {
-                e.as_ref().map(|e| AgentFailure {
-                    robot: r.name.clone(),
-                    what: format!("failed: {e}"),
-                })
-            })
-            .collect();
+        let agent_failures = alike(
+            scenario
+                .robots
+                .iter()
+                .zip(&outcome.agent_errors)
+                .filter_map(|(r, e)| Some((r.name.as_str(), format!("failed: {}", e.as_ref()?)))),
+        );
         let finished = crate::finish::finish(Ending {
             dir: &dir,
             world_failure: None,
@@ -426,24 +442,40 @@ impl Prepared {
             .stdin(Stdio::null())
             .spawn()
             .map_err(RunError::SpawnWorld)?;
-        let spawn = |robot: &str| -> Result<Child, RunError> {
-            Command::new(&exe)
-                .args(["agent", "--robot", robot, "--run", run_id, "--usage-out"])
-                .arg(usage_file(dir, robot))
+        // One process per group of `robots_per_agent` robots (the last
+        // takes the rest), named after the group's first robot.
+        // An `external` robot's agent is its user's program: none is started.
+        let names: Vec<&str> = scenario
+            .robots
+            .iter()
+            .filter(|r| r.planner != mrsim_planners::EXTERNAL)
+            .map(|r| r.name.as_str())
+            .collect();
+        let k = (scenario.world.robots_per_agent as usize).max(1);
+        let groups: Vec<&[&str]> = names.chunks(k).collect();
+        let spawn = |group: &[&str]| -> Result<Child, RunError> {
+            let first = group.first().copied().unwrap_or_default();
+            let mut cmd = Command::new(&exe);
+            cmd.arg("agent");
+            if let [one] = group {
+                cmd.args(["--robot", one]);
+            } else {
+                cmd.arg("--robots").arg(group.join(","));
+            }
+            cmd.args(["--run", run_id, "--usage-out"])
+                .arg(usage_file(dir, first))
                 .args(["--timeout", &join_secs])
                 .args(&agent_net)
                 .stdin(Stdio::null())
                 .spawn()
                 .map_err(|source| RunError::SpawnAgent {
-                    robot: robot.to_string(),
+                    robot: group_name(group),
                     source,
                 })
         };
-        let mut agents: Vec<(&str, Child)> = Vec::with_capacity(scenario.robots.len());
-        for r in &scenario.robots {
-            if r.planner != mrsim_planners::EXTERNAL {
-                agents.push((&r.name, spawn(&r.name)?));
-            }
+        let mut agents: Vec<(String, Child)> = Vec::with_capacity(groups.len());
+        for g in &groups {
+            agents.push((group_name(g), spawn(g)?));
         }
         let mut restarts = vec![0u32; agents.len()];
 
@@ -465,7 +497,7 @@ impl Prepared {
             if forwarded.is_some_and(|t| t.elapsed() > Duration::from_secs(5)) {
                 mrsim_sys::process::kill(world.id(), mrsim_sys::signal::SIGKILL);
             }
-            for ((name, a), n) in agents.iter_mut().zip(restarts.iter_mut()) {
+            for (((name, a), n), g) in agents.iter_mut().zip(restarts.iter_mut()).zip(&groups) {
                 let Ok(Some(status)) = a.try_wait() else {
                     continue;
                 };
@@ -483,13 +515,18 @@ impl Prepared {
                     how: describe(status),
                     restart: *n,
                 });
-                *a = spawn(name)?;
+                // A group's robots rejoin together, in one new process.
+                *a = spawn(g)?;
             }
             std::thread::sleep(Duration::from_millis(20));
         };
         on_event(Event::WorldEnded);
 
-        let agent_failures = reap_agents(&mut agents, world_status);
+        let agent_failures = alike(
+            reap_agents(&mut agents, world_status)
+                .iter()
+                .map(|f| (f.robot.as_str(), f.what.clone())),
+        );
         self.ns.remove_leftovers();
         // 130: the world was interrupted and wrote what it had (metrics.json).
         let interrupted = world_status.code() == Some(130);
@@ -497,14 +534,22 @@ impl Prepared {
             pid: world.id(),
             how: describe(world_status),
         });
-        let usage: Vec<AgentUsage> = scenario
-            .robots
+        // A group's process used what its robots used together: each
+        // robot is given an equal share of its CPU time.
+        let usage: Vec<AgentUsage> = groups
             .iter()
-            .filter_map(|r| {
-                let f = usage_file(dir, &r.name);
+            .filter_map(|g| {
+                let f = usage_file(dir, g.first()?);
                 let u = crate::usage::read_agent(&f);
                 let _ = std::fs::remove_file(&f);
-                u
+                u.map(|u| (g.len(), u))
+            })
+            .flat_map(|(len, u)| {
+                let share = AgentUsage {
+                    cpu_s: u.cpu_s / len as f64,
+                    ..u
+                };
+                std::iter::repeat_n(share, len)
             })
             .collect();
         Ok(crate::finish::finish(Ending {
@@ -519,7 +564,7 @@ impl Prepared {
 
 /// Agents end on the world's last snapshot: gives them a moment, then stops
 /// them. Returns the ones that ended badly while the world did not.
-fn reap_agents(agents: &mut [(&str, Child)], world_status: ExitStatus) -> Vec<AgentFailure> {
+fn reap_agents(agents: &mut [(String, Child)], world_status: ExitStatus) -> Vec<AgentFailure> {
     let grace = Instant::now();
     let mut failures = Vec::new();
     for (name, a) in agents.iter_mut() {
@@ -543,7 +588,7 @@ fn reap_agents(agents: &mut [(&str, Child)], world_status: ExitStatus) -> Vec<Ag
         };
         if !status.success() && world_status.success() {
             failures.push(AgentFailure {
-                robot: name.to_string(),
+                robot: name.clone(),
                 what: describe(status),
             });
         }
@@ -551,7 +596,35 @@ fn reap_agents(agents: &mut [(&str, Child)], world_status: ExitStatus) -> Vec<Ag
     failures
 }
 
-/// Where the agent of `robot` writes what it used.
+/// Failures of robots (or groups) that failed alike (every robot when the
+/// world went, say) as one failure naming the first few: a run of 10,000
+/// robots prints a line, not 10,000.
+fn alike<'a>(failures: impl Iterator<Item = (&'a str, String)>) -> Vec<AgentFailure> {
+    let mut alike: Vec<(String, Vec<&str>)> = Vec::new();
+    let mut index = std::collections::HashMap::new();
+    for (name, what) in failures {
+        let k = *index.entry(what.clone()).or_insert_with(|| {
+            alike.push((what, Vec::new()));
+            alike.len() - 1
+        });
+        alike[k].1.push(name);
+    }
+    alike
+        .into_iter()
+        .map(|(what, names)| AgentFailure {
+            robot: group_name(&names),
+            what,
+        })
+        .collect()
+}
+
+/// A group's robots as messages name them: the first few and a count.
+fn group_name(group: &[&str]) -> String {
+    mrsim_world::names::first_few(group, 3)
+}
+
+/// Where the agent of `robot` (of the group it is first of) writes what
+/// it used.
 fn usage_file(dir: &Path, robot: &str) -> PathBuf {
     dir.join(mrsim_runfolder::agent_usage_file(robot))
 }
@@ -593,4 +666,29 @@ fn zenoh_args(opts: &ZenohOptions) -> Result<(Vec<String>, Vec<String>), RunErro
         }
     }
     Ok((world, agent))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn robots_that_failed_alike_are_one_failure_naming_the_first_few() {
+        let names: Vec<String> = (0..1000).map(|i| format!("g{i}")).collect();
+        let failures = alike(
+            names
+                .iter()
+                .map(|n| (n.as_str(), "failed: the world is gone".to_string()))
+                .chain([("odd", "exited with status 1".to_string())]),
+        );
+        assert_eq!(failures.len(), 2);
+        assert_eq!(
+            failures[0].to_string(),
+            "agent for g0, g1, g2 and 997 more failed: the world is gone"
+        );
+        assert_eq!(
+            failures[1].to_string(),
+            "agent for odd exited with status 1"
+        );
+    }
 }

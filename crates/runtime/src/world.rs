@@ -98,6 +98,7 @@ pub fn serve(
     let bodies = scenario.robots.len() + scenario.obstacles.len();
     let cap = Capacity {
         robots: scenario.robots.len(),
+        group: scenario.world.robots_per_agent.max(1) as usize,
     };
     let mut link: Box<dyn WorldTransport> = match &req.zenoh {
         None => ShmWorld::create(&ns, cap, bodies, setup_len).map(|w| Box::new(w) as _),

@@ -57,8 +57,8 @@ pub(crate) struct Plan {
 }
 
 const WHAT: &str = "generate";
-/// Most robots `[generate]` makes (a sanity bound, far above 64 agents on 2 cores).
-const MAX_COUNT: usize = 10_000;
+/// Most robots `[generate]` makes (a sanity bound: 100,000 robots run in-process).
+const MAX_COUNT: usize = 1_000_000;
 
 /// Checks `[generate]` and names its robots.
 pub(crate) fn plan(g: &S<RawGenerate>, world: &WorldConfig) -> Result<Plan, Fail> {

@@ -77,6 +77,7 @@ pub(crate) struct RawWorld {
     pub arena: Option<S<RawArena>>,
     pub deadline: Option<S<f64>>,
     pub stall_timeout: Option<S<f64>>,
+    pub robots_per_agent: Option<S<u32>>,
 }
 
 /// `arena = { min, max }`.

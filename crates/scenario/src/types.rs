@@ -93,6 +93,19 @@ pub struct WorldConfig {
     /// Lockstep: how long the world waits for an agent before it is lost,
     /// s (default 2.0).
     pub stall_timeout: f64,
+    /// Robots each agent process of `mrsim run` drives (default 1; the
+    /// last process takes the rest). Left out of the resolved scenario
+    /// when 1, so files written before it existed read the same.
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub robots_per_agent: u32,
+}
+
+fn one() -> u32 {
+    1
+}
+
+fn is_one(k: &u32) -> bool {
+    *k == 1
 }
 
 /// One planner parameter value (see `mrsim_planners::ParamValue`).

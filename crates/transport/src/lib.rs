@@ -311,8 +311,12 @@ pub trait ObserverTransport {
 /// How many participants the channels must hold.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Capacity {
-    /// Robots in the scenario (one agent each).
+    /// Robots in the scenario.
     pub robots: usize,
+    /// Robots one agent drives at most (1 unless agents drive groups):
+    /// an agent sends that many commands a tick, and the world's buffer
+    /// for each agent's commands must hold them all.
+    pub group: usize,
 }
 
 impl Capacity {

@@ -122,6 +122,9 @@ pub struct Admission {
     agents: Vec<Agent>,
     /// The robots' names, for refusals.
     names: Vec<String>,
+    /// Each name's robot: a join is found in O(1), not by a scan of every
+    /// name (thousands of joins each scanning thousands of names).
+    index: std::collections::HashMap<String, usize>,
     /// Agents that have said they are ready (setup read, planner built).
     pub ready: Vec<bool>,
     /// This tick's accepted command per robot.
@@ -144,6 +147,12 @@ impl Admission {
         let n = names.len();
         Self {
             agents: vec![Agent::Waiting; n],
+            index: names
+                .iter()
+                .enumerate()
+                .rev()
+                .map(|(i, n)| (n.clone(), i))
+                .collect(),
             names,
             ready: vec![false; n],
             got: vec![None; n],
@@ -200,7 +209,7 @@ impl Admission {
             world_pid,
             reason: FixedStr::default(),
         };
-        let idx = self.names.iter().position(|n| *n == name);
+        let idx = self.index.get(&name).copied();
         let reply = if req.protocol_version != PROTOCOL_VERSION {
             refuse(format!(
                 "protocol version {} refused: this world speaks version {PROTOCOL_VERSION}",
@@ -346,11 +355,16 @@ impl Admission {
 
     /// Live agents whose process is gone by `alive`, in robot order;
     /// agents of process `own` (threads of this one) are not looked at.
+    /// Each process is looked at once, however many robots it drives.
     pub fn dead(&self, alive: impl Fn(u32) -> bool, own: u32) -> Vec<usize> {
+        let mut seen = std::collections::HashMap::new();
         (0..self.agents.len())
-            .filter(
-                |&i| matches!(self.agents[i], Agent::Live { pid, .. } if pid != own && !alive(pid)),
-            )
+            .filter(|&i| match self.agents[i] {
+                Agent::Live { pid, .. } if pid != own => {
+                    !*seen.entry(pid).or_insert_with(|| alive(pid))
+                }
+                _ => false,
+            })
             .collect()
     }
 

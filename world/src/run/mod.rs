@@ -574,8 +574,14 @@ fn run_with_clock(
     .map_err(|e| out_err("setup")(e.into()))?;
     let tracker = Tracker::new(&scenario, world.walls());
     let extras = crate::record::Extras::of(&dir, &scenario).map_err(out_err(TRAJECTORY_FILE))?;
-    let rec = Recorder::start_with(&dir, body_names(&scenario), tracker, scenario.output, extras)
-        .map_err(out_err(TRAJECTORY_FILE))?;
+    let rec = Recorder::start_with(
+        &dir,
+        body_names(&scenario),
+        tracker,
+        scenario.output,
+        extras,
+    )
+    .map_err(out_err(TRAJECTORY_FILE))?;
     link.publish_setup(&setup)?;
     let timings = TimingRecorder::start(n).map_err(out_err(METRICS_FILE))?;
     let mut lp = Loop::new(world, link, clock, opts, rec, timings);

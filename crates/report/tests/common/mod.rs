@@ -125,6 +125,7 @@ pub fn scenario(n: usize) -> Scenario {
             }),
             deadline: 1.0,
             stall_timeout: 2.0,
+            robots_per_agent: 1,
         },
         robots: (0..n)
             .map(|i| {

@@ -54,6 +54,9 @@ pub enum InprocError {
     /// The world loop failed.
     #[error("world: {0}")]
     Run(mrsim_world::run::RunError),
+    /// A thread of the run panicked.
+    #[error("{0} panicked")]
+    Panicked(&'static str),
     /// An agent or worker thread could not be started.
     #[error("cannot start the agent thread for {robot}: {error}")]
     Spawn {
@@ -76,12 +79,14 @@ pub struct InprocOutcome {
     pub agent_usage: Vec<AgentUsage>,
 }
 
-/// Runs `scenario` on `world` (built from it) with the world in this thread and one thread per agent,
-/// writing the outputs (trajectory.csv, events.jsonl, metrics.json,
-/// scenario.json) into `out_dir`, which must exist. `stop` ends the run
-/// early (the role SIGTERM plays for processes). Each agent joins with
-/// `agents`'s options (its robot's name put in): where planners come from,
-/// and what stops the run when one fails.
+/// Runs `scenario` on `world` (built from it) with the world loop in a
+/// thread and the agents in a pool of workers, writing the outputs
+/// (trajectory.csv, events.jsonl, metrics.json, scenario.json) into
+/// `out_dir`, which must exist. `stop` ends the run early (the role SIGTERM
+/// plays for processes). Meanwhile this thread calls `on_wait` about every
+/// 20 ms with an observer of the run's live statistics (for progress).
+/// Each agent joins with `agents`'s options (its robot's name put in):
+/// where planners come from, and what stops the run when one fails.
 pub fn run_scenario(
     scenario: &Scenario,
     world: mrsim_world::World,
@@ -89,6 +94,7 @@ pub fn run_scenario(
     run_id: &str,
     stop: Arc<AtomicBool>,
     agents: &mrsim_agents::AgentOptions,
+    on_wait: &mut dyn FnMut(&mut dyn mrsim_transport::ObserverTransport),
 ) -> Result<InprocOutcome, InprocError> {
     let n = scenario.robots.len();
     let cpus = std::thread::available_parallelism().map_or(1, |p| p.get());
@@ -103,8 +109,12 @@ pub fn run_scenario(
     } else {
         Duration::ZERO
     };
+    // The agents join in a few groups, each a thread with one side that
+    // reads the setup once (a thread and a setup per robot cost O(n²) at
+    // start: every agent read the whole setup).
+    let groups = join_groups(n, cpus);
     let (mut link, sides, pool_sides) =
-        mrsim_transport::inproc::pooled_channels(n, workers, stop, spin);
+        mrsim_transport::inproc::pooled_channels(groups.len(), workers, stop, spin);
     let reach = scenario
         .robots
         .iter()
@@ -132,36 +142,26 @@ pub fn run_scenario(
             })?;
         worker_handles.push(handle);
     }
-    let mut handles = Vec::with_capacity(n);
-    for (i, (robot, mut side)) in scenario.robots.iter().zip(sides).enumerate() {
-        let mut opts = agents.clone();
-        opts.robot = robot.name.clone();
-        let pool = pool.clone();
-        let handle = std::thread::Builder::new()
-            .name(format!("agent-{}", robot.name))
-            // Planners keep little on the stack; 1000 agents fit easily.
-            .stack_size(512 * 1024)
-            .spawn(move || match mrsim_agents::join(&mut side, &opts) {
-                Ok(Some(driver)) => {
-                    // Into the pool first, then ready: the world starts
-                    // the run once every robot is ready, and the first
-                    // snapshot must find every driver in the pool.
-                    let ready = driver.ready();
-                    let answer = pool.adopt(i, driver);
-                    std::iter::once(&ready)
-                        .chain(&answer)
-                        .try_for_each(|m| side.send_command(m))
-                        .err()
-                        .map(|e| e.to_string())
-                }
-                Ok(None) => None,
-                Err(e) => Some(e.to_string()),
+    let mut handles = Vec::with_capacity(groups.len());
+    for (range, mut side) in groups.into_iter().zip(sides) {
+        let opts: Vec<_> = scenario.robots[range.clone()]
+            .iter()
+            .map(|r| {
+                let mut o = agents.clone();
+                o.robot = r.name.clone();
+                o
             })
+            .collect();
+        let pool = pool.clone();
+        let first = range.start;
+        let handle = std::thread::Builder::new()
+            .name(format!("join-{first}"))
+            .spawn(move || join_group(&mut side, &opts, &pool))
             .map_err(|error| InprocError::Spawn {
-                robot: robot.name.clone(),
+                robot: scenario.robots[first].name.clone(),
                 error,
             })?;
-        handles.push(handle);
+        handles.push((range, handle));
     }
     let opts = mrsim_world::RunOptions {
         out_dir: out_dir.to_path_buf(),
@@ -170,17 +170,42 @@ pub fn run_scenario(
         start_timeout: Some(Duration::from_secs(60)),
         verbose: std::env::var_os("MRSIM_VERBOSE").is_some(),
     };
-    let outcome = mrsim_world::run(world, &mut link, opts);
-    // Dropping the world's side disconnects the channels: an agent still
-    // waiting sees the world gone and ends (and the helper lets go of the
-    // pool).
-    drop(link);
-    let mut agent_errors = Vec::with_capacity(n);
-    for h in handles {
-        agent_errors.push(
-            h.join()
-                .unwrap_or_else(|_| Some("the agent thread panicked".to_string())),
-        );
+    // The world loop in a thread of its own, and this one shows progress
+    // (`on_wait`, about every 20 ms) until it ends.
+    let mut observer = link.observer();
+    let outcome = std::thread::scope(|s| {
+        let world = std::thread::Builder::new()
+            .name("world".to_string())
+            .spawn_scoped(s, move || {
+                let outcome = mrsim_world::run(world, &mut link, opts);
+                // Dropping the world's side disconnects the channels: an
+                // agent still waiting sees the world gone and ends (and the
+                // helper lets go of the pool).
+                drop(link);
+                outcome
+            })
+            .map_err(|error| InprocError::Spawn {
+                robot: "the world".to_string(),
+                error,
+            })?;
+        while !world.is_finished() {
+            on_wait(&mut observer);
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        on_wait(&mut observer);
+        world
+            .join()
+            .map_err(|_| InprocError::Panicked("the world thread"))
+    })?;
+    let mut agent_errors = vec![None; n];
+    for (range, h) in handles {
+        let e = h
+            .join()
+            .unwrap_or_else(|_| Some("the agent thread panicked".to_string()));
+        if let Some(e) = e {
+            // The group's error is every robot's of the group.
+            agent_errors[range].fill(Some(e));
+        }
     }
     let mut exit = AgentExit::Finished;
     let mut cpu_s = 0.0;
@@ -226,6 +251,43 @@ pub fn run_scenario(
         agent_errors,
         agent_usage,
     })
+}
+
+/// The robots each join thread joins: consecutive ranges, a few per CPU
+/// (a thread waits for the world's replies most of the time).
+fn join_groups(n: usize, cpus: usize) -> Vec<std::ops::Range<usize>> {
+    let size = n.div_ceil((4 * cpus).max(1)).max(1);
+    (0..n).step_by(size).map(|s| s..(s + size).min(n)).collect()
+}
+
+/// Joins the robots of `opts` over `side` and puts their drivers into
+/// `pool`, each followed by its ready (and, if a snapshot is being
+/// answered already, its answer to it). Returns the error that ended it.
+fn join_group(
+    side: &mut mrsim_transport::inproc::InprocAgent,
+    opts: &[mrsim_agents::AgentOptions],
+    pool: &Pool,
+) -> Option<String> {
+    let drivers = match mrsim_agents::join_group(side, opts) {
+        Ok(Some(d)) => d,
+        Ok(None) => return None,
+        Err(e) => return Some(e.to_string()),
+    };
+    for driver in drivers {
+        // Into the pool first, then ready: the world starts the run once
+        // every robot is ready, and the first snapshot must find every
+        // driver in the pool.
+        let ready = driver.ready();
+        let i = driver.robot_id();
+        let answer = pool.adopt(i, driver);
+        if let Err(e) = std::iter::once(&ready)
+            .chain(&answer)
+            .try_for_each(|m| side.send_command(m))
+        {
+            return Some(e.to_string());
+        }
+    }
+    None
 }
 
 /// Every robot's [`Driver`], in chunks of consecutive robots. For each

@@ -50,6 +50,17 @@ pub(super) fn resolve_world(w: Option<&S<RawWorld>>) -> Result<WorldConfig, Fail
         arena,
         deadline: opt(&raw.deadline, "deadline", Rule::Fraction, what, 1.0)?,
         stall_timeout: opt(&raw.stall_timeout, "stall_timeout", Rule::Pos, what, 2.0)?,
+        robots_per_agent: match &raw.robots_per_agent {
+            Some(k) if *k.get_ref() == 0 => {
+                return Err(Fail::new(
+                    Some(k.span()),
+                    what,
+                    "robots_per_agent must be >= 1, got 0",
+                ));
+            }
+            Some(k) => *k.get_ref(),
+            None => 1,
+        },
     })
 }
 

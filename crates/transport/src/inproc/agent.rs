@@ -14,10 +14,10 @@ pub struct InprocAgent {
     pub(super) tx: Sender<ToWorld>,
     pub(super) rx: Receiver<ToAgent>,
     pub(super) setup: Arc<std::sync::Mutex<Option<Vec<u8>>>>,
-    pub(super) replies: Vec<JoinReply>,
+    pub(super) replies: std::collections::HashMap<u64, JoinReply>,
     /// Nonces of this agent's join requests: replies are broadcast to every
     /// agent, and only those answering one of these are kept.
-    pub(super) asked: Vec<u64>,
+    pub(super) asked: std::collections::HashSet<u64>,
     pub(super) pending: Option<(SnapshotHeader, Arc<[BodyState]>)>,
     pub(super) stop: Arc<AtomicBool>,
     pub(super) world_alive: Arc<AtomicBool>,
@@ -28,7 +28,9 @@ impl InprocAgent {
         for m in first.into_iter().chain(self.rx.try_iter()) {
             match m {
                 ToAgent::Snapshot(h, b) => self.pending = Some((h, b)),
-                ToAgent::Reply(r) if self.asked.contains(&r.nonce) => self.replies.push(r),
+                ToAgent::Reply(r) if self.asked.contains(&r.nonce) => {
+                    self.replies.insert(r.nonce, r);
+                }
                 ToAgent::Reply(_) => {}
             }
         }
@@ -37,9 +39,7 @@ impl InprocAgent {
 
 impl AgentTransport for InprocAgent {
     fn request_join(&mut self, req: &JoinRequest) -> Result<(), TransportError> {
-        if !self.asked.contains(&req.nonce) {
-            self.asked.push(req.nonce);
-        }
+        self.asked.insert(req.nonce);
         self.tx
             .send(ToWorld::Join(*req, self.index))
             .map_err(|_| TransportError::Disconnected)
@@ -47,11 +47,7 @@ impl AgentTransport for InprocAgent {
 
     fn poll_join_reply(&mut self, nonce: u64) -> Result<Option<JoinReply>, TransportError> {
         self.pump(None);
-        Ok(self
-            .replies
-            .iter()
-            .position(|r| r.nonce == nonce)
-            .map(|i| self.replies.swap_remove(i)))
+        Ok(self.replies.remove(&nonce))
     }
 
     fn setup(&mut self) -> Result<Option<Vec<u8>>, TransportError> {

@@ -45,11 +45,13 @@
 
 mod agent;
 mod message;
+mod observer;
 mod poll;
 mod worker;
 mod world;
 
 pub use agent::InprocAgent;
+pub use observer::InprocObserver;
 pub use worker::{InprocWorker, WorkerEvent};
 pub use world::{Helper, InprocWorld};
 
@@ -75,8 +77,8 @@ pub fn channels(agents: usize, stop: Arc<AtomicBool>) -> (InprocWorld, Vec<Inpro
             tx: tx.clone(),
             rx: arx,
             setup: setup.clone(),
-            replies: Vec::new(),
-            asked: Vec::new(),
+            replies: Default::default(),
+            asked: Default::default(),
             pending: None,
             stop: stop.clone(),
             world_alive: alive.clone(),
@@ -95,6 +97,7 @@ pub fn channels(agents: usize, stop: Arc<AtomicBool>) -> (InprocWorld, Vec<Inpro
             poll: Poll::default(),
             helper: None,
             to_help: None,
+            stats: Default::default(),
         },
         sides,
     )

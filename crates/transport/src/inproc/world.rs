@@ -1,6 +1,7 @@
 //! The world's side of an in-process run ([`InprocWorld`]).
 
 use super::message::{ToAgent, ToWorld};
+use super::observer::InprocObserver;
 use super::poll::Poll;
 use crate::{TransportError, WorldTransport};
 use crossbeam::channel::{Receiver, Sender};
@@ -29,6 +30,8 @@ pub struct InprocWorld {
     /// [`InprocWorld::help_with`]), and the snapshot it has yet to help with.
     pub(super) helper: Option<Helper>,
     pub(super) to_help: Option<(SnapshotHeader, Arc<[BodyState]>)>,
+    /// The newest live statistics, for [`InprocObserver`]s.
+    pub(super) stats: super::observer::SharedStats,
 }
 
 /// Work the world's thread takes on while it waits for a snapshot's
@@ -56,6 +59,17 @@ impl InprocWorld {
     /// CPUs taking turns.
     pub fn help_with(&mut self, helper: Helper) {
         self.helper = Some(helper);
+    }
+
+    /// A read-only observer of this run's setup and live statistics (the
+    /// launcher's progress).
+    pub fn observer(&self) -> InprocObserver {
+        InprocObserver {
+            setup: self.setup.clone(),
+            stats: self.stats.clone(),
+            seen: 0,
+            alive: self.alive.clone(),
+        }
     }
 }
 
@@ -181,12 +195,19 @@ impl WorldTransport for InprocWorld {
         Ok(false)
     }
 
-    /// No observers: an in-process run has no one to read them.
+    /// Kept for [`InprocObserver`]s (a copy at most every 200 ms: the
+    /// world publishes no more often).
     fn publish_stats(
         &mut self,
-        _header: &StatsHeader,
-        _robots: &[RobotStats],
+        header: &StatsHeader,
+        robots: &[RobotStats],
     ) -> Result<(), TransportError> {
+        if let Ok(mut s) = self.stats.lock() {
+            s.0 += 1;
+            s.1 = *header;
+            s.2.clear();
+            s.2.extend_from_slice(robots);
+        }
         Ok(())
     }
 }

@@ -26,6 +26,12 @@ pub struct ShmAgent {
     _node: Node<S>,
     world: WorldWatch,
     terminated: std::cell::Cell<bool>,
+    /// The nonces this agent joined with, and replies to them received
+    /// while it looked for another one's (an agent driving several robots
+    /// asks for each with its own nonce, and every agent receives every
+    /// reply).
+    asked: std::collections::HashSet<u64>,
+    replies: std::collections::HashMap<u64, JoinReply>,
 }
 
 /// An agent's ports on the run's services.
@@ -98,6 +104,8 @@ impl ShmAgent {
             _node: node,
             world: WorldWatch::new(),
             terminated: std::cell::Cell::new(false),
+            asked: Default::default(),
+            replies: Default::default(),
         })
     }
 
@@ -184,6 +192,7 @@ fn send_command(
 
 impl AgentTransport for ShmAgent {
     fn request_join(&mut self, req: &JoinRequest) -> Result<(), TransportError> {
+        self.asked.insert(req.nonce);
         self.ports
             .joining("join publisher")?
             .join_pub
@@ -210,15 +219,16 @@ impl AgentTransport for ShmAgent {
                 .reply_sub
                 .receive()
             {
-                Ok(Some(s)) if s.payload().nonce == nonce => {
+                Ok(Some(s)) => {
                     let reply = *s.payload();
-                    if reply.world_pid != 0 {
-                        self.world.pid = Some(reply.world_pid);
+                    if self.asked.contains(&reply.nonce) {
+                        if reply.world_pid != 0 {
+                            self.world.pid = Some(reply.world_pid);
+                        }
+                        self.replies.insert(reply.nonce, reply);
                     }
-                    return Ok(Some(reply));
                 }
-                Ok(Some(_)) => continue,
-                Ok(None) => return Ok(None),
+                Ok(None) => break,
                 Err(e) => {
                     return Err(TransportError::Receive {
                         what: "join reply",
@@ -227,6 +237,7 @@ impl AgentTransport for ShmAgent {
                 }
             }
         }
+        Ok(self.replies.remove(&nonce))
     }
 
     fn setup(&mut self) -> Result<Option<Vec<u8>>, TransportError> {

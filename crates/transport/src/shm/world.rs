@@ -110,7 +110,7 @@ impl ShmWorld {
         let join = node
             .service_builder(&service_name("mrsim/join")?)
             .publish_subscribe::<JoinRequest>()
-            .subscriber_max_buffer_size(4)
+            .subscriber_max_buffer_size(cap.group.max(4))
             .max_publishers(agents)
             .max_subscribers(2)
             .max_nodes(nodes)
@@ -148,7 +148,8 @@ impl ShmWorld {
         let cmd = node
             .service_builder(&service_name("mrsim/command")?)
             .publish_subscribe::<CommandMsg>()
-            .subscriber_max_buffer_size(8)
+            // A group's agent sends a command per robot, all at once.
+            .subscriber_max_buffer_size(cap.group.max(8))
             .max_publishers(agents)
             .max_subscribers(2)
             .max_nodes(nodes)
