@@ -6,25 +6,6 @@ mod common;
 use common::*;
 use std::process::Stdio;
 
-const TWO: &str = r#"name = "two"
-[world]
-dt = 0.1
-duration = 20.0
-stall_timeout = 1.0
-
-[[robot]]
-name = "a"
-start = [0.0, 0.0]
-goal = [3.0, 0.0]
-planner = "social-force"
-
-[[robot]]
-name = "b"
-start = [0.0, 4.0]
-goal = [3.0, 4.0]
-planner = "social-force"
-"#;
-
 #[test]
 fn a_command_for_a_robot_the_agent_does_not_own_is_rejected_and_logged() {
     let dir = fresh_dir("own");

@@ -10,25 +10,6 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-const TWO: &str = r#"name = "two"
-[world]
-dt = 0.1
-duration = 20.0
-stall_timeout = 1.0
-
-[[robot]]
-name = "a"
-start = [0.0, 0.0]
-goal = [3.0, 0.0]
-planner = "social-force"
-
-[[robot]]
-name = "b"
-start = [0.0, 4.0]
-goal = [3.0, 4.0]
-planner = "social-force"
-"#;
-
 /// A loopback endpoint on a port free a moment ago.
 fn free_endpoint() -> String {
     let port = std::net::TcpListener::bind("127.0.0.1:0")

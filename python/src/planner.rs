@@ -58,6 +58,20 @@ pub struct PyObservation {
     others_kind: Py<PyArray1<u8>>,
     /// Wall segments (the arena's included), (m, 4): x0, y0, x1, y1.
     walls: Py<PyArray2<f64>>,
+    /// Own heading, rad (a unicycle's; 0 for a holonomic robot).
+    heading: f64,
+    /// Own turn rate, rad/s.
+    angular_velocity: f64,
+    /// `"holonomic"` or `"unicycle"` (a unicycle's velocity commands go
+    /// through the look-ahead point controller).
+    kinematics: &'static str,
+    /// The laser scan's ranges, (beams,), `inf` where no return; `None`
+    /// without a `sensor`.
+    scan_ranges: Option<Py<PyArray1<f64>>>,
+    /// Angle of the first beam in the robot's frame, rad (0 without a scan).
+    scan_angle_min: f64,
+    /// Angle between beams, rad (0 without a scan).
+    scan_angle_increment: f64,
 }
 
 /// A (rows, 2) or (rows, 4) array from a flat row-major vector.
@@ -116,6 +130,17 @@ impl PyObservation {
             )
             .unbind(),
             walls: rows(py, walls.collect(), 4)?.unbind(),
+            heading: obs.me.heading,
+            angular_velocity: obs.me.angular_velocity,
+            kinematics: match obs.me.kinematics {
+                mrsim_planners::Kinematics::Holonomic => "holonomic",
+                mrsim_planners::Kinematics::Unicycle { .. } => "unicycle",
+            },
+            scan_ranges: obs
+                .scan
+                .map(|s| PyArray1::from_slice(py, &s.ranges).unbind()),
+            scan_angle_min: obs.scan.map_or(0.0, |s| s.angle_min),
+            scan_angle_increment: obs.scan.map_or(0.0, |s| s.angle_increment),
         })
     }
 }

@@ -141,3 +141,41 @@ def test_an_unknown_planner_name_is_refused_naming_the_known_ones(repo, tmp_path
     with pytest.raises(ValueError, match="toward"):
         mrsim.run(crossing(repo), planners={"toward": Toward}, set=["robot.a0.planner=towards"],
                   out=tmp_path / "run")
+
+
+def test_a_python_planner_on_a_unicycle_sees_its_heading_and_its_laser_scan(repo, tmp_path):
+    seen = []
+
+    class Looking:
+        """Asks to go north, across its heading: the unicycle must turn."""
+
+        def __init__(self, params):
+            pass
+
+        def plan(self, obs):
+            seen.append(
+                (obs.kinematics, obs.heading, obs.scan_ranges, obs.scan_angle_min,
+                 obs.scan_angle_increment)
+            )
+            return np.array([0.0, 0.5])
+
+    result = mrsim.run(
+        repo / "scenarios" / "lidar-demo.toml",
+        planners={"looking": Looking},
+        set=["robot.scout.planner=looking", "world.duration=2"],
+        out=tmp_path / "run",
+    )
+    assert result.metrics["ticks"] > 0
+    kinematics, heading, ranges, angle_min, increment = seen[0]
+    assert kinematics == "unicycle"
+    # A unicycle starts facing its goal: from (-4, -1) to (4, 1).
+    assert heading == pytest.approx(np.arctan2(2.0, 8.0), abs=1e-9)
+    assert ranges.shape == (360,)
+    assert increment == pytest.approx(2 * np.pi / 360)
+    # The beam pointing straight back (in the robot's frame) meets the
+    # room's west wall, x = -5, 1 m behind the start along x: 1 / cos(heading)
+    # away, give or take the 1 cm noise.
+    back = np.argmin(np.cos(angle_min + increment * np.arange(360)))
+    assert ranges[back] == pytest.approx(1.0 / np.cos(heading), abs=0.05)
+    # Asked to go north, it turns left: the heading is the world's.
+    assert seen[-1][1] > heading + 0.1

@@ -299,3 +299,25 @@ pub fn ko_choi_crossing(dir: &Path) -> Crossing {
         min_gap,
     }
 }
+
+/// Two social-force robots side by side, 4 m apart, 3 m to go, a 1 s
+/// stall timeout: the smallest run whose agents can be stopped, killed or
+/// refused one at a time.
+pub const TWO: &str = r#"name = "two"
+[world]
+dt = 0.1
+duration = 20.0
+stall_timeout = 1.0
+
+[[robot]]
+name = "a"
+start = [0.0, 0.0]
+goal = [3.0, 0.0]
+planner = "social-force"
+
+[[robot]]
+name = "b"
+start = [0.0, 4.0]
+goal = [3.0, 4.0]
+planner = "social-force"
+"#;

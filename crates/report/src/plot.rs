@@ -287,18 +287,8 @@ fn draw_map<DB: DrawingBackend>(
     }
     // Starts (circles of the robot's radius, at least 4 px), goals
     // (crosses) and names, for every robot of the scenario.
-    let specs: HashMap<&str, &mrsim_scenario::RobotSpec> = run
-        .scenario
-        .robots
-        .iter()
-        .map(|r| (r.name.as_str(), r))
-        .collect();
-    let tracks: HashMap<&str, &crate::BodyTrack> = run
-        .trajectory
-        .bodies
-        .iter()
-        .map(|b| (b.name.as_str(), b))
-        .collect();
+    let specs = run.specs_by_name();
+    let tracks = run.tracks_by_name();
     for (index, name) in run.robot_names().iter().enumerate() {
         let c = rgb(robot_color(index));
         let spec = specs.get(name.as_str()).copied();

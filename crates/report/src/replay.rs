@@ -147,18 +147,8 @@ fn replay_data(run: &RunData) -> Value {
     let ticks = &ticks;
     let frame_of = |tick: u64| ticks.partition_point(|&t| t <= tick).saturating_sub(1);
     let names = run.robot_names();
-    let by_name: HashMap<&str, &crate::BodyTrack> = run
-        .trajectory
-        .bodies
-        .iter()
-        .map(|b| (b.name.as_str(), b))
-        .collect();
-    let specs: HashMap<&str, &mrsim_scenario::RobotSpec> = run
-        .scenario
-        .robots
-        .iter()
-        .map(|r| (r.name.as_str(), r))
-        .collect();
+    let by_name = run.tracks_by_name();
+    let specs = run.specs_by_name();
 
     let track = |name: &str| -> (Vec<Value>, Vec<Value>) {
         match by_name.get(name) {

@@ -271,6 +271,25 @@ impl RunData {
             .map(|i| self.scenario.robots.len() + i)
     }
 
+    /// The scenario's robot entries by name (one lookup per robot, not a
+    /// scan: pictures of 10,000 robots look each one up).
+    pub fn specs_by_name(&self) -> HashMap<&str, &mrsim_scenario::RobotSpec> {
+        self.scenario
+            .robots
+            .iter()
+            .map(|r| (r.name.as_str(), r))
+            .collect()
+    }
+
+    /// The recorded tracks by body name.
+    pub fn tracks_by_name(&self) -> HashMap<&str, &crate::BodyTrack> {
+        self.trajectory
+            .bodies
+            .iter()
+            .map(|b| (b.name.as_str(), b))
+            .collect()
+    }
+
     /// Robot names in colour order: the scenario's, then any other robot in
     /// the trajectory.
     pub fn robot_names(&self) -> Vec<String> {
