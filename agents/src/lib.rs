@@ -8,19 +8,22 @@
 //! in a test against a scripted fake world. The planner is pure and never
 //! sees the transport or a clock; the agent measures its compute time.
 //!
-//! Three ways to drive a joined robot share one seat (`seat`: join, observe,
-//! send, fault injection, diagnostics): [`Live`] hands out each tick's
-//! observation and takes the reply (a user's own program, [`LiveAgent`]
-//! over iceoryx2); [`run`] is [`drive`] over it, a planner answering (what
-//! `mrsim agent` runs); a [`Driver`] pairs the seat with a planner for the
-//! in-process pool, which plans for many robots per snapshot. Every plan
-//! call goes through [`guard::plan_checked`].
+//! Every way to drive a joined robot shares one seat (`seat`: observe,
+//! send, fault injection, diagnostics; `join`: joining, one robot or
+//! several) and, but for the in-process pool, one per-tick loop ([`Live`],
+//! over one robot or a group): [`Live::next`] hands out each tick's
+//! observation and [`Live::reply`] takes the answer (a user's own program,
+//! [`LiveAgent`] over iceoryx2); [`drive`] answers with planners (what
+//! [`run`] and [`run_group`], `mrsim agent`, run); a [`Driver`] pairs the
+//! seat with a planner for the in-process pool, which plans for many robots
+//! per snapshot. Every plan call goes through [`guard::plan_checked`].
 #![warn(missing_docs)]
 
 pub mod diagnostics;
 pub mod fault;
 pub mod group;
 pub mod guard;
+mod join;
 pub mod live;
 pub mod observe;
 mod seat;
@@ -30,7 +33,7 @@ pub use guard::{Halt, PlanFailure, PlanFault, plan_checked};
 pub use live::{Live, LiveAgent, Next, OwnedObservation, drive};
 
 use mrsim_planners::{Planner, Registry};
-use mrsim_proto::{BodyState, CommandMsg, PROTOCOL_VERSION, SnapshotHeader, now_ns};
+use mrsim_proto::{BodyState, CommandMsg, PROTOCOL_VERSION, SnapshotHeader};
 use mrsim_scenario::RobotSpec;
 use mrsim_transport::{AgentTransport, TransportError};
 use seat::Seat;
@@ -214,11 +217,11 @@ pub fn reach(spec: &RobotSpec) -> Option<f64> {
 /// the run, the process is asked to stop, or something fails: [`drive`]
 /// over a [`Live`] robot.
 pub fn run(link: &mut dyn AgentTransport, opts: &AgentOptions) -> Result<AgentExit, AgentError> {
-    let Some(seat) = seat::join_seat(link, opts)? else {
+    let Some(seat) = join::join_seat(link, opts)? else {
         return Ok(AgentExit::Interrupted);
     };
     let mut planner = seat.build_planner(&opts.registry)?;
-    let mut live = Live::start(link, seat, opts)?;
+    let mut live = Live::start(link, vec![seat], opts.world_check_after)?;
     let exit = drive(link, &mut live, planner.as_mut())?;
     live.finish(exit)
 }
@@ -230,7 +233,7 @@ pub fn join(
     link: &mut dyn AgentTransport,
     opts: &AgentOptions,
 ) -> Result<Option<Driver>, AgentError> {
-    let Some(seat) = seat::join_seat(link, opts)? else {
+    let Some(seat) = join::join_seat(link, opts)? else {
         return Ok(None);
     };
     let planner = seat.build_planner(&opts.registry)?;
@@ -305,27 +308,15 @@ impl Driver {
         start: Option<u64>,
         send: &mut dyn FnMut(&CommandMsg) -> Result<(), TransportError>,
     ) -> Result<u64, AgentError> {
-        if !self.seat.due(header, bodies.len()) {
-            return Ok(start.unwrap_or(woke));
-        }
-        let t0 = start.unwrap_or_else(now_ns);
-        let obs = self.seat.observe_among(header, bodies, near);
-        let cmd = match guard::plan_checked(self.planner.as_mut(), &obs) {
-            Ok(cmd) => cmd,
-            Err(what) => {
-                self.seat.failed(header.tick, what)?;
-                return Ok(now_ns());
-            }
-        };
-        let t1 = now_ns();
-        self.seat
-            .send(header, cmd, [t1.saturating_sub(t0), woke, t1], send)?;
-        // After the command is out: off the tick's critical path.
-        if self.seat.wants_diagnostics() {
-            self.seat
-                .diagnostics(header.tick, header.sim_time, self.planner.diagnostics());
-        }
-        Ok(t1)
+        self.seat.answer(
+            self.planner.as_mut(),
+            header,
+            bodies,
+            near,
+            woke,
+            start,
+            send,
+        )
     }
 
     /// Ends the robot's control: writes out its diagnostics (and reports a

@@ -1,30 +1,45 @@
-//! A robot driven tick by tick by a program that pulls: [`Live::next`]
-//! waits for the world's next snapshot and returns the robot's observation
-//! (owned), [`Live::reply`] sends the command for it. The protocol is the
-//! agent's (join with a token, ready twice, lockstep and realtime, world-gone
-//! detection, a clean exit on the run's last snapshot or a termination
-//! request): [`crate::run`], what `mrsim agent` runs, is [`drive`] over this,
-//! a planner answering each observation.
+//! The agent's one per-tick loop, over the robots this process drives (a
+//! group of one for `mrsim agent --robot`, [`LiveAgent`] and the Python
+//! package; several for `mrsim agent --robots`): wait for the world's next
+//! snapshot, ask every so often whether the process is to stop, notice a
+//! world that is gone, say ready again until the first snapshot comes, end
+//! on the run's last snapshot. What each snapshot is for is the caller's:
 //!
-//! [`LiveAgent`] is the same over iceoryx2, joining a run by its id: what a
-//! user's own program (or the Python package) drives a robot with.
+//! - pull: [`Live::next`] returns a robot's observation (owned) and
+//!   [`Live::reply`] sends the command for it (a user's own program;
+//!   [`LiveAgent`] is this over iceoryx2, joining a run by its id);
+//! - push: [`drive`] answers every robot's observation with its planner
+//!   within the snapshot (what `mrsim agent` runs: [`crate::run`],
+//!   [`crate::run_group`]).
+//!
+//! The observations of a group of more than one robot look only at the
+//! bodies a neighbour grid (`mrsim-spatial`, one built per snapshot) puts
+//! near each robot: the same bodies in the same order as a full scan, so
+//! the commands are those of one process per robot.
 
-use crate::guard::plan_checked;
-use crate::seat::{Seat, join_seat};
+use crate::join::join_seat;
+use crate::seat::Seat;
 use crate::{AgentError, AgentExit, AgentOptions};
 use mrsim_planners::{
     Command, DesignatedPath, Observation, Params, Planner, Segment, SelfState, Sensed, Vec2,
     lidar::LaserScan,
 };
 use mrsim_proto::{BodyState, SnapshotHeader, now_ns};
+use mrsim_spatial::NeighbourGrid;
 use mrsim_transport::shm::ShmAgent;
-use mrsim_transport::{AgentTransport, Namespace};
+use mrsim_transport::{AgentTransport, Namespace, SendFn};
+use std::collections::VecDeque;
 use std::sync::Arc;
 use std::time::Duration;
 
 /// How often (at most) the loop asks its transport whether the process is
-/// to stop: 50 ms, so a stop is heard within that and one wait (100 ms).
-pub(crate) const STOP_CHECK_EVERY_NS: u64 = 50_000_000;
+/// to stop (over iceoryx2 the question takes a process-wide lock: asked
+/// every few ticks, not every tick): 50 ms, so a stop is heard within that
+/// and one wait (100 ms).
+const STOP_CHECK_EVERY_NS: u64 = 50_000_000;
+
+/// The longest single wait of the loop.
+const WAIT_SLICE_NS: u64 = 100_000_000;
 
 /// A robot's observation of one tick, owned: what a planner's
 /// [`Observation`] borrows, kept (sensing range, field of view, noise and
@@ -94,28 +109,191 @@ pub enum Next {
     Interrupted,
 }
 
-/// A tick handed out and not answered yet.
+/// A tick handed out (or queued to be) and not answered yet.
 #[derive(Debug, Clone, Copy)]
 struct Pending {
+    /// The robot's seat.
+    seat: usize,
     header: SnapshotHeader,
     /// When the agent woke for it, and when its observation began.
     woke: u64,
     began: u64,
 }
 
-/// A joined robot answered tick by tick, over any [`AgentTransport`]
-/// (given to each call, so the caller keeps the transport).
-pub struct Live {
-    seat: Seat,
+/// How one run of [`Ticks::listen`] ended.
+enum Heard {
+    /// The caller's snapshot handler has something for it.
+    Tick,
+    /// The timeout passed.
+    Idle,
+    /// The world ended the run.
+    Finished,
+    /// The world process is gone.
+    WorldGone,
+    /// The process was asked to terminate.
+    Interrupted,
+}
+
+/// What [`Ticks::listen`] calls with each snapshot that is not the run's
+/// last: the robots, the snapshot, when the agent woke for it, and a sender
+/// of commands. True when the caller is to hear of it ([`Heard::Tick`]).
+type OnSnapshot<'a> = dyn FnMut(
+        &mut Seats,
+        &SnapshotHeader,
+        &[BodyState],
+        u64,
+        &mut SendFn<'_>,
+    ) -> Result<bool, AgentError>
+    + 'a;
+
+/// The loop's own state, the same whatever the snapshots are for.
+struct Ticks {
     /// Where a transport that cannot lend its snapshot copies it.
     scratch: (SnapshotHeader, Vec<BodyState>),
-    /// When the last snapshot came.
+    /// When the last snapshot came (the clock read as the agent woke for
+    /// it).
     last_heard: u64,
     /// A snapshot has come (after it, a wake-up without one is spurious).
     heard_one: bool,
+    /// Silence after which the world's life is checked.
     check_after: u64,
     /// When the loop last asked whether it is to stop.
     asked_to_stop_at: u64,
+}
+
+impl Ticks {
+    /// Waits for snapshots until one `on` wants the caller to hear of, the
+    /// run ends, the world is gone, the process is to stop, or the clock
+    /// passes `until` (CLOCK_MONOTONIC ns; `u64::MAX`: never).
+    fn listen(
+        &mut self,
+        link: &mut dyn AgentTransport,
+        seats: &mut Seats,
+        until: u64,
+        on: &mut OnSnapshot<'_>,
+    ) -> Result<Heard, AgentError> {
+        let mut now = now_ns();
+        loop {
+            if now.saturating_sub(self.asked_to_stop_at) >= STOP_CHECK_EVERY_NS {
+                self.asked_to_stop_at = now;
+                if link.termination_requested() {
+                    return Ok(Heard::Interrupted);
+                }
+            }
+            link.wait(Duration::from_nanos(
+                until.saturating_sub(now).min(WAIT_SLICE_NS),
+            ))?;
+            let woke = now_ns();
+            now = woke;
+            let (mut finished, mut handled) = (false, Ok(false));
+            let heard_one = &mut self.heard_one;
+            let got =
+                link.with_latest_snapshot(&mut self.scratch, &mut |header, bodies, send| {
+                    *heard_one = true;
+                    if header.finished != 0 {
+                        finished = true;
+                    } else {
+                        handled = on(seats, header, bodies, woke, send);
+                    }
+                })?;
+            if !got {
+                if woke.saturating_sub(self.last_heard) > self.check_after && !link.world_alive() {
+                    return Ok(Heard::WorldGone);
+                }
+                if !self.heard_one {
+                    // Before the first snapshot a wake-up is the world's
+                    // call to take up the tick's channels (this receive just
+                    // did): say ready again, and the world starts the clock
+                    // once every agent has (`WorldTransport::prepare_ticks`).
+                    for s in &seats.seats {
+                        link.send_command(&s.ready())?;
+                    }
+                }
+            } else {
+                self.last_heard = woke;
+                if handled? {
+                    return Ok(Heard::Tick);
+                }
+                if finished {
+                    return Ok(Heard::Finished);
+                }
+            }
+            if woke >= until {
+                return Ok(Heard::Idle);
+            }
+        }
+    }
+}
+
+/// The robots this process drives and, for more than one that all sense
+/// within a finite reach, the neighbour grid their observations share.
+struct Seats {
+    seats: Vec<Seat>,
+    /// The largest reach of the robots, when a grid is built at all.
+    reach: Option<f64>,
+    grid: NeighbourGrid,
+    near: Vec<u32>,
+}
+
+impl Seats {
+    fn new(seats: Vec<Seat>) -> Self {
+        let reach = seats
+            .iter()
+            .map(|s| crate::reach(&s.spec))
+            .try_fold(0.0_f64, |m, r| r.map(|r| m.max(r)))
+            .filter(|_| seats.len() > 1);
+        Self {
+            seats,
+            reach,
+            grid: NeighbourGrid::default(),
+            near: Vec::new(),
+        }
+    }
+
+    /// Builds the grid over this snapshot's bodies: true if there is one
+    /// to look robots' neighbours up in.
+    fn index(&mut self, bodies: &[BodyState]) -> bool {
+        self.reach.is_some_and(|r| {
+            self.grid.build(
+                bodies
+                    .iter()
+                    .map(|b| [b.position[0], b.position[1], b.radius]),
+                r,
+            )
+        })
+    }
+
+    /// Seat `i` and, when `gridded`, the indices of the bodies near it
+    /// (`None`: it looks at every body).
+    fn near(
+        &mut self,
+        i: usize,
+        gridded: bool,
+        bodies: &[BodyState],
+    ) -> (&mut Seat, Option<&[u32]>) {
+        let seat = &mut self.seats[i];
+        let among = gridded
+            && match (
+                crate::reach(&seat.spec),
+                bodies.get(seat.me).map(|b| b.position),
+            ) {
+                (Some(r), Some(p)) => self.grid.near(p, r, &mut self.near),
+                _ => false,
+            };
+        (seat, among.then_some(self.near.as_slice()))
+    }
+}
+
+/// Joined robots answered tick by tick over any [`AgentTransport`] (given
+/// to each call, so the caller keeps the transport): one robot when
+/// [`Self::join`] made it, several (`mrsim agent --robots`) in
+/// [`crate::run_group`].
+pub struct Live {
+    seats: Seats,
+    ticks: Ticks,
+    /// Observations of the last snapshot not handed out yet (a group's).
+    queued: VecDeque<(Pending, Box<OwnedObservation>)>,
+    /// The tick [`Self::next`] handed out last, until answered.
     pending: Option<Pending>,
 }
 
@@ -127,104 +305,111 @@ impl Live {
         opts: &AgentOptions,
     ) -> Result<Option<Self>, AgentError> {
         match join_seat(link, opts)? {
-            Some(seat) => Self::start(link, seat, opts).map(Some),
+            Some(seat) => Self::start(link, vec![seat], opts.world_check_after).map(Some),
             None => Ok(None),
         }
     }
 
+    /// Tells the world every robot of `seats` is ready, and closes the
+    /// join-time ports; `world_check_after` is the silence after which the
+    /// world's life is checked.
     pub(crate) fn start(
         link: &mut dyn AgentTransport,
-        seat: Seat,
-        opts: &AgentOptions,
+        seats: Vec<Seat>,
+        world_check_after: Duration,
     ) -> Result<Self, AgentError> {
-        link.send_command(&seat.ready())?;
+        for s in &seats {
+            link.send_command(&s.ready())?;
+        }
         link.joined();
+        let capacity = seats.first().map_or(0, |s| s.capacity);
         Ok(Self {
-            scratch: (SnapshotHeader::default(), Vec::with_capacity(seat.capacity)),
-            seat,
-            last_heard: now_ns(),
-            heard_one: false,
-            check_after: u64::try_from(opts.world_check_after.as_nanos()).unwrap_or(u64::MAX),
-            asked_to_stop_at: 0,
+            seats: Seats::new(seats),
+            ticks: Ticks {
+                scratch: (SnapshotHeader::default(), Vec::with_capacity(capacity)),
+                last_heard: now_ns(),
+                heard_one: false,
+                check_after: u64::try_from(world_check_after.as_nanos()).unwrap_or(u64::MAX),
+                asked_to_stop_at: 0,
+            },
+            queued: VecDeque::new(),
             pending: None,
         })
     }
 
-    /// The robot's name.
-    pub fn robot(&self) -> &str {
-        &self.seat.spec.name
+    fn first(&self) -> Option<&Seat> {
+        self.seats.seats.first()
     }
 
-    /// The robot's id (its index in the scenario).
+    /// The robot's name (of a group, the first robot's).
+    pub fn robot(&self) -> &str {
+        self.first().map_or("", |s| &s.spec.name)
+    }
+
+    /// The robot's id, its index in the scenario (of a group, the first
+    /// robot's).
     pub fn robot_id(&self) -> usize {
-        self.seat.me
+        self.first().map_or(0, |s| s.me)
     }
 
     /// The robot's planner parameters as its scenario entry gives them
     /// (for a program that reads its own settings from the scenario).
     pub fn params(&self) -> Params {
-        crate::planner_params(&self.seat.spec)
+        self.first()
+            .map(|s| crate::planner_params(&s.spec))
+            .unwrap_or_default()
     }
 
-    /// Waits up to `timeout` for the next tick to answer. A tick not
-    /// answered before a newer one comes is skipped (in realtime a miss; in
-    /// lockstep the world waits for the answer, so none comes).
+    /// Waits up to `timeout` for the next tick to answer (of a group, the
+    /// next robot's: `me.id` says whose). A tick not answered before a
+    /// newer one comes is skipped (in realtime a miss; in lockstep the
+    /// world waits for the answer, so none comes).
     pub fn next(
         &mut self,
         link: &mut dyn AgentTransport,
         timeout: Duration,
     ) -> Result<Next, AgentError> {
-        let until = now_ns().saturating_add(u64::try_from(timeout.as_nanos()).unwrap_or(u64::MAX));
-        loop {
-            let now = now_ns();
-            if now.saturating_sub(self.asked_to_stop_at) >= STOP_CHECK_EVERY_NS {
-                self.asked_to_stop_at = now;
-                if link.termination_requested() {
-                    return Ok(Next::Interrupted);
-                }
+        if self.queued.is_empty() {
+            let until =
+                now_ns().saturating_add(u64::try_from(timeout.as_nanos()).unwrap_or(u64::MAX));
+            let queued = &mut self.queued;
+            let heard = self.ticks.listen(
+                link,
+                &mut self.seats,
+                until,
+                &mut |seats, header, bodies, woke, _| {
+                    let gridded = seats.index(bodies);
+                    for i in 0..seats.seats.len() {
+                        let (seat, near) = seats.near(i, gridded, bodies);
+                        if seat.due(header, bodies.len()) {
+                            let began = now_ns();
+                            let obs = owned(seat, header, bodies, near);
+                            let p = Pending {
+                                seat: i,
+                                header: *header,
+                                woke,
+                                began,
+                            };
+                            queued.push_back((p, Box::new(obs)));
+                        }
+                    }
+                    Ok(!queued.is_empty())
+                },
+            )?;
+            match heard {
+                Heard::Tick => {}
+                Heard::Idle => return Ok(Next::Idle),
+                Heard::Finished => return Ok(Next::Finished),
+                Heard::WorldGone => return Ok(Next::WorldGone),
+                Heard::Interrupted => return Ok(Next::Interrupted),
             }
-            let slice = Duration::from_nanos(until.saturating_sub(now).min(100_000_000));
-            link.wait(slice)?;
-            let woke = now_ns();
-            let (mut finished, mut observed) = (false, None);
-            let (seat, heard_one) = (&mut self.seat, &mut self.heard_one);
-            let got = link.with_latest_snapshot(&mut self.scratch, &mut |header, bodies, _| {
-                *heard_one = true;
-                if header.finished != 0 {
-                    finished = true;
-                } else if seat.due(header, bodies.len()) {
-                    let began = now_ns();
-                    observed = Some((owned(seat, header, bodies), began));
-                }
-            })?;
-            if !got {
-                if woke.saturating_sub(self.last_heard) > self.check_after && !link.world_alive() {
-                    return Ok(Next::WorldGone);
-                }
-                if !self.heard_one {
-                    // Before the first snapshot a wake-up is the world's
-                    // call to take up the tick's channels (this receive just
-                    // did): say ready again, and the world starts the clock
-                    // once every agent has.
-                    link.send_command(&self.seat.ready())?;
-                }
-            } else {
-                self.last_heard = woke;
-                if finished {
-                    return Ok(Next::Finished);
-                }
-                if let Some((obs, began)) = observed {
-                    self.pending = Some(Pending {
-                        header: header_of(&obs),
-                        woke,
-                        began,
-                    });
-                    return Ok(Next::Observation(Box::new(obs)));
-                }
+        }
+        match self.queued.pop_front() {
+            Some((p, obs)) => {
+                self.pending = Some(p);
+                Ok(Next::Observation(obs))
             }
-            if woke >= until {
-                return Ok(Next::Idle);
-            }
+            None => Ok(Next::Idle),
         }
     }
 
@@ -233,8 +418,13 @@ impl Live {
     /// (`commands_rejected`) and the robot brakes.
     pub fn reply(&mut self, link: &mut dyn AgentTransport, cmd: Command) -> Result<(), AgentError> {
         let p = self.pending.take().ok_or(AgentError::NothingToAnswer)?;
+        let seat = self
+            .seats
+            .seats
+            .get_mut(p.seat)
+            .ok_or(AgentError::NothingToAnswer)?;
         let sent = now_ns();
-        self.seat.send(
+        seat.send(
             &p.header,
             cmd,
             [sent.saturating_sub(p.began), p.woke, sent],
@@ -242,16 +432,29 @@ impl Live {
         )
     }
 
-    /// Ends the robot's control: writes out its diagnostics.
-    pub fn finish(mut self, exit: AgentExit) -> Result<AgentExit, AgentError> {
-        self.seat.finish(exit)
+    /// Ends the robots' control: writes out their diagnostics. The first
+    /// robot's error (a planner that failed in a realtime run), if any.
+    pub fn finish(self, exit: AgentExit) -> Result<AgentExit, AgentError> {
+        let mut result = Ok(exit);
+        for mut s in self.seats.seats {
+            let r = s.finish(exit);
+            if result.is_ok() {
+                result = r;
+            }
+        }
+        result
     }
 }
 
 /// The observation of a snapshot, owned.
-fn owned(seat: &mut Seat, header: &SnapshotHeader, bodies: &[BodyState]) -> OwnedObservation {
+fn owned(
+    seat: &mut Seat,
+    header: &SnapshotHeader,
+    bodies: &[BodyState],
+    near: Option<&[u32]>,
+) -> OwnedObservation {
     let (walls, path) = (seat.walls.clone(), seat.path.clone());
-    let o = seat.observe_among(header, bodies, None);
+    let o = seat.observe_among(header, bodies, near);
     OwnedObservation {
         tick: o.tick,
         time: o.time,
@@ -268,45 +471,49 @@ fn owned(seat: &mut Seat, header: &SnapshotHeader, bodies: &[BodyState]) -> Owne
     }
 }
 
-/// What answering a tick needs of its snapshot's header.
-fn header_of(o: &OwnedObservation) -> SnapshotHeader {
-    SnapshotHeader {
-        tick: o.tick,
-        sim_time: o.time,
-        deadline_ns: o.deadline_ns,
-        ..Default::default()
-    }
-}
-
-/// Answers every tick of `live` with `planner` until the run ends: the
-/// loop of `mrsim agent`. A planner that panics or returns a non-finite
-/// command fails the robot at that tick ([`crate::guard`]): in lockstep the
-/// loop ends with that error, in realtime the tick is a miss and the first
-/// failure is the error at the end.
+/// Answers every tick of `live`, a robot, with `planner` until the run
+/// ends: [`drive_each`] for one.
 pub fn drive(
     link: &mut dyn AgentTransport,
     live: &mut Live,
     planner: &mut dyn Planner,
 ) -> Result<AgentExit, AgentError> {
+    drive_each(link, live, &mut [planner])
+}
+
+/// Answers every tick of every robot of `live` with its planner (in the
+/// robots' order; a robot without one is not answered) until the run ends:
+/// the loop of `mrsim agent`. A planner that panics or returns a
+/// non-finite command fails its robot at that tick ([`crate::guard`]): in
+/// lockstep the loop ends with that error (the first robot's failure ends
+/// the group: its process is one agent), in realtime the tick is a miss
+/// and the first failure is the error at the end ([`Live::finish`]).
+pub(crate) fn drive_each(
+    link: &mut dyn AgentTransport,
+    live: &mut Live,
+    planners: &mut [&mut dyn Planner],
+) -> Result<AgentExit, AgentError> {
+    let mut answer = |seats: &mut Seats,
+                      header: &SnapshotHeader,
+                      bodies: &[BodyState],
+                      woke: u64,
+                      send: &mut SendFn<'_>| {
+        let gridded = seats.index(bodies);
+        for (i, planner) in planners.iter_mut().enumerate().take(seats.seats.len()) {
+            let (seat, near) = seats.near(i, gridded, bodies);
+            seat.answer(&mut **planner, header, bodies, near, woke, None, send)?;
+        }
+        Ok(false)
+    };
     loop {
-        match live.next(link, Duration::from_millis(100))? {
-            Next::Observation(obs) => match plan_checked(planner, &obs.view()) {
-                Ok(cmd) => {
-                    live.reply(link, cmd)?;
-                    if live.seat.wants_diagnostics() {
-                        live.seat
-                            .diagnostics(obs.tick, obs.time, planner.diagnostics());
-                    }
-                }
-                Err(what) => {
-                    live.pending = None;
-                    live.seat.failed(obs.tick, what)?;
-                }
-            },
-            Next::Idle => {}
-            Next::Finished => return Ok(AgentExit::Finished),
-            Next::Interrupted => return Ok(AgentExit::Interrupted),
-            Next::WorldGone => return Err(AgentError::WorldGone),
+        match live
+            .ticks
+            .listen(link, &mut live.seats, u64::MAX, &mut answer)?
+        {
+            Heard::Tick | Heard::Idle => {}
+            Heard::Finished => return Ok(AgentExit::Finished),
+            Heard::Interrupted => return Ok(AgentExit::Interrupted),
+            Heard::WorldGone => return Err(AgentError::WorldGone),
         }
     }
 }
@@ -409,144 +616,4 @@ impl Drop for LiveAgent {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use mrsim_proto::{JoinReply, PROTOCOL_VERSION, command_kind};
-    use mrsim_transport::WorldTransport;
-    use mrsim_transport::inproc::{InprocAgent, InprocWorld};
-    use std::sync::atomic::AtomicBool;
-
-    /// A world side with one robot `a` (planner `external`) and its
-    /// agent's side, the setup published.
-    fn world() -> (InprocWorld, InprocAgent) {
-        let scenario = mrsim_scenario::parse(
-            r#"
-            name = "live"
-            [world]
-            arena = { min = [0.0, 0.0], max = [10.0, 10.0] }
-            [[robot]]
-            name = "a"
-            start = [1.0, 5.0]
-            goal = [9.0, 5.0]
-            planner = "external"
-            params = { gain = 2.0 }
-            "#,
-            "live.toml",
-        )
-        .expect("scenario")
-        .scenario;
-        let (mut world, mut sides) =
-            mrsim_transport::inproc::channels(1, Arc::new(AtomicBool::new(false)));
-        let setup = serde_json::json!({"run_id": "live", "out_dir": null, "scenario": scenario});
-        world
-            .publish_setup(setup.to_string().as_bytes())
-            .expect("setup");
-        let side = sides.pop().expect("one side");
-        (world, side)
-    }
-
-    /// Answers the first join request with token 7.
-    fn admit(world: &mut InprocWorld) {
-        let mut asked = None;
-        while asked.is_none() {
-            world.wait(Duration::from_millis(10)).expect("wait");
-            world.drain_joins(&mut |r| asked = Some(r)).expect("joins");
-        }
-        let asked = asked.expect("a join request");
-        world
-            .reply_join(&JoinReply {
-                nonce: asked.nonce,
-                accepted: 1,
-                robot_id: 0,
-                token: 7,
-                protocol_version: PROTOCOL_VERSION,
-                world_pid: std::process::id(),
-                reason: Default::default(),
-            })
-            .expect("reply");
-    }
-
-    fn commands(world: &mut InprocWorld) -> Vec<mrsim_proto::CommandMsg> {
-        let mut got = Vec::new();
-        world
-            .drain_commands(&mut |c, _| got.push(c))
-            .expect("drain");
-        got
-    }
-
-    #[test]
-    fn a_live_robot_gets_each_tick_owned_and_answers_it_once_with_its_token() {
-        let (mut world, mut side) = world();
-        let agent = std::thread::spawn(move || {
-            let mut live = Live::join(&mut side, &AgentOptions::new("a"))
-                .expect("join")
-                .expect("not interrupted");
-            assert_eq!(live.robot(), "a");
-            assert!(live.params().contains_key("gain"));
-            let mut seen = Vec::new();
-            loop {
-                match live.next(&mut side, Duration::from_secs(5)).expect("next") {
-                    Next::Observation(obs) => {
-                        let view = obs.view();
-                        assert_eq!((view.goal.x, view.goal.y), (9.0, 5.0));
-                        assert_eq!(view.walls.len(), 4, "the arena's walls");
-                        seen.push(obs.tick);
-                        live.reply(&mut side, Command::Velocity(Vec2::new(1.0, 0.0)))
-                            .expect("reply");
-                        assert!(matches!(
-                            live.reply(&mut side, Command::Velocity(Vec2::zeros())),
-                            Err(AgentError::NothingToAnswer)
-                        ));
-                    }
-                    Next::Idle => {}
-                    Next::Finished => break,
-                    other => panic!("{other:?}"),
-                }
-            }
-            live.finish(AgentExit::Finished).expect("finish");
-            seen
-        });
-        admit(&mut world);
-        world.joins_answered().expect("answered");
-        // The ready command, then one answer per tick.
-        let mut ready = Vec::new();
-        while ready.is_empty() {
-            world.wait(Duration::from_millis(10)).expect("wait");
-            ready = commands(&mut world);
-        }
-        assert_eq!(ready[0].kind, command_kind::READY);
-        let bodies = [BodyState {
-            position: [1.0, 5.0],
-            ..Default::default()
-        }];
-        for tick in 0..3 {
-            let header = SnapshotHeader {
-                tick,
-                ..Default::default()
-            };
-            world.publish_snapshot(&header, &bodies).expect("snapshot");
-            let mut got = Vec::new();
-            while got
-                .iter()
-                .all(|c: &mrsim_proto::CommandMsg| c.tick != tick || c.kind == command_kind::READY)
-            {
-                world.wait(Duration::from_millis(10)).expect("wait");
-                got.extend(commands(&mut world));
-            }
-            let answer = got
-                .iter()
-                .find(|c| c.kind == command_kind::VELOCITY)
-                .expect("answer");
-            assert_eq!(
-                (answer.tick, answer.token, answer.value),
-                (tick, 7, [1.0, 0.0])
-            );
-        }
-        let end = SnapshotHeader {
-            finished: 1,
-            ..Default::default()
-        };
-        world.publish_snapshot(&end, &[]).expect("the end");
-        assert_eq!(agent.join().expect("agent thread"), [0, 1, 2]);
-    }
-}
+mod tests;

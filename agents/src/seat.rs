@@ -1,19 +1,19 @@
 //! A robot's seat in a run: what joining gives an agent (its id and token,
-//! its scenario entry, the static geometry, its observer and diagnostics)
-//! and what every way of driving the robot does with it each tick: observe
-//! a snapshot, turn a command into the wire message, send it (through the
-//! fault injector in tests), and note a planner's failure. The planner
-//! itself is not here: a [`crate::Driver`] pairs a seat with one, a
-//! [`crate::Live`] hands the observation to whatever program answers.
+//! its scenario entry, the static geometry, its observer and diagnostics;
+//! built here from the run's setup, see [`crate::join`]) and what every way
+//! of driving the robot does with it each tick: observe a snapshot, turn a
+//! command into the wire message, send it (through the fault injector in
+//! tests), note a planner's failure, and, with a planner, all of these at
+//! once ([`Seat::answer`]). The planner itself is not kept here: a
+//! [`crate::Driver`] pairs a seat with one, a [`crate::Live`] drives seats
+//! with planners or hands their observations to whatever program answers.
 
-use crate::guard::{Halt, PlanFailure, PlanFault};
+use crate::guard::{Halt, PlanFailure, PlanFault, plan_checked};
 use crate::{AgentError, AgentExit, AgentOptions, diagnostics, fault, observe};
-use mrsim_planners::{
-    Command, DesignatedPath, Diagnostic, Observation, Planner, Registry, Segment, Vec2,
-};
+use mrsim_planners::{Command, DesignatedPath, Observation, Planner, Registry, Segment, Vec2};
 use mrsim_proto::{BodyState, CommandMsg, JoinReply, SnapshotHeader, command_kind, now_ns};
 use mrsim_scenario::RobotSpec;
-use mrsim_transport::{AgentTransport, TransportError};
+use mrsim_transport::TransportError;
 use std::sync::Arc;
 
 /// One joined robot, without its planner.
@@ -37,16 +37,6 @@ pub(crate) struct Seat {
     /// The first failure of the planner in a realtime run (reported at
     /// the end; the run goes on, each failed tick a miss).
     failed: Option<PlanFailure>,
-}
-
-/// Joins the run as `opts.robot` and reads the run's setup. `None` if the
-/// process was asked to stop meanwhile. (A group of robots joins through
-/// [`crate::group::join_seats`], which this is for one.)
-pub(crate) fn join_seat(
-    link: &mut dyn AgentTransport,
-    opts: &AgentOptions,
-) -> Result<Option<Seat>, AgentError> {
-    Ok(crate::group::join_seats(link, std::slice::from_ref(opts))?.and_then(|mut s| s.pop()))
 }
 
 /// The walls every robot of the run whose setup is `view` sees (its
@@ -269,17 +259,41 @@ impl Seat {
         Ok(())
     }
 
-    /// True if the planner's diagnostics are written (asking a planner
-    /// for them costs it something).
-    pub(crate) fn wants_diagnostics(&self) -> bool {
-        self.diag.is_some()
-    }
-
-    /// Queues the planner's values of one tick for diagnostics.csv.
-    pub(crate) fn diagnostics(&mut self, tick: u64, time: f64, values: Vec<Diagnostic>) {
-        if let Some(d) = &mut self.diag {
-            d.push(tick, time, values);
+    /// Plans with `planner` on one snapshot (not the run's last) and hands
+    /// the command to `send`: what [`crate::Driver::on_snapshot_among`]
+    /// documents (`near`, `woke`, `start` and the clock returned), for
+    /// every robot driven by a planner.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn answer(
+        &mut self,
+        planner: &mut dyn Planner,
+        header: &SnapshotHeader,
+        bodies: &[BodyState],
+        near: Option<&[u32]>,
+        woke: u64,
+        start: Option<u64>,
+        send: &mut dyn FnMut(&CommandMsg) -> Result<(), TransportError>,
+    ) -> Result<u64, AgentError> {
+        if !self.due(header, bodies.len()) {
+            return Ok(start.unwrap_or(woke));
         }
+        let t0 = start.unwrap_or_else(now_ns);
+        let obs = self.observe_among(header, bodies, near);
+        let cmd = match plan_checked(planner, &obs) {
+            Ok(cmd) => cmd,
+            Err(what) => {
+                self.failed(header.tick, what)?;
+                return Ok(now_ns());
+            }
+        };
+        let t1 = now_ns();
+        self.send(header, cmd, [t1.saturating_sub(t0), woke, t1], send)?;
+        // After the command is out: off the tick's critical path (asking a
+        // planner for its diagnostics costs it something).
+        if let Some(d) = &mut self.diag {
+            d.push(header.tick, header.sim_time, planner.diagnostics());
+        }
+        Ok(t1)
     }
 
     /// The planner failed at `tick`. Lockstep: the robot answers no more,
