@@ -1,11 +1,15 @@
 """mrsim.Agent: a Python program driving a robot of a real run (the world
 and the other robots' agents as processes, over shared memory)."""
 
+import gc
 import json
 import os
 import subprocess
 import sys
+import threading
 import time
+import warnings
+import weakref
 
 import numpy as np
 import pytest
@@ -48,15 +52,15 @@ def run_id(tag):
 def test_a_python_agent_drives_its_robot_through_a_lockstep_run(repo, tmp_path):
     proc = start_run(repo, tmp_path, run_id("lock"))
     try:
-        agent = mrsim.Agent(run_id("lock"), "a0", timeout=60)
-        assert agent.robot == "a0"
-        ticks = []
-        for obs in agent:
-            ticks.append(obs.tick)
-            assert obs.others_position.shape == (len(obs.others_radius), 2)
-            assert set(obs.others_kind) <= {0}
-            assert obs.walls.shape == (4, 4)
-            agent.reply(toward(obs))
+        with mrsim.Agent(run_id("lock"), "a0", timeout=60) as agent:
+            assert agent.robot == "a0"
+            ticks = []
+            for obs in agent:
+                ticks.append(obs.tick)
+                assert obs.others_position.shape == (len(obs.others_radius), 2)
+                assert set(obs.others_kind) <= {0}
+                assert obs.walls.shape == (4, 4)
+                agent.reply(toward(obs))
         finish(proc)
     finally:
         proc.kill()
@@ -69,16 +73,16 @@ def test_a_python_agent_drives_its_robot_through_a_lockstep_run(repo, tmp_path):
 def test_a_late_reply_in_realtime_is_a_miss_and_the_run_goes_on(repo, tmp_path):
     proc = start_run(repo, tmp_path, run_id("rt"), "--mode", "realtime", "--set", "world.duration=2.0")
     try:
-        agent = mrsim.Agent(run_id("rt"), "a0", timeout=60)
-        late = None
-        for obs in agent:
-            if late is None and obs.tick >= 3:
-                late = obs.tick
-                time.sleep(0.35)  # three and a half ticks of 0.1 s
-            try:
-                agent.reply(toward(obs))
-            except RuntimeError:
-                pass  # a reply for a tick the world has left may be refused
+        with mrsim.Agent(run_id("rt"), "a0", timeout=60) as agent:
+            late = None
+            for obs in agent:
+                if late is None and obs.tick >= 3:
+                    late = obs.tick
+                    time.sleep(0.35)  # three and a half ticks of 0.1 s
+                try:
+                    agent.reply(toward(obs))
+                except RuntimeError:
+                    pass  # a reply for a tick the world has left may be refused
         finish(proc)
     finally:
         proc.kill()
@@ -92,3 +96,39 @@ def test_a_bad_reply_is_refused_in_python_and_joining_no_run_times_out(repo):
         mrsim.Agent(run_id("none"), "a0", timeout=0.5)
     with pytest.raises(ValueError, match="velocity"):
         mrsim.Agent(run_id("none"), "a0", command="torque")
+
+
+def test_a_closed_agent_leaves_the_run_and_may_be_freed_on_any_thread(repo, tmp_path):
+    proc = start_run(repo, tmp_path, run_id("close"), "--mode", "realtime", "--set", "world.duration=1.0")
+    try:
+        agent = mrsim.Agent(run_id("close"), "a0", timeout=60)
+        with agent:
+            obs = next(agent)
+            agent.reply(toward(obs))
+        # Leaving the block closed it: the run goes on without the robot
+        # (its ticks are misses).
+        assert agent.robot == ""
+        assert list(agent) == []
+        with pytest.raises(RuntimeError, match="nothing to answer"):
+            agent.reply((0.0, 0.0))
+        agent.close()  # again: nothing
+        finish(proc)
+    finally:
+        proc.kill()
+    # The last reference dropped on another thread (as the garbage collector
+    # may do): nothing to warn about, nothing leaked.
+    unraisable = []
+    hook, sys.unraisablehook = sys.unraisablehook, unraisable.append
+    try:
+        with warnings.catch_warnings(record=True) as warned:
+            warnings.simplefilter("always")
+            held, gone = [agent], weakref.ref(agent)
+            del agent, obs
+            freer = threading.Thread(target=held.clear)
+            freer.start()
+            freer.join()
+            assert gone() is None, "freed by the other thread"
+            gc.collect()
+    finally:
+        sys.unraisablehook = hook
+    assert unraisable == [] and warned == []

@@ -45,6 +45,9 @@ def test_the_readmes_python_planner_and_live_agent_examples_run(repo, in_scratch
     try:
         exec(agent_block, scope)
         finish(proc)
+        # The run out closed it; the scope lives on in a reference cycle
+        # until some later collection, on whatever thread triggers it.
+        scope["agent"].close()
     finally:
         proc.kill()
 
