@@ -3,7 +3,7 @@
 //! read once, one wait per snapshot, and per robot its own join token,
 //! observation and planner, exactly as if each had a process of its own.
 //!
-//! Each robot joins with a request of its own ([`crate::join`]), so the
+//! Each robot joins with a request of its own (`join.rs`), so the
 //! world gives each its own token and judges each robot's commands on their
 //! own; the group only shares the process. When the process dies, the world
 //! loses every robot it drove (each one's join carried the process's pid),

@@ -1,7 +1,8 @@
 //! One robot's agent: join the run, get the robot's setup from the world,
-//! then each tick turn the snapshot into the planner's [`Observation`]
-//! (sensing range and field of view applied), call the planner, and send
-//! the command back before the deadline.
+//! then each tick turn the snapshot into the planner's
+//! [`Observation`](mrsim_planners::Observation) (sensing range and field of
+//! view applied), call the planner, and send the command back before the
+//! deadline.
 //!
 //! The transport is injected ([`AgentTransport`]), so the same loop runs in
 //! an agent process over iceoryx2, in a thread over crossbeam channels, or

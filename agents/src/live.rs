@@ -472,7 +472,11 @@ fn owned(
 }
 
 /// Answers every tick of `live`, a robot, with `planner` until the run
-/// ends: [`drive_each`] for one.
+/// ends: the loop of `mrsim agent` ([`crate::run`]). A planner that panics
+/// or returns a non-finite command fails the robot at that tick
+/// ([`crate::guard`]): in lockstep the loop ends with that error, in
+/// realtime the tick is a miss and the first failure is the error at the
+/// end ([`Live::finish`]).
 pub fn drive(
     link: &mut dyn AgentTransport,
     live: &mut Live,
@@ -481,13 +485,9 @@ pub fn drive(
     drive_each(link, live, &mut [planner])
 }
 
-/// Answers every tick of every robot of `live` with its planner (in the
-/// robots' order; a robot without one is not answered) until the run ends:
-/// the loop of `mrsim agent`. A planner that panics or returns a
-/// non-finite command fails its robot at that tick ([`crate::guard`]): in
-/// lockstep the loop ends with that error (the first robot's failure ends
-/// the group: its process is one agent), in realtime the tick is a miss
-/// and the first failure is the error at the end ([`Live::finish`]).
+/// [`drive`] for every robot of `live`, each with its planner (in the
+/// robots' order; a robot without one is not answered): the first robot's
+/// failure in lockstep ends the group (its process is one agent).
 pub(crate) fn drive_each(
     link: &mut dyn AgentTransport,
     live: &mut Live,

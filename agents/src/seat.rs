@@ -1,6 +1,6 @@
 //! A robot's seat in a run: what joining gives an agent (its id and token,
 //! its scenario entry, the static geometry, its observer and diagnostics;
-//! built here from the run's setup, see [`crate::join`]) and what every way
+//! built here from the run's setup that `join.rs` reads) and what every way
 //! of driving the robot does with it each tick: observe a snapshot, turn a
 //! command into the wire message, send it (through the fault injector in
 //! tests), note a planner's failure, and, with a planner, all of these at
