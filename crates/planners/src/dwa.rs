@@ -291,6 +291,10 @@ impl Planner for Dwa {
         // No admissible velocity: the one that keeps contact furthest off.
         Command::Velocity(best.map_or(least_bad.1, |(_, v)| v))
     }
+
+    fn native_unicycle(&self) -> bool {
+        true
+    }
 }
 
 #[cfg(test)]
