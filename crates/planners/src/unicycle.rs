@@ -57,11 +57,11 @@
 //! current turn or speed enough in one tick), each of v and omega is
 //! clamped to the box, which is the point of the box nearest the request
 //! in the metric of p' (|T x|^2 = x_v^2 + l^2 x_omega^2, a weighted sum of
-//! squares, whose nearest box point is the coordinate-wise clamp). This is
-//! the standard scaling of a saturated linearising controller (Siciliano et
-//! al. section 11.6.2 note the input bounds; the scaling keeps the
-//! closed-loop direction of the linearised system, as in velocity-scaling
-//! of saturated differential drives).
+//! squares, whose nearest box point is the coordinate-wise clamp), and what
+//! the world would do anyway. Siciliano et al. derive the linearising law
+//! without input bounds; the common scaling of (v, omega) is our choice of
+//! how to respect them, made so that the linearised closed loop p' = u
+//! keeps holding in direction, only slower.
 //!
 //! **4. Planners that know the model.** A planner that plans (v, omega)
 //! itself ([`Planner::native_unicycle`], [`crate::dwa`]) needs none of
@@ -311,6 +311,99 @@ mod tests {
         assert!(
             (v - 0.8).abs() < 1e-12 && (w - 0.4).abs() < 1e-12,
             "{v} {w}"
+        );
+    }
+
+    /// Records what it was shown; answers `answer`.
+    struct Probe {
+        answer: Command,
+        native: bool,
+        seen: std::sync::Arc<std::sync::Mutex<Option<(Vec2, Vec2, f64)>>>,
+    }
+
+    impl Planner for Probe {
+        fn plan(&mut self, obs: &Observation) -> Command {
+            *self.seen.lock().expect("probe") =
+                Some((obs.me.position, obs.me.velocity, obs.goal_tolerance));
+            self.answer
+        }
+        fn native_unicycle(&self) -> bool {
+            self.native
+        }
+    }
+
+    fn unicycle_me(heading: f64, v: f64, w: f64) -> crate::SelfState {
+        crate::SelfState {
+            id: 0,
+            position: Vec2::new(1.0, 2.0),
+            velocity: Vec2::new(heading.cos(), heading.sin()) * v,
+            radius: 0.25,
+            mass: 1.0,
+            damping: 0.0,
+            max_speed: LIMITS.max_speed,
+            max_accel: LIMITS.max_accel,
+            heading,
+            angular_velocity: w,
+            kinematics: Kinematics::Unicycle {
+                max_angular_speed: LIMITS.max_angular_speed,
+                max_angular_accel: LIMITS.max_angular_accel,
+            },
+        }
+    }
+
+    fn probe(answer: Command, native: bool) -> (LookAhead, impl Fn() -> (Vec2, Vec2, f64)) {
+        let seen = std::sync::Arc::new(std::sync::Mutex::new(None));
+        let p = Probe {
+            answer,
+            native,
+            seen: seen.clone(),
+        };
+        let read = move || seen.lock().expect("probe").expect("planned");
+        (LookAhead::new(Box::new(p), 0.05), read)
+    }
+
+    #[test]
+    fn a_holonomic_planner_sees_the_look_ahead_point_and_a_smaller_tolerance() {
+        let (mut la, seen) = probe(Command::Velocity(Vec2::new(0.5, 0.0)), false);
+        let mut obs =
+            crate::testkit::observation(unicycle_me(FRAC_PI_2, 0.4, 1.0), Vec2::zeros(), &[]);
+        obs.goal_tolerance = 0.1;
+        la.plan(&obs);
+        let (p, v, tol) = seen();
+        assert!((p - Vec2::new(1.0, 2.05)).norm() < 1e-12, "{p}");
+        // p' = v e + l omega e_perp = (0, 0.4) + 0.05 (-1, 0).
+        assert!((v - Vec2::new(-0.05, 0.4)).norm() < 1e-12, "{v}");
+        assert!((tol - 0.05).abs() < 1e-12, "{tol}");
+    }
+
+    #[test]
+    fn a_planner_of_its_own_unicycle_commands_sees_the_robot_itself() {
+        let answer = Command::Unicycle {
+            v: 0.3,
+            omega: -0.2,
+        };
+        let (mut la, seen) = probe(answer, true);
+        let obs = crate::testkit::observation(unicycle_me(0.3, 0.4, 1.0), Vec2::zeros(), &[]);
+        assert_eq!(la.plan(&obs), answer);
+        let (p, v, tol) = seen();
+        assert_eq!(
+            (p, v, tol),
+            (obs.me.position, obs.me.velocity, obs.goal_tolerance)
+        );
+    }
+
+    #[test]
+    fn a_sideways_request_from_rest_turns_as_far_as_one_tick_allows() {
+        // Heading +x at rest, asked 1 m/s along +y: T^-1 gives (0, 20);
+        // one tick reaches omega = 0.4, so (0, 0.4), p moving along +y.
+        let (mut la, _) = probe(Command::Velocity(Vec2::new(0.0, 1.0)), false);
+        let obs = crate::testkit::observation(unicycle_me(0.0, 0.0, 0.0), Vec2::zeros(), &[]);
+        let Command::Unicycle { v, omega } = la.plan(&obs) else {
+            panic!("a unicycle command");
+        };
+        assert!(
+            v.abs() < 1e-12 && (omega - 0.4).abs() < 1e-12,
+            "{v} {omega}"
         );
     }
 
