@@ -38,30 +38,21 @@
 //! with l >= `goal_tolerance` nothing can guarantee this and the planner
 //! keeps the world's tolerance, so keep `lookahead` below `goal_tolerance`).
 //!
-//! **3. Saturation that keeps the direction.** T^-1 is exact only while
-//! (v, omega) is within the robot's limits. The world clamps v to
-//! ±`max_speed` and omega to ±`max_angular_speed` independently, and a
-//! request beyond either (omega grows as 1/l: with l = 0.05 a sideways
-//! 0.1 m/s already asks 2 rad/s) would then move p in another direction
-//! than the planner asked: clamping omega alone keeps the forward part and
-//! drops part of the sideways one, so p swerves less than asked, overshoots
-//! and the planner's loop sees a motion it did not ask for. Since p' is
-//! linear in (v, omega), scaling both by one factor s in (0, 1] scales p'
-//! by s and keeps its direction; [`LookAhead::saturate`] takes the largest
-//! such s that keeps (v, omega) within the speed limits and within what the
-//! acceleration limits reach in one tick, the box
-//! [v_c - max_accel dt, v_c + max_accel dt] x
-//! [omega_c - max_angular_accel dt, omega_c + max_angular_accel dt] around
-//! the current (v_c, omega_c) (the dynamic window of Fox, Burgard & Thrun,
-//! section 3.1). If no s > 0 is reachable (the robot cannot slow its
-//! current turn or speed enough in one tick), each of v and omega is
-//! clamped to the box, which is the point of the box nearest the request
-//! in the metric of p' (|T x|^2 = x_v^2 + l^2 x_omega^2, a weighted sum of
-//! squares, whose nearest box point is the coordinate-wise clamp), and what
-//! the world would do anyway. Siciliano et al. derive the linearising law
-//! without input bounds; the common scaling of (v, omega) is our choice of
-//! how to respect them, made so that the linearised closed loop p' = u
-//! keeps holding in direction, only slower.
+//! **3. The limits.** T^-1 is exact only while (v, omega) is within the
+//! robot's limits; the world clamps v to ±`max_speed`, omega to
+//! ±`max_angular_speed` and their rates of change, each on its own. A
+//! request beyond the turn rate (omega grows as 1/l: with l = 0.05 a
+//! sideways 0.1 m/s already asks 2 rad/s) then moves p more along the
+//! heading than asked, and the planner sees that in its next observation
+//! and corrects. Scaling v and omega by one factor would keep p's direction
+//! instead (p' is linear in them), but it turns every saturated request
+//! into a near stop-and-turn, since with a small l almost every request
+//! with a sideways part is saturated. Measured on the unicycle crossing
+//! with every planner, that scaling (against the speed limits alone, or
+//! also against what the acceleration limits reach in one tick) made
+//! robots slower and no planner's goals more reachable, and gave more
+//! contacts (BENCHMARKS.md, "Unicycle robots"), so the controller leaves
+//! the limits to the world.
 //!
 //! **4. Planners that know the model.** A planner that plans (v, omega)
 //! itself ([`Planner::native_unicycle`], [`crate::dwa`]) needs none of
@@ -71,7 +62,7 @@
 //! holonomic robot nothing is converted.
 //!
 //! `l` is the robot's `lookahead` key: a small l follows u more tightly
-//! but turns harder (omega grows as 1/l, so saturation scales p' down more
+//! but turns harder (omega grows as 1/l, so the turn-rate limit binds more
 //! often), and the tolerance left to the planner is `goal_tolerance - l`.
 
 use crate::{Command, Diagnostic, Kinematics, Observation, Planner, Vec2};
@@ -80,19 +71,6 @@ use crate::{Command, Diagnostic, Kinematics, Observation, Planner, Vec2};
 pub struct LookAhead {
     inner: Box<dyn Planner>,
     lookahead: f64,
-}
-
-/// A unicycle's limits as [`LookAhead::saturate`] uses them.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Limits {
-    /// Forward-speed limit, m/s.
-    pub max_speed: f64,
-    /// Turn-rate limit, rad/s.
-    pub max_angular_speed: f64,
-    /// Forward-acceleration limit, m/s².
-    pub max_accel: f64,
-    /// Angular-acceleration limit, rad/s².
-    pub max_angular_accel: f64,
 }
 
 impl LookAhead {
@@ -120,61 +98,11 @@ impl LookAhead {
             tolerance
         }
     }
-
-    /// The command the robot can follow for the request `asked` = (v, omega)
-    /// from the current `current` = (v_c, omega_c) within `limits` over one
-    /// tick `dt` (module documentation, 3): `asked` scaled by the largest
-    /// s in (0, 1] that keeps it within the speed limits and the one-tick
-    /// acceleration box, or, when no s > 0 does, `asked` clamped to the
-    /// box.
-    pub fn saturate(asked: (f64, f64), current: (f64, f64), limits: Limits, dt: f64) -> (f64, f64) {
-        let dt = dt.max(0.0);
-        let boxes = [
-            (
-                asked.0,
-                (current.0 - limits.max_accel * dt).max(-limits.max_speed),
-                (current.0 + limits.max_accel * dt).min(limits.max_speed),
-            ),
-            (
-                asked.1,
-                (current.1 - limits.max_angular_accel * dt).max(-limits.max_angular_speed),
-                (current.1 + limits.max_angular_accel * dt).min(limits.max_angular_speed),
-            ),
-        ];
-        // The s with s * x in [lo, hi] for each coordinate form an
-        // interval; intersect them with (0, 1].
-        let (mut s_lo, mut s_hi) = (0.0f64, 1.0f64);
-        for &(x, lo, hi) in &boxes {
-            if x > 0.0 {
-                s_lo = s_lo.max(lo / x);
-                s_hi = s_hi.min(hi / x);
-            } else if x < 0.0 {
-                s_lo = s_lo.max(hi / x);
-                s_hi = s_hi.min(lo / x);
-            } else if lo > 0.0 || hi < 0.0 {
-                // 0 is outside the box: no multiple of x reaches it.
-                s_hi = f64::NEG_INFINITY;
-            }
-        }
-        if s_hi > 0.0 && s_lo <= s_hi {
-            (asked.0 * s_hi, asked.1 * s_hi)
-        } else {
-            let clamp = |(x, lo, hi): (f64, f64, f64)| x.clamp(lo, hi.max(lo));
-            (clamp(boxes[0]), clamp(boxes[1]))
-        }
-    }
 }
 
 impl Planner for LookAhead {
     fn plan(&mut self, obs: &Observation) -> Command {
-        let Kinematics::Unicycle {
-            max_angular_speed,
-            max_angular_accel,
-        } = obs.me.kinematics
-        else {
-            return self.inner.plan(obs);
-        };
-        if self.inner.native_unicycle() {
+        if obs.me.kinematics == Kinematics::Holonomic || self.inner.native_unicycle() {
             return self.inner.plan(obs);
         }
         let l = self.lookahead;
@@ -199,14 +127,7 @@ impl Planner for LookAhead {
                 me.velocity + a * obs.dt
             }
         };
-        let limits = Limits {
-            max_speed: me.max_speed,
-            max_angular_speed,
-            max_accel: me.max_accel,
-            max_angular_accel,
-        };
-        let asked = Self::unicycle_for(u, me.heading, l);
-        let (v, omega) = Self::saturate(asked, (v_c, w_c), limits, obs.dt);
+        let (v, omega) = Self::unicycle_for(u, me.heading, l);
         Command::Unicycle { v, omega }
     }
 
@@ -223,13 +144,6 @@ impl Planner for LookAhead {
 mod tests {
     use super::*;
     use std::f64::consts::FRAC_PI_2;
-
-    const LIMITS: Limits = Limits {
-        max_speed: 1.0,
-        max_angular_speed: 2.0,
-        max_accel: 2.0,
-        max_angular_accel: 4.0,
-    };
 
     /// p' = T(theta) (v, omega).
     fn point_velocity(v: f64, w: f64, theta: f64, l: f64) -> Vec2 {
@@ -261,59 +175,6 @@ mod tests {
         assert!((v - 1.0).abs() < 1e-15 && w.abs() < 1e-15);
     }
 
-    #[test]
-    fn a_request_within_the_limits_passes_unscaled() {
-        let out = LookAhead::saturate((0.9, 1.0), (0.8, 0.8), LIMITS, 0.1);
-        assert_eq!(out, (0.9, 1.0));
-    }
-
-    #[test]
-    fn a_turn_beyond_the_turn_rate_limit_is_scaled_with_its_speed() {
-        // Driving at 0.3 turning at 1.8, asked (0.5, 4): omega is capped at
-        // 2, so both halve and p still moves in the asked direction.
-        let (theta, l) = (0.7, 0.05);
-        let asked = (0.5, 4.0);
-        let (v, w) = LookAhead::saturate(asked, (0.3, 1.8), LIMITS, 0.1);
-        assert!(
-            (v - 0.25).abs() < 1e-12 && (w - 2.0).abs() < 1e-12,
-            "{v} {w}"
-        );
-        let want = point_velocity(asked.0, asked.1, theta, l);
-        let got = point_velocity(v, w, theta, l);
-        let cross = want.x * got.y - want.y * got.x;
-        assert!(cross.abs() < 1e-12 && want.dot(&got) > 0.0);
-    }
-
-    #[test]
-    fn a_speed_beyond_the_speed_limit_is_scaled_with_its_turn() {
-        let (v, w) = LookAhead::saturate((-2.0, 1.0), (-1.0, 0.5), LIMITS, 0.1);
-        assert!(
-            (v + 1.0).abs() < 1e-12 && (w - 0.5).abs() < 1e-12,
-            "{v} {w}"
-        );
-    }
-
-    #[test]
-    fn a_turn_beyond_the_angular_acceleration_is_scaled_to_what_one_tick_reaches() {
-        // From rest, omega reaches 0.4 in a tick of 0.1 s: (0.1, 2) -> (0.02, 0.4).
-        let (v, w) = LookAhead::saturate((0.1, 2.0), (0.0, 0.0), LIMITS, 0.1);
-        assert!(
-            (v - 0.02).abs() < 1e-12 && (w - 0.4).abs() < 1e-12,
-            "{v} {w}"
-        );
-    }
-
-    #[test]
-    fn a_request_no_scaling_reaches_is_clamped_to_the_reachable_box() {
-        // Driving at 1 m/s, asked to turn on the spot: v cannot drop below
-        // 0.8 in one tick, so no multiple of (0, 2) is reachable.
-        let (v, w) = LookAhead::saturate((0.0, 2.0), (1.0, 0.0), LIMITS, 0.1);
-        assert!(
-            (v - 0.8).abs() < 1e-12 && (w - 0.4).abs() < 1e-12,
-            "{v} {w}"
-        );
-    }
-
     /// Records what it was shown; answers `answer`.
     struct Probe {
         answer: Command,
@@ -340,13 +201,13 @@ mod tests {
             radius: 0.25,
             mass: 1.0,
             damping: 0.0,
-            max_speed: LIMITS.max_speed,
-            max_accel: LIMITS.max_accel,
+            max_speed: 1.0,
+            max_accel: 2.0,
             heading,
             angular_velocity: w,
             kinematics: Kinematics::Unicycle {
-                max_angular_speed: LIMITS.max_angular_speed,
-                max_angular_accel: LIMITS.max_angular_accel,
+                max_angular_speed: 2.0,
+                max_angular_accel: 4.0,
             },
         }
     }
@@ -393,18 +254,43 @@ mod tests {
     }
 
     #[test]
-    fn a_sideways_request_from_rest_turns_as_far_as_one_tick_allows() {
-        // Heading +x at rest, asked 1 m/s along +y: T^-1 gives (0, 20);
-        // one tick reaches omega = 0.4, so (0, 0.4), p moving along +y.
-        let (mut la, _) = probe(Command::Velocity(Vec2::new(0.0, 1.0)), false);
+    fn a_velocity_command_is_applied_to_the_look_ahead_point_unclamped() {
+        // Heading +y, asked (0.5, 0): v = 0, omega = -0.5 / 0.05 = -10,
+        // beyond the 2 rad/s limit: the world clamps it, not the controller.
+        let (mut la, _) = probe(Command::Velocity(Vec2::new(0.5, 0.0)), false);
+        let obs = crate::testkit::observation(unicycle_me(FRAC_PI_2, 0.0, 0.0), Vec2::zeros(), &[]);
+        let Command::Unicycle { v, omega } = la.plan(&obs) else {
+            panic!("a unicycle command");
+        };
+        assert!(
+            v.abs() < 1e-12 && (omega + 10.0).abs() < 1e-9,
+            "{v} {omega}"
+        );
+    }
+
+    #[test]
+    fn a_force_becomes_the_velocity_it_gives_the_point_in_one_tick() {
+        // At rest heading +x, a force of 10 N on 1 kg is clamped to
+        // max_accel 2: u = 0.2 m/s along the force, here +x: v = 0.2.
+        let (mut la, _) = probe(Command::Force(Vec2::new(10.0, 0.0)), false);
         let obs = crate::testkit::observation(unicycle_me(0.0, 0.0, 0.0), Vec2::zeros(), &[]);
         let Command::Unicycle { v, omega } = la.plan(&obs) else {
             panic!("a unicycle command");
         };
         assert!(
-            v.abs() < 1e-12 && (omega - 0.4).abs() < 1e-12,
+            (v - 0.2).abs() < 1e-12 && omega.abs() < 1e-12,
             "{v} {omega}"
         );
+    }
+
+    #[test]
+    fn a_holonomic_robot_gets_the_planner_command_unconverted() {
+        let (mut la, seen) = probe(Command::Velocity(Vec2::new(0.5, 0.1)), false);
+        let mut me = unicycle_me(0.0, 0.0, 0.0);
+        me.kinematics = Kinematics::Holonomic;
+        let obs = crate::testkit::observation(me, Vec2::zeros(), &[]);
+        assert_eq!(la.plan(&obs), Command::Velocity(Vec2::new(0.5, 0.1)));
+        assert_eq!(seen().0, obs.me.position);
     }
 
     #[test]
