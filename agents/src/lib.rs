@@ -192,8 +192,9 @@ pub fn build_planner_in(
 }
 
 /// On a unicycle robot the planner drives through the look-ahead point
-/// controller (`mrsim_planners::unicycle`), which passes a planner's own
-/// unicycle commands (dwa's) through unchanged; a holonomic robot's
+/// controller (`mrsim_planners::unicycle`), which hands a planner that
+/// plans (v, omega) itself (`Planner::native_unicycle`, dwa) the robot's
+/// own observation and passes its command unchanged; a holonomic robot's
 /// planner is used as built.
 fn fit_kinematics(spec: &RobotSpec, planner: Box<dyn Planner>) -> Box<dyn Planner> {
     match spec.kinematics {

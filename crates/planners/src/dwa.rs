@@ -66,7 +66,10 @@
 //! to `horizon`; admissible when v <= sqrt(2 dist(v, omega) a_max) with
 //! dist the arc length to the first contact (section 3.1, V_a); heading is
 //! 1 - |angle to the goal from the pose predicted after dt| / pi (section
-//! 3.2), clearance and speed as above.
+//! 3.2), clearance and speed as above. It says so
+//! ([`Planner::native_unicycle`]), so the look-ahead controller that
+//! drives the other planners on a unicycle ([`crate::unicycle`]) gives it
+//! the robot's own pose and goal tolerance, not the look-ahead point's.
 
 use crate::{
     Command, Kinematics, Observation, ParamError, ParamReader, Params, Planner, Segment, Vec2,
@@ -290,6 +293,10 @@ impl Planner for Dwa {
         }
         // No admissible velocity: the one that keeps contact furthest off.
         Command::Velocity(best.map_or(least_bad.1, |(_, v)| v))
+    }
+
+    fn native_unicycle(&self) -> bool {
+        true
     }
 }
 

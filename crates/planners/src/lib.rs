@@ -249,4 +249,13 @@ pub trait Planner: Send {
     fn diagnostics(&self) -> Vec<Diagnostic> {
         Vec::new()
     }
+
+    /// True for a planner that plans a unicycle robot's (v, omega) itself
+    /// (as [`dwa`] does): on a unicycle robot it then gets the robot's own
+    /// observation and its command is applied unchanged, instead of
+    /// driving through the look-ahead point ([`unicycle`]). The default,
+    /// false, suits a planner that commands a force or a velocity.
+    fn native_unicycle(&self) -> bool {
+        false
+    }
 }
