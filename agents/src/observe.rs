@@ -14,21 +14,23 @@
 //!
 //! A unicycle robot's heading is its body's (the snapshot's `heading`), and
 //! the observation says so ([`SelfState::heading`], `kinematics`). A robot
-//! with a `sensor` gets a laser scan each tick ([`mrsim_planners::lidar`]):
-//! cast from its centre along its heading (a holonomic robot's frame is the
-//! world's: heading 0) against every other body of the snapshot (true
-//! positions, whatever the sensing range) and every wall, with noise from
-//! [`Rng::lidar`], a stream per robot and tick, so the world's scan.csv
-//! repeats exactly what the planner saw.
+//! with a `sensor` gets a laser scan each tick ([`mrsim_lidar`]'s
+//! [`Scanner::scan_robot`], the function the world's scan.csv calls too, so
+//! the file repeats exactly what the planner saw): cast from its centre
+//! along its heading (a holonomic robot's frame is the world's: heading 0)
+//! against every other body of the snapshot (true positions, whatever the
+//! sensing range) and every wall, with noise from a stream per robot and
+//! tick.
 
+use mrsim_lidar::{Scanner, Walls};
 use mrsim_planners::estimate::VelocityEstimator;
-use mrsim_planners::lidar::{LaserScan, LidarConfig};
+use mrsim_planners::lidar::LaserScan;
 use mrsim_planners::{
     BodyKind, DesignatedPath, Kinematics, Observation, Segment, SelfState, Sensed, Vec2,
 };
 use mrsim_proto::{BodyState, SnapshotHeader, body_kind};
 use mrsim_scenario::rng::Rng;
-use mrsim_scenario::{Lidar, RobotSpec, Scenario, VelocitySource, WorldConfig};
+use mrsim_scenario::{RobotSpec, Scenario, VelocitySource, WorldConfig};
 
 /// Turns snapshots into observations for one robot; keeps the buffers.
 pub struct Observer {
@@ -43,49 +45,9 @@ pub struct Observer {
     seed: u64,
     /// The last scan, if the robot has a lidar.
     scan: LaserScan,
-}
-
-/// The planners' scanner configuration of a robot's `sensor`.
-pub fn lidar_config(l: &Lidar) -> LidarConfig {
-    LidarConfig {
-        beams: l.beams,
-        fov: l.fov_deg.to_radians(),
-        range: l.range,
-        noise: l.noise,
-    }
-}
-
-/// The scan of robot `me` (entry `spec`) in `bodies` among `walls`, as its
-/// observation gets it, into `out`; `false` (and `out` untouched) if the
-/// robot has no sensor. The world's scan.csv (`mrsim_world::scan`) computes
-/// the same, line for line.
-pub fn scan_of(
-    out: &mut LaserScan,
-    seed: u64,
-    tick: u64,
-    me: usize,
-    spec: &RobotSpec,
-    bodies: &[BodyState],
-    walls: &[Segment],
-) -> bool {
-    let (Some(sensor), Some(s)) = (&spec.sensor, bodies.get(me)) else {
-        return false;
-    };
-    let mut rng = Rng::lidar(seed, me as u64, tick);
-    mrsim_planners::lidar::scan(
-        out,
-        &lidar_config(sensor),
-        Vec2::new(s.position[0], s.position[1]),
-        s.heading,
-        bodies
-            .iter()
-            .enumerate()
-            .filter(|(k, _)| *k != me)
-            .map(|(_, b)| (Vec2::new(b.position[0], b.position[1]), b.radius)),
-        walls,
-        &mut || rng.gaussian(),
-    );
-    true
+    /// The scanner among the walls it was built for (their address and
+    /// length: a run's walls are fixed), built at the first scan.
+    scanner: Option<((usize, usize), Scanner)>,
 }
 
 impl Observer {
@@ -120,6 +82,7 @@ impl Observer {
             rng: Rng::stream(world.seed, "position-noise", me as u64),
             seed: world.seed,
             scan: LaserScan::default(),
+            scanner: None,
         }
     }
 
@@ -219,15 +182,25 @@ impl Observer {
         if let Some(e) = &mut self.estimator {
             e.apply(header.sim_time, &mut self.others);
         }
-        let scanned = scan_of(
-            &mut self.scan,
-            self.seed,
-            header.tick,
-            self.me,
-            spec,
-            bodies,
-            walls,
-        );
+        let scanned = spec.sensor.is_some() && {
+            let key = (walls.as_ptr() as usize, walls.len());
+            let scanner = match &mut self.scanner {
+                Some((k, s)) if *k == key => s,
+                slot => {
+                    &mut slot
+                        .insert((key, Scanner::new(Walls::from_segments(walls))))
+                        .1
+                }
+            };
+            scanner.scan_robot(
+                &mut self.scan,
+                self.seed,
+                header.tick,
+                self.me,
+                spec,
+                bodies,
+            )
+        };
         Observation {
             tick: header.tick,
             time: header.sim_time,
