@@ -61,7 +61,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let head = "[world]\ndt = 0.1\nsubsteps = 10\nduration = 60.0\n\
                 [defaults]\nradius = 0.25\nplanner = \"homing\"\n";
     let with_map = format!("{head}[map]\nfile = \"big.yaml\"\n{}", robots());
-    let without = format!("{head}\n{}", robots().replacen("[[robot]]", "[[robot]]", 1)).replace(
+    let without = format!("{head}\n{}", robots()).replace(
         "[world]\n",
         "[world]\narena = { min = [-9.8, -9.8], max = [9.8, 9.8] }\n",
     );
