@@ -131,7 +131,6 @@ impl Scanner {
     /// with the noise of robot `me` at `tick` under `seed`; `false` (and
     /// `out` untouched) if the robot has no sensor or is not in `bodies`.
     /// The agent's observation and the world's scan.csv both call this.
-    #[allow(clippy::too_many_arguments)]
     pub fn scan_robot(
         &mut self,
         out: &mut LaserScan,
