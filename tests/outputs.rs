@@ -73,6 +73,7 @@ fn parquet_holds_the_same_rows_as_the_csv_of_the_same_run() {
     let table =
         mrsim_runfolder::trajectory::read_parquet_trajectory(&pq.join("trajectory.parquet"))
             .expect("reads back");
+    assert!(!table.has_theta(), "no unicycle, no theta column");
     let lines = csv_lines(&csv);
     assert_eq!(lines[0], "tick,time,body,kind,x,y,vx,vy");
     assert_eq!(table.len(), lines.len() - 1, "row count");
@@ -137,4 +138,54 @@ fn without_a_trajectory_the_metrics_are_the_same_and_the_report_draws_the_scene(
     assert!(none.join("plot.svg").exists() && none.join("replay.html").exists());
     let page = std::fs::read_to_string(none.join("replay.html")).expect("replay.html");
     assert!(page.contains(r#""ticksRecorded":0"#));
+}
+
+/// Runs the lockstep unicycle crossing (4 unicycles, 5 s) in-process with
+/// `extra` settings; returns its folder.
+fn unicycle_crossing(tag: &str, extra: &[&str]) -> PathBuf {
+    let dir = fresh_dir(tag);
+    let mut args = vec![
+        "--transport",
+        "inproc",
+        "--quiet",
+        "--set",
+        "world.duration=5",
+    ];
+    for s in extra {
+        args.extend(["--set", s]);
+    }
+    let out = run(
+        &root().join("scenarios/unicycle-crossing.toml"),
+        &dir,
+        &run_id(tag),
+        &args,
+    );
+    assert_ok(&out);
+    dir
+}
+
+#[test]
+fn a_unicycle_run_in_parquet_keeps_every_heading_of_the_csv() {
+    let csv = unicycle_crossing("uc-csv", &[]);
+    let pq = unicycle_crossing("uc-parquet", &["output.trajectory=parquet"]);
+    let table =
+        mrsim_runfolder::trajectory::read_parquet_trajectory(&pq.join("trajectory.parquet"))
+            .expect("reads back");
+    assert!(table.has_theta(), "a unicycle run's Parquet file has theta");
+    let lines = csv_lines(&csv);
+    assert_eq!(lines[0], "tick,time,body,kind,x,y,vx,vy,theta");
+    assert_eq!(table.len(), lines.len() - 1, "row count");
+    let mut turned = 0;
+    for (row, line) in table.rows().zip(&lines[1..]) {
+        let theta = row.theta.expect("every row has a heading");
+        let written = format!(
+            "{},{:.6},{},{},{:.6},{:.6},{:.6},{:.6},{:.6}",
+            row.tick, row.time, row.body, row.kind, row.x, row.y, row.vx, row.vy, theta
+        );
+        assert_eq!(&written, line);
+        turned += usize::from(theta.abs() > 0.1);
+    }
+    // Stream b starts facing +y: headings other than 0 are written.
+    assert!(turned > 0, "no heading away from 0");
+    assert_eq!(motion(&csv), motion(&pq));
 }

@@ -12,23 +12,32 @@
 //! ([`VelocityEstimator`]). With `"truth"` the velocity is the snapshot's and
 //! the acceleration zero.
 //!
+//! With a finite `sensing_range` the planner gets only the walls near it:
+//! every chain of walls (segments joined end to end, such as a room's
+//! outline or the arena) with a segment within the sensing range plus the
+//! robot's radius of its centre, whole and in the run's order, so a
+//! planner that joins walls into polygons (orca) sees the same polygons
+//! ([`NearWalls`]). With an infinite range (the default) it gets them all.
+//!
 //! A unicycle robot's heading is its body's (the snapshot's `heading`), and
 //! the observation says so ([`SelfState::heading`], `kinematics`). A robot
-//! with a `sensor` gets a laser scan each tick ([`mrsim_planners::lidar`]):
-//! cast from its centre along its heading (a holonomic robot's frame is the
-//! world's: heading 0) against every other body of the snapshot (true
-//! positions, whatever the sensing range) and every wall, with noise from
-//! [`Rng::lidar`], a stream per robot and tick, so the world's scan.csv
-//! repeats exactly what the planner saw.
+//! with a `sensor` gets a laser scan each tick ([`mrsim_lidar`]'s
+//! [`Scanner::scan_robot`], the function the world's scan.csv calls too, so
+//! the file repeats exactly what the planner saw): cast from its centre
+//! along its heading (a holonomic robot's frame is the world's: heading 0)
+//! against every other body of the snapshot (true positions, whatever the
+//! sensing range) and every wall, with noise from a stream per robot and
+//! tick.
 
+use mrsim_lidar::{Scanner, Walls};
 use mrsim_planners::estimate::VelocityEstimator;
-use mrsim_planners::lidar::{LaserScan, LidarConfig};
+use mrsim_planners::lidar::LaserScan;
 use mrsim_planners::{
     BodyKind, DesignatedPath, Kinematics, Observation, Segment, SelfState, Sensed, Vec2,
 };
 use mrsim_proto::{BodyState, SnapshotHeader, body_kind};
 use mrsim_scenario::rng::Rng;
-use mrsim_scenario::{Lidar, RobotSpec, Scenario, VelocitySource, WorldConfig};
+use mrsim_scenario::{RobotSpec, Scenario, VelocitySource, WorldConfig};
 
 /// Turns snapshots into observations for one robot; keeps the buffers.
 pub struct Observer {
@@ -43,49 +52,207 @@ pub struct Observer {
     seed: u64,
     /// The last scan, if the robot has a lidar.
     scan: LaserScan,
+    /// The scanner among the walls it was built for (their address and
+    /// length: a run's walls are fixed), built at the first scan.
+    scanner: Option<((usize, usize), Scanner)>,
+    /// The walls near the robot, if its sensing range is finite: the
+    /// index among the walls it was built for (as `scanner`).
+    near_walls: Option<((usize, usize), WallsBox)>,
 }
 
-/// The planners' scanner configuration of a robot's `sensor`.
-pub fn lidar_config(l: &Lidar) -> LidarConfig {
-    LidarConfig {
-        beams: l.beams,
-        fov: l.fov_deg.to_radians(),
-        range: l.range,
-        noise: l.noise,
+/// The box of a run's walls, and their [`NearWalls`] index once a robot
+/// is out of reach of some wall (never with the default sensing range,
+/// 1e9, so most runs build none).
+struct WallsBox {
+    lo: Vec2,
+    hi: Vec2,
+    index: Option<NearWalls>,
+}
+
+impl WallsBox {
+    fn new(walls: &[Segment]) -> Self {
+        let (mut lo, mut hi) = (Vec2::repeat(f64::INFINITY), Vec2::repeat(f64::NEG_INFINITY));
+        for p in walls.iter().flat_map(|w| [w.a, w.b]) {
+            lo = lo.inf(&p);
+            hi = hi.sup(&p);
+        }
+        Self {
+            lo,
+            hi,
+            index: None,
+        }
+    }
+
+    /// True if every wall is within `reach` of `p` (the box's farthest
+    /// corner is).
+    fn all_within(&self, p: Vec2, reach: f64) -> bool {
+        let far = (p - self.lo).abs().sup(&(p - self.hi).abs());
+        far.norm() <= reach
     }
 }
 
-/// The scan of robot `me` (entry `spec`) in `bodies` among `walls`, as its
-/// observation gets it, into `out`; `false` (and `out` untouched) if the
-/// robot has no sensor. The world's scan.csv (`mrsim_world::scan`) computes
-/// the same, line for line.
-pub fn scan_of(
-    out: &mut LaserScan,
-    seed: u64,
-    tick: u64,
-    me: usize,
-    spec: &RobotSpec,
-    bodies: &[BodyState],
-    walls: &[Segment],
-) -> bool {
-    let (Some(sensor), Some(s)) = (&spec.sensor, bodies.get(me)) else {
-        return false;
-    };
-    let mut rng = Rng::lidar(seed, me as u64, tick);
-    mrsim_planners::lidar::scan(
-        out,
-        &lidar_config(sensor),
-        Vec2::new(s.position[0], s.position[1]),
-        s.heading,
-        bodies
+/// The chains of a run's walls and a grid of their segments, built once,
+/// to give a robot the chains within a distance of it each tick.
+struct NearWalls {
+    /// Chain of each segment.
+    chain_of: Vec<u32>,
+    /// Segments of each chain, ascending.
+    chains: Vec<Vec<u32>>,
+    /// A grid over the walls' box: cell `(i, j)` holds the segments whose
+    /// box meets it, `cells[start[c]..start[c + 1]]`.
+    lo: [f64; 2],
+    cell: f64,
+    dims: [usize; 2],
+    start: Vec<u32>,
+    cells: Vec<u32>,
+    /// The tick stamp of each chain taken (`stamp`: this query's).
+    taken: Vec<u32>,
+    stamp: u32,
+    picked: Vec<u32>,
+    out: Vec<Segment>,
+}
+
+impl NearWalls {
+    /// Cells across the grid's longer side at most.
+    const MAX_CELLS: f64 = 64.0;
+
+    /// The index of `walls`, for queries of about `reach`.
+    fn new(walls: &[Segment], reach: f64) -> Self {
+        // Chains: segments sharing an end (bit for bit, as traced).
+        let mut parent: Vec<u32> = (0..walls.len() as u32).collect();
+        fn root(parent: &mut [u32], mut i: u32) -> u32 {
+            while parent[i as usize] != i {
+                let up = parent[parent[i as usize] as usize];
+                parent[i as usize] = up;
+                i = up;
+            }
+            i
+        }
+        let mut ends: std::collections::HashMap<(u64, u64), u32> = Default::default();
+        for (k, w) in walls.iter().enumerate() {
+            for p in [w.a, w.b] {
+                let other = *ends
+                    .entry((p.x.to_bits(), p.y.to_bits()))
+                    .or_insert(k as u32);
+                let (a, b) = (root(&mut parent, other), root(&mut parent, k as u32));
+                parent[a.max(b) as usize] = a.min(b);
+            }
+        }
+        let mut chain_id = vec![u32::MAX; walls.len()];
+        let mut chains: Vec<Vec<u32>> = Vec::new();
+        let mut chain_of = Vec::with_capacity(walls.len());
+        for k in 0..walls.len() as u32 {
+            let r = root(&mut parent, k) as usize;
+            if chain_id[r] == u32::MAX {
+                chain_id[r] = chains.len() as u32;
+                chains.push(Vec::new());
+            }
+            chain_of.push(chain_id[r]);
+            chains[chain_id[r] as usize].push(k);
+        }
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for w in walls {
+            for p in [w.a, w.b] {
+                lo = [lo[0].min(p.x), lo[1].min(p.y)];
+                hi = [hi[0].max(p.x), hi[1].max(p.y)];
+            }
+        }
+        let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-9);
+        let cell = reach.max(extent / Self::MAX_CELLS).max(1e-9);
+        let dims = [
+            ((hi[0] - lo[0]) / cell) as usize + 1,
+            ((hi[1] - lo[1]) / cell) as usize + 1,
+        ];
+        let at = |v: f64, k: usize| (((v - lo[k]) / cell).max(0.0) as usize).min(dims[k] - 1);
+        let boxes: Vec<[usize; 4]> = walls
             .iter()
-            .enumerate()
-            .filter(|(k, _)| *k != me)
-            .map(|(_, b)| (Vec2::new(b.position[0], b.position[1]), b.radius)),
-        walls,
-        &mut || rng.gaussian(),
-    );
-    true
+            .map(|w| {
+                let (x0, x1) = (w.a.x.min(w.b.x), w.a.x.max(w.b.x));
+                let (y0, y1) = (w.a.y.min(w.b.y), w.a.y.max(w.b.y));
+                [at(x0, 0), at(x1, 0), at(y0, 1), at(y1, 1)]
+            })
+            .collect();
+        let mut count = vec![0u32; dims[0] * dims[1] + 1];
+        for b in &boxes {
+            for j in b[2]..=b[3] {
+                for i in b[0]..=b[1] {
+                    count[j * dims[0] + i + 1] += 1;
+                }
+            }
+        }
+        for c in 1..count.len() {
+            count[c] += count[c - 1];
+        }
+        let start = count.clone();
+        let mut cells = vec![0u32; *count.last().unwrap_or(&0) as usize];
+        for (k, b) in boxes.iter().enumerate() {
+            for j in b[2]..=b[3] {
+                for i in b[0]..=b[1] {
+                    let c = j * dims[0] + i;
+                    cells[count[c] as usize] = k as u32;
+                    count[c] += 1;
+                }
+            }
+        }
+        Self {
+            taken: vec![0; chains.len()],
+            chain_of,
+            chains,
+            lo,
+            cell,
+            dims,
+            start,
+            cells,
+            stamp: 0,
+            picked: Vec::new(),
+            out: Vec::new(),
+        }
+    }
+
+    /// The chains of `walls` (the ones this index was built for) with a
+    /// segment within `reach` of `p`; `None` if that is all of them.
+    fn near(&mut self, walls: &[Segment], p: Vec2, reach: f64) -> Option<&[Segment]> {
+        self.stamp = self.stamp.wrapping_add(1);
+        if self.stamp == 0 {
+            self.taken.fill(0);
+            self.stamp = 1;
+        }
+        let mut chains = 0;
+        let at = |v: f64, k: usize| {
+            let c = ((v - self.lo[k]) / self.cell).floor();
+            c.clamp(0.0, (self.dims[k] - 1) as f64) as usize
+        };
+        let (i0, i1) = (at(p.x - reach, 0), at(p.x + reach, 0));
+        let (j0, j1) = (at(p.y - reach, 1), at(p.y + reach, 1));
+        for j in j0..=j1 {
+            for i in i0..=i1 {
+                let c = j * self.dims[0] + i;
+                for &k in &self.cells[self.start[c] as usize..self.start[c + 1] as usize] {
+                    let chain = self.chain_of[k as usize] as usize;
+                    if self.taken[chain] != self.stamp
+                        && (walls[k as usize].closest_point(p) - p).norm() <= reach
+                    {
+                        self.taken[chain] = self.stamp;
+                        chains += 1;
+                    }
+                }
+            }
+        }
+        if chains == self.chains.len() {
+            return None;
+        }
+        self.picked.clear();
+        for (c, segments) in self.chains.iter().enumerate() {
+            if self.taken[c] == self.stamp {
+                self.picked.extend_from_slice(segments);
+            }
+        }
+        self.picked.sort_unstable();
+        self.out.clear();
+        self.out
+            .extend(self.picked.iter().map(|&k| walls[k as usize]));
+        Some(&self.out)
+    }
 }
 
 impl Observer {
@@ -120,6 +287,8 @@ impl Observer {
             rng: Rng::stream(world.seed, "position-noise", me as u64),
             seed: world.seed,
             scan: LaserScan::default(),
+            scanner: None,
+            near_walls: None,
         }
     }
 
@@ -219,15 +388,42 @@ impl Observer {
         if let Some(e) = &mut self.estimator {
             e.apply(header.sim_time, &mut self.others);
         }
-        let scanned = scan_of(
-            &mut self.scan,
-            self.seed,
-            header.tick,
-            self.me,
-            spec,
-            bodies,
-            walls,
-        );
+        let scanned = spec.sensor.is_some() && {
+            let key = (walls.as_ptr() as usize, walls.len());
+            let scanner = match &mut self.scanner {
+                Some((k, s)) if *k == key => s,
+                slot => {
+                    &mut slot
+                        .insert((key, Scanner::new(Walls::from_segments(walls))))
+                        .1
+                }
+            };
+            scanner.scan_robot(
+                &mut self.scan,
+                self.seed,
+                header.tick,
+                self.me,
+                spec,
+                bodies,
+            )
+        };
+        let reach = spec.sensing_range + spec.radius;
+        let near_walls = if reach.is_finite() && !walls.is_empty() {
+            let key = (walls.as_ptr() as usize, walls.len());
+            if !matches!(&self.near_walls, Some((k, _)) if *k == key) {
+                self.near_walls = Some((key, WallsBox::new(walls)));
+            }
+            match &mut self.near_walls {
+                Some((_, b)) if !b.all_within(position, reach) => b
+                    .index
+                    .get_or_insert_with(|| NearWalls::new(walls, reach))
+                    .near(walls, position, reach)
+                    .unwrap_or(walls),
+                _ => walls,
+            }
+        } else {
+            walls
+        };
         Observation {
             tick: header.tick,
             time: header.sim_time,
@@ -256,9 +452,90 @@ impl Observer {
             goal_tolerance: spec.goal_tolerance,
             goal_hold_ticks: spec.goal_hold_ticks,
             others: &self.others,
-            walls,
+            walls: near_walls,
             path,
             scan: scanned.then_some(&self.scan),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The square of side `s` at `(x, y)` (lower left), as four walls.
+    fn square(x: f64, y: f64, s: f64) -> Vec<Segment> {
+        let c = [(x, y), (x + s, y), (x + s, y + s), (x, y + s)];
+        (0..4)
+            .map(|k| Segment {
+                a: Vec2::new(c[k].0, c[k].1),
+                b: Vec2::new(c[(k + 1) % 4].0, c[(k + 1) % 4].1),
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_robot_gets_the_whole_outlines_within_its_reach_and_no_others() {
+        // Pillars at x = 0, 10, 20, ..., 90 and one long wall far below.
+        let mut walls: Vec<Segment> = (0..10)
+            .flat_map(|k| square(10.0 * k as f64, 0.0, 1.0))
+            .collect();
+        walls.push(Segment {
+            a: Vec2::new(0.0, -50.0),
+            b: Vec2::new(100.0, -50.0),
+        });
+        let mut near = NearWalls::new(&walls, 2.5);
+        // From (12.5, 0.5): the pillar at 10 (its right side 1.5 away),
+        // whole, all four sides; nothing else within 2.5.
+        let got = near
+            .near(&walls, Vec2::new(12.5, 0.5), 2.5)
+            .expect("a few")
+            .to_vec();
+        assert_eq!(got, walls[4..8].to_vec());
+        // Between two pillars: both, in the walls' order.
+        let got = near
+            .near(&walls, Vec2::new(25.5, 0.5), 5.0)
+            .expect("a few")
+            .to_vec();
+        assert_eq!(got, walls[8..16].to_vec());
+        // Far from everything: nothing.
+        assert_eq!(near.near(&walls, Vec2::new(50.0, 30.0), 2.5), Some(&[][..]));
+        // Within reach of all: `None`, the caller gives them all.
+        assert_eq!(near.near(&walls, Vec2::new(50.0, 0.0), 500.0), None);
+    }
+
+    #[test]
+    fn every_wall_within_reach_is_given_whatever_the_grid_cells() {
+        // Pseudo-random separate segments: the index gives exactly those
+        // within reach (each its own chain), in order.
+        let mut x: u64 = 3;
+        let mut next = || {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (x >> 11) as f64 / (1u64 << 53) as f64 * 100.0
+        };
+        let walls: Vec<Segment> = (0..300)
+            .map(|_| {
+                let a = Vec2::new(next(), next());
+                Segment {
+                    a,
+                    b: a + Vec2::new(next() / 10.0 - 5.0, next() / 10.0 - 5.0),
+                }
+            })
+            .collect();
+        let mut near = NearWalls::new(&walls, 4.0);
+        for _ in 0..50 {
+            let p = Vec2::new(next(), next());
+            let want: Vec<Segment> = walls
+                .iter()
+                .filter(|w| (w.closest_point(p) - p).norm() <= 4.0)
+                .copied()
+                .collect();
+            let got = near
+                .near(&walls, p, 4.0)
+                .map_or(walls.clone(), <[_]>::to_vec);
+            assert_eq!(got, want, "from {p:?}");
         }
     }
 }

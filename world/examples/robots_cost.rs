@@ -1,12 +1,17 @@
 //! BENCHMARKS.md "Robots, scans and maps": the cost of a 400 x 400 map's
-//! load, of 64 robots' 360-beam scans, and of the world's tick with that
-//! map against the same scene without it. The map is made here (a 20 m
-//! square at 0.05 m a cell, a border and a 9 x 9 grid of 0.5 m pillars),
-//! not committed. Run with
+//! load, of 64 robots' 360-beam scans (in that map and in the shipped
+//! office map; all in one thread, as the world would compute them, and
+//! each robot's on its own in threads over every CPU, as the agents do),
+//! and of the world's tick with that map against the same scene without
+//! it. The map is made here (a 20 m square at 0.05 m a cell, a border and
+//! a 9 x 9 grid of 0.5 m pillars), not committed. Run with
 //! `cargo run --release -p mrsim-world --example robots_cost`.
 
-use mrsim_planners::lidar::{LaserScan, LidarConfig};
-use mrsim_planners::{Segment, Vec2};
+use mrsim_lidar::{Scanner, Walls};
+use mrsim_planners::lidar::LaserScan;
+use mrsim_proto::BodyState;
+use mrsim_scenario::map::OccupancyMap;
+use mrsim_scenario::{Lidar, Scenario, UnknownCells};
 use std::time::Instant;
 
 const CELLS: usize = 400;
@@ -56,7 +61,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let head = "[world]\ndt = 0.1\nsubsteps = 10\nduration = 60.0\n\
                 [defaults]\nradius = 0.25\nplanner = \"homing\"\n";
     let with_map = format!("{head}[map]\nfile = \"big.yaml\"\n{}", robots());
-    let without = format!("{head}\n{}", robots().replacen("[[robot]]", "[[robot]]", 1)).replace(
+    let without = format!("{head}\n{}", robots()).replace(
         "[world]\n",
         "[world]\narena = { min = [-9.8, -9.8], max = [9.8, 9.8] }\n",
     );
@@ -102,47 +107,117 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
     }
 
-    // Scans: 64 robots x 360 beams, range 10, among the map's walls and
-    // the 63 other discs.
-    let segs: Vec<Segment> = with
-        .all_walls()
-        .iter()
-        .map(|w| Segment {
-            a: Vec2::new(w[0][0], w[0][1]),
-            b: Vec2::new(w[1][0], w[1][1]),
+    // Scans: 64 robots x 360 beams, range 10, among the big map's walls
+    // and among the office map's (64 robots on its free cells).
+    scan_costs(
+        "400 x 400 map",
+        &with,
+        with.robots.iter().map(|r| r.start).collect(),
+    )?;
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let office = mrsim_scenario::load(&root.join("scenarios/maps/office.toml"))?.scenario;
+    let grid = mrsim_scenario::map::load(&root.join("scenarios/maps/office.yaml"))?;
+    scan_costs("office map", &office, free_points(&grid, 64))?;
+    std::fs::remove_dir_all(&dir)?;
+    Ok(())
+}
+
+/// `n` points spread over the free cells of `grid` with 0.4 m free around.
+fn free_points(grid: &OccupancyMap, n: usize) -> Vec<[f64; 2]> {
+    let free = |p: [f64; 2]| {
+        [-0.4, 0.0, 0.4].iter().all(|dx| {
+            [-0.4, 0.0, 0.4].iter().all(|dy| {
+                grid.cell_of([p[0] + dx, p[1] + dy])
+                    .is_some_and(|(i, j)| !grid.is_wall(i, j, UnknownCells::Occupied))
+            })
         })
-        .collect();
-    let discs: Vec<(Vec2, f64)> = with
-        .robots
-        .iter()
-        .map(|r| (Vec2::new(r.start[0], r.start[1]), r.radius))
-        .collect();
-    let cfg = LidarConfig {
-        beams: 360,
-        fov: std::f64::consts::TAU,
-        range: 10.0,
-        noise: 0.0,
     };
-    let mut scan = LaserScan::default();
-    let rounds = 20;
-    let t = Instant::now();
-    for _ in 0..rounds {
-        for (me, (p, _)) in discs.iter().enumerate() {
-            let others = discs
-                .iter()
-                .enumerate()
-                .filter(|(k, _)| *k != me)
-                .map(|(_, d)| *d);
-            mrsim_planners::lidar::scan(&mut scan, &cfg, *p, 0.0, others, &segs, &mut || 0.0);
+    let mut all = Vec::new();
+    for j in -70..70 {
+        for i in -120..120 {
+            let p = [f64::from(i) * 0.1, f64::from(j) * 0.1];
+            if free(p) {
+                all.push(p);
+            }
         }
     }
-    let per_tick = t.elapsed().as_secs_f64() * 1e6 / rounds as f64;
+    let step = (all.len() / n).max(1);
+    all.into_iter().step_by(step).take(n).collect()
+}
+
+/// Prints the cost of one tick's scans of robots at `at` (360 beams,
+/// 10 m) among the walls of `scenario`: every scan in one thread with one
+/// scanner (the world's way), and each robot's own scanner in threads
+/// over every CPU (the agents' way: what a tick waits for).
+fn scan_costs(
+    name: &str,
+    scenario: &Scenario,
+    at: Vec<[f64; 2]>,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let segments = scenario.all_walls();
+    let t = Instant::now();
+    let walls = Walls::new(segments.iter().copied());
+    let build_us = t.elapsed().as_secs_f64() * 1e6;
+    let mut spec = scenario.robots.first().ok_or("no robot")?.clone();
+    spec.sensor = Some(Lidar {
+        beams: 360,
+        fov_deg: 360.0,
+        range: 10.0,
+        noise: 0.0,
+        record: false,
+    });
+    let bodies: Vec<BodyState> = at
+        .iter()
+        .enumerate()
+        .map(|(i, p)| BodyState {
+            id: i as u32,
+            position: *p,
+            radius: spec.radius,
+            heading: 0.3 * i as f64,
+            ..Default::default()
+        })
+        .collect();
+    let n = bodies.len();
+    let rounds = 50;
+    // The world's way: one thread, one scanner, every robot each tick.
+    let mut scanner = Scanner::new(walls.clone());
+    let mut scan = LaserScan::default();
+    let mut hits = 0usize;
+    let t = Instant::now();
+    for tick in 0..rounds {
+        for me in 0..n {
+            scanner.scan_robot(&mut scan, 1, tick, me, &spec, &bodies);
+            hits += scan.ranges.iter().filter(|r| r.is_finite()).count();
+        }
+    }
+    let serial_us = t.elapsed().as_secs_f64() * 1e6 / rounds as f64;
+    // The agents' way: each robot its own scanner, the robots shared out
+    // over one thread per CPU.
+    let cpus = std::thread::available_parallelism().map_or(1, |c| c.get());
+    let mut scanners: Vec<Scanner> = (0..n).map(|_| Scanner::new(walls.clone())).collect();
+    let t = Instant::now();
+    for tick in 0..rounds {
+        std::thread::scope(|s| {
+            for (c, chunk) in scanners.chunks_mut(n.div_ceil(cpus)).enumerate() {
+                let (bodies, spec) = (&bodies, &spec);
+                s.spawn(move || {
+                    let mut scan = LaserScan::default();
+                    for (k, sc) in chunk.iter_mut().enumerate() {
+                        let me = c * n.div_ceil(cpus) + k;
+                        sc.scan_robot(&mut scan, 1, tick, me, spec, bodies);
+                    }
+                });
+            }
+        });
+    }
+    let parallel_us = t.elapsed().as_secs_f64() * 1e6 / rounds as f64;
     println!(
-        "scans, 64 robots x 360 beams among {} walls: {:.0} us per tick for all ({:.0} us per scan)",
-        segs.len(),
-        per_tick,
-        per_tick / 64.0
+        "scans, {name}, {n} robots x 360 beams among {} walls (built in {build_us:.0} us): \
+         one thread {serial_us:.0} us/tick ({:.0} us a scan, {:.0}% of beams hit); \
+         {cpus} threads {parallel_us:.0} us/tick",
+        walls.len(),
+        serial_us / n as f64,
+        100.0 * hits as f64 / (rounds as usize * n * 360) as f64,
     );
-    std::fs::remove_dir_all(&dir)?;
     Ok(())
 }

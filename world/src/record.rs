@@ -116,7 +116,7 @@ impl Sink {
                 Sink::Csv(traj, theta)
             }
             TrajectoryFormat::Parquet => Sink::Parquet(Box::new(
-                ParquetTrajectoryWriter::create(&parquet).map_err(std::io::Error::other)?,
+                ParquetTrajectoryWriter::create(&parquet, theta).map_err(std::io::Error::other)?,
             )),
             TrajectoryFormat::None => Sink::None,
         })
@@ -198,7 +198,8 @@ fn csv_rows(
     }
 }
 
-/// Adds one tick's rows to the Parquet file (the CSV's columns, typed).
+/// Adds one tick's rows to the Parquet file (the CSV's columns, typed;
+/// the heading goes to the `theta` column if the file has one).
 fn parquet_rows(
     w: &mut ParquetTrajectoryWriter,
     labels: &mut Labels,
@@ -208,7 +209,7 @@ fn parquet_rows(
 ) -> std::io::Result<()> {
     for b in bodies {
         let state = [b.position[0], b.position[1], b.velocity[0], b.velocity[1]];
-        w.push(tick, time, &labels.of(b, names).cells, state)
+        w.push(tick, time, &labels.of(b, names).cells, state, b.heading)
             .map_err(std::io::Error::other)?;
     }
     Ok(())

@@ -1,8 +1,8 @@
 //! scan.csv: the laser scans of the robots whose `sensor` has
 //! `record = true`, one row per robot and tick, written by the recording
 //! thread. Each scan is computed here again, by the function the agent's
-//! observation uses ([`mrsim_planners::lidar::scan`], with the same bodies,
-//! walls and per-tick noise stream [`Rng::lidar`]), from the states of the
+//! observation uses ([`mrsim_lidar::Scanner::scan_robot`], with the same
+//! bodies, walls and per-tick noise stream), from the states of the
 //! trajectory row of the same tick: the very scan the planner got.
 //!
 //! Columns: `tick,robot,angle_min,angle_increment,range_max,r0,...`; angles
@@ -11,11 +11,10 @@
 //! six decimals, `inf` where a beam hit nothing within `range_max`. Robots
 //! with fewer beams than the most leave the last fields empty.
 
-use mrsim_planners::lidar::{LaserScan, LidarConfig};
-use mrsim_planners::{Segment, Vec2};
+use mrsim_lidar::{Scanner, Walls};
+use mrsim_planners::lidar::LaserScan;
 use mrsim_proto::BodyState;
-use mrsim_scenario::Scenario;
-use mrsim_scenario::rng::Rng;
+use mrsim_scenario::{RobotSpec, Scenario};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::Path;
@@ -26,9 +25,9 @@ pub const SCAN_FILE: &str = "scan.csv";
 /// Writes scan.csv.
 pub struct ScanWriter {
     out: BufWriter<File>,
-    /// (robot index, name, scanner) of every recorded robot.
-    robots: Vec<(usize, String, LidarConfig)>,
-    walls: Vec<Segment>,
+    /// (robot index, entry) of every recorded robot.
+    robots: Vec<(usize, RobotSpec)>,
+    scanner: Scanner,
     seed: u64,
     width: usize,
     scan: LaserScan,
@@ -39,46 +38,31 @@ impl ScanWriter {
     /// Creates scan.csv in `dir` if a robot of `scenario` records its
     /// scans; `None` otherwise.
     pub fn create(dir: &Path, scenario: &Scenario) -> std::io::Result<Option<Self>> {
-        let robots: Vec<(usize, String, LidarConfig)> = scenario
+        let robots: Vec<(usize, RobotSpec)> = scenario
             .robots
             .iter()
             .enumerate()
-            .filter_map(|(i, r)| {
-                let l = r.sensor.filter(|l| l.record)?;
-                Some((
-                    i,
-                    r.name.clone(),
-                    LidarConfig {
-                        beams: l.beams,
-                        fov: l.fov_deg.to_radians(),
-                        range: l.range,
-                        noise: l.noise,
-                    },
-                ))
-            })
+            .filter(|(_, r)| r.sensor.is_some_and(|l| l.record))
+            .map(|(i, r)| (i, r.clone()))
             .collect();
         if robots.is_empty() {
             return Ok(None);
         }
-        let width = robots.iter().map(|r| r.2.beams as usize).max().unwrap_or(0);
+        let width = robots
+            .iter()
+            .filter_map(|(_, r)| r.sensor.map(|l| l.beams as usize))
+            .max()
+            .unwrap_or(0);
         let mut out = BufWriter::new(File::create(dir.join(SCAN_FILE))?);
         write!(out, "tick,robot,angle_min,angle_increment,range_max")?;
         for k in 0..width {
             write!(out, ",r{k}")?;
         }
         writeln!(out)?;
-        let walls = scenario
-            .all_walls()
-            .iter()
-            .map(|w| Segment {
-                a: Vec2::new(w[0][0], w[0][1]),
-                b: Vec2::new(w[1][0], w[1][1]),
-            })
-            .collect();
         Ok(Some(Self {
             out,
             robots,
-            walls,
+            scanner: Scanner::new(Walls::new(scenario.all_walls())),
             seed: scenario.world.seed,
             width,
             scan: LaserScan::default(),
@@ -89,27 +73,18 @@ impl ScanWriter {
     /// Writes the scans of tick `tick` (every body's state in `bodies`).
     pub fn write(&mut self, tick: u64, bodies: &[BodyState]) -> std::io::Result<()> {
         use std::fmt::Write as _;
-        for (me, name, config) in &self.robots {
-            let Some(s) = bodies.get(*me) else { continue };
-            let mut rng = Rng::lidar(self.seed, *me as u64, tick);
-            mrsim_planners::lidar::scan(
-                &mut self.scan,
-                config,
-                Vec2::new(s.position[0], s.position[1]),
-                s.heading,
-                bodies
-                    .iter()
-                    .enumerate()
-                    .filter(|(k, _)| k != me)
-                    .map(|(_, b)| (Vec2::new(b.position[0], b.position[1]), b.radius)),
-                &self.walls,
-                &mut || rng.gaussian(),
-            );
+        for (me, spec) in &self.robots {
+            if !self
+                .scanner
+                .scan_robot(&mut self.scan, self.seed, tick, *me, spec, bodies)
+            {
+                continue;
+            }
             self.line.clear();
             let _ = write!(
                 self.line,
-                "{tick},{name},{},{},{}",
-                self.scan.angle_min, self.scan.angle_increment, self.scan.range_max
+                "{tick},{},{},{},{}",
+                spec.name, self.scan.angle_min, self.scan.angle_increment, self.scan.range_max
             );
             for r in &self.scan.ranges {
                 let _ = if r.is_finite() {

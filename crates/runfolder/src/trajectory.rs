@@ -9,9 +9,11 @@
 //! | `kind` | BYTE_ARRAY, UTF8 (dictionary) | `robot` or `obstacle` |
 //! | `x`, `y` | DOUBLE | position |
 //! | `vx`, `vy` | DOUBLE | velocity |
+//! | `theta` | DOUBLE | heading, rad (only in a run with a unicycle robot) |
 //!
 //! Every column is REQUIRED (no nulls); rows come in the CSV's order (tick,
-//! then body id). The CSV rounds the numbers to six decimals, the Parquet
+//! then body id). `theta` is written, last, exactly when the CSV has it:
+//! when the scenario has a unicycle robot. The CSV rounds the numbers to six decimals, the Parquet
 //! file keeps them exact. Row groups hold about [`ROW_GROUP_ROWS`] rows and
 //! are Snappy-compressed. The file is readable only once the world has
 //! closed it (its footer is written last): a run whose world was killed
@@ -30,14 +32,21 @@ use std::fs::File;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-/// The columns, in file order (the CSV's header, split).
+/// The columns every trajectory has, in file order (the CSV's header,
+/// split).
 pub const COLUMNS: [&str; 8] = ["tick", "time", "body", "kind", "x", "y", "vx", "vy"];
+
+/// The optional last column: every body's heading, rad (in runs with a
+/// unicycle robot, as in the CSV).
+pub const THETA: &str = "theta";
 
 /// Rows a row group holds before the writer starts the next one.
 pub const ROW_GROUP_ROWS: usize = 1 << 18;
 
-/// The file's Parquet schema.
-const SCHEMA: &str = "message trajectory {
+/// The file's Parquet schema, with the `theta` column or without.
+fn schema(theta: bool) -> String {
+    format!(
+        "message trajectory {{
     REQUIRED INT64 tick (INTEGER(64, false));
     REQUIRED DOUBLE time;
     REQUIRED BYTE_ARRAY body (UTF8);
@@ -45,8 +54,15 @@ const SCHEMA: &str = "message trajectory {
     REQUIRED DOUBLE x;
     REQUIRED DOUBLE y;
     REQUIRED DOUBLE vx;
-    REQUIRED DOUBLE vy;
-}";
+    REQUIRED DOUBLE vy;{}
+}}",
+        if theta {
+            "\n    REQUIRED DOUBLE theta;"
+        } else {
+            ""
+        }
+    )
+}
 
 /// Why a Parquet trajectory could not be written or read.
 #[derive(Debug, thiserror::Error)]
@@ -105,11 +121,14 @@ pub struct ParquetTrajectoryWriter {
     body: Vec<ByteArray>,
     kind: Vec<ByteArray>,
     state: [Vec<f64>; 4],
+    /// The headings, if the file has a `theta` column.
+    theta: Option<Vec<f64>>,
 }
 
 impl ParquetTrajectoryWriter {
-    /// Creates the file at `path` (replacing one there).
-    pub fn create(path: &Path) -> Result<Self, TrajectoryError> {
+    /// Creates the file at `path` (replacing one there), with a `theta`
+    /// column if `theta`.
+    pub fn create(path: &Path, theta: bool) -> Result<Self, TrajectoryError> {
         let file = File::create(path).map_err(|source| TrajectoryError::Io {
             path: path.to_path_buf(),
             source,
@@ -118,7 +137,7 @@ impl ParquetTrajectoryWriter {
             path: path.to_path_buf(),
             source,
         };
-        let schema = Arc::new(parse_message_type(SCHEMA).map_err(pq)?);
+        let schema = Arc::new(parse_message_type(&schema(theta)).map_err(pq)?);
         let props = WriterProperties::builder()
             .set_compression(Compression::SNAPPY)
             .set_created_by("mrsim".into())
@@ -132,17 +151,20 @@ impl ParquetTrajectoryWriter {
             body: Vec::new(),
             kind: Vec::new(),
             state: Default::default(),
+            theta: theta.then(Vec::new),
         })
     }
 
-    /// Adds one row: `state` is `[x, y, vx, vy]`. A full row group goes to
-    /// the file.
+    /// Adds one row: `state` is `[x, y, vx, vy]`, `theta` the heading (kept
+    /// only if the file has that column). A full row group goes to the
+    /// file.
     pub fn push(
         &mut self,
         tick: u64,
         time: f64,
         body: &BodyCells,
         state: [f64; 4],
+        theta: f64,
     ) -> Result<(), TrajectoryError> {
         self.tick.push(tick as i64);
         self.time.push(time);
@@ -150,6 +172,9 @@ impl ParquetTrajectoryWriter {
         self.kind.push(body.kind.clone());
         for (column, v) in self.state.iter_mut().zip(state) {
             column.push(v);
+        }
+        if let Some(column) = &mut self.theta {
+            column.push(theta);
         }
         if self.tick.len() >= ROW_GROUP_ROWS {
             self.write_group()?;
@@ -184,10 +209,14 @@ impl ParquetTrajectoryWriter {
                     .write_batch(&self.kind, None, None)
                     .map(drop),
                 k => {
-                    let values = if k == 1 {
-                        &self.time
-                    } else {
-                        &self.state[k - 4]
+                    let values = match k {
+                        1 => &self.time,
+                        4..=7 => &self.state[k - 4],
+                        _ => self.theta.as_ref().ok_or_else(|| {
+                            pq(ParquetError::General(
+                                "more columns than the schema's".into(),
+                            ))
+                        })?,
                     };
                     column
                         .typed::<DoubleType>()
@@ -205,6 +234,9 @@ impl ParquetTrajectoryWriter {
         self.body.clear();
         self.kind.clear();
         self.state.iter_mut().for_each(Vec::clear);
+        if let Some(column) = &mut self.theta {
+            column.clear();
+        }
         Ok(())
     }
 
@@ -238,6 +270,8 @@ pub struct TrajectoryRow<'a> {
     pub vx: f64,
     /// Velocity y.
     pub vy: f64,
+    /// Heading, rad, if the file has a `theta` column.
+    pub theta: Option<f64>,
 }
 
 /// A whole `trajectory.parquet` in memory, by column; the names and kinds
@@ -249,6 +283,8 @@ pub struct TrajectoryTable {
     body: Vec<u32>,
     kind: Vec<u32>,
     state: [Vec<f64>; 4],
+    /// The headings, if the file has a `theta` column.
+    theta: Option<Vec<f64>>,
     strings: Vec<String>,
 }
 
@@ -263,6 +299,11 @@ impl TrajectoryTable {
         self.tick.is_empty()
     }
 
+    /// True if the file had a `theta` column (a run with a unicycle).
+    pub fn has_theta(&self) -> bool {
+        self.theta.is_some()
+    }
+
     /// Row `i`.
     pub fn row(&self, i: usize) -> TrajectoryRow<'_> {
         TrajectoryRow {
@@ -274,6 +315,7 @@ impl TrajectoryTable {
             y: self.state[1][i],
             vx: self.state[2][i],
             vy: self.state[3][i],
+            theta: self.theta.as_ref().map(|t| t[i]),
         }
     }
 
@@ -284,7 +326,8 @@ impl TrajectoryTable {
 }
 
 /// Reads a trajectory written by [`ParquetTrajectoryWriter`] (or any
-/// Parquet file with its columns and types, in any order).
+/// Parquet file with its columns and types, in any order; `theta` if there
+/// is one).
 pub fn read_parquet_trajectory(path: &Path) -> Result<TrajectoryTable, TrajectoryError> {
     let file = File::open(path).map_err(|source| TrajectoryError::Io {
         path: path.to_path_buf(),
@@ -301,19 +344,26 @@ pub fn read_parquet_trajectory(path: &Path) -> Result<TrajectoryTable, Trajector
     let reader = SerializedFileReader::new(file).map_err(pq)?;
     let meta = reader.metadata();
     let descr = meta.file_metadata().schema_descr();
-    let mut at = [usize::MAX; 8];
+    let find = |name: &str| (0..descr.num_columns()).find(|&i| descr.column(i).name() == name);
+    let mut at = [usize::MAX; 9];
     for (k, name) in COLUMNS.iter().enumerate() {
-        at[k] = (0..descr.num_columns())
-            .find(|&i| descr.column(i).name() == *name)
-            .ok_or_else(|| schema_err(format!("no column `{name}`")))?;
+        at[k] = find(name).ok_or_else(|| schema_err(format!("no column `{name}`")))?;
     }
-    let mut table = TrajectoryTable::default();
+    let theta_at = find(THETA);
+    let columns = COLUMNS.len() + usize::from(theta_at.is_some());
+    if let Some(i) = theta_at {
+        at[8] = i;
+    }
+    let mut table = TrajectoryTable {
+        theta: theta_at.map(|_| Vec::new()),
+        ..Default::default()
+    };
     let mut interned: HashMap<Vec<u8>, u32> = HashMap::new();
     for g in 0..meta.num_row_groups() {
         let group = reader.get_row_group(g).map_err(pq)?;
         let rows = group.metadata().num_rows() as usize;
         let wrong = |name: &str| schema_err(format!("column `{name}` has the wrong type"));
-        for (k, name) in COLUMNS.iter().enumerate() {
+        for (k, name) in COLUMNS.iter().chain([&THETA]).take(columns).enumerate() {
             let column = group.get_column_reader(at[k]).map_err(pq)?;
             use parquet::column::reader::ColumnReader as C;
             match (k, column) {
@@ -340,11 +390,11 @@ pub fn read_parquet_trajectory(path: &Path) -> Result<TrajectoryTable, Trajector
                         .push(id);
                     }
                 }
-                (1 | 4..=7, C::DoubleColumnReader(mut r)) => {
-                    let out = if k == 1 {
-                        &mut table.time
-                    } else {
-                        &mut table.state[k - 4]
+                (1 | 4..=8, C::DoubleColumnReader(mut r)) => {
+                    let out = match k {
+                        1 => &mut table.time,
+                        4..=7 => &mut table.state[k - 4],
+                        _ => table.theta.get_or_insert_default(),
                     };
                     r.read_records(rows, None, None, out).map_err(pq)?;
                 }
@@ -360,6 +410,7 @@ pub fn read_parquet_trajectory(path: &Path) -> Result<TrajectoryTable, Trajector
             table.state[1].len(),
             table.state[2].len(),
             table.state[3].len(),
+            table.theta.as_ref().map_or(n, Vec::len),
         ];
         if lengths.iter().any(|&l| l != n) {
             return Err(schema_err(format!(
@@ -381,17 +432,19 @@ mod tests {
         let path = dir.join("t.parquet");
         let a = BodyCells::new("r0", "robot");
         let b = BodyCells::new("o1", "obstacle");
-        let mut w = ParquetTrajectoryWriter::create(&path).expect("create");
+        let mut w = ParquetTrajectoryWriter::create(&path, false).expect("create");
         let ticks = ROW_GROUP_ROWS as u64 / 2 + 3;
         for t in 0..ticks {
             let f = t as f64;
-            w.push(t, f * 0.1, &a, [f, -f, 0.5, 1e-9 * f]).expect("row");
-            w.push(t, f * 0.1, &b, [1.0 / (f + 1.0), 2.0, -0.0, f64::MAX])
+            w.push(t, f * 0.1, &a, [f, -f, 0.5, 1e-9 * f], 9.0)
+                .expect("row");
+            w.push(t, f * 0.1, &b, [1.0 / (f + 1.0), 2.0, -0.0, f64::MAX], 9.0)
                 .expect("row");
         }
         w.finish().expect("finish");
         let table = read_parquet_trajectory(&path).expect("read");
         assert_eq!(table.len(), 2 * ticks as usize);
+        assert!(!table.has_theta());
         for (i, row) in table.rows().enumerate() {
             let t = i as u64 / 2;
             let f = t as f64;
@@ -403,6 +456,31 @@ mod tests {
             assert_eq!((row.tick, row.time), (t, f * 0.1));
             assert_eq!((row.body, row.kind), (want.0, want.1));
             assert_eq!([row.x, row.y, row.vx, row.vy], want.2);
+            assert_eq!(row.theta, None);
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn headings_read_back_as_written_when_the_file_has_a_theta_column() {
+        let dir = std::env::temp_dir().join(format!("mrsim-pq-theta-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        let path = dir.join("t.parquet");
+        let a = BodyCells::new("u0", "robot");
+        let mut w = ParquetTrajectoryWriter::create(&path, true).expect("create");
+        let ticks = ROW_GROUP_ROWS as u64 + 5;
+        for t in 0..ticks {
+            let f = t as f64;
+            w.push(t, f, &a, [f, 0.0, 0.0, 0.0], (f * 1e-3).sin())
+                .expect("row");
+        }
+        w.finish().expect("finish");
+        let table = read_parquet_trajectory(&path).expect("read");
+        assert!(table.has_theta());
+        assert_eq!(table.len(), ticks as usize);
+        for (t, row) in table.rows().enumerate() {
+            assert_eq!(row.theta, Some((t as f64 * 1e-3).sin()), "row {t}");
+            assert_eq!(row.x, t as f64);
         }
         let _ = std::fs::remove_dir_all(&dir);
     }

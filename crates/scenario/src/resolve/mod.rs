@@ -193,25 +193,6 @@ pub(crate) fn resolve(
         )?;
     }
     check_scene(&scenario, &robot_spans, &obstacle_spans, &raw)?;
-    // trajectory.parquet's schema has no heading column yet: a unicycle's
-    // theta would be lost, so the pair is refused rather than half-written.
-    if scenario.output.trajectory == crate::types::TrajectoryFormat::Parquet
-        && let Some(r) = scenario
-            .robots
-            .iter()
-            .find(|r| r.kinematics == crate::types::Kinematics::Unicycle)
-    {
-        let span = raw.output.as_ref().map(|o| o.span());
-        return Err(Fail::new(
-            span,
-            "output",
-            format!(
-                "trajectory = \"parquet\" does not record headings yet, and robot `{}` is a \
-                 unicycle: use trajectory = \"csv\" (which adds a theta column)",
-                r.name
-            ),
-        ));
-    }
     Ok(Resolved {
         scenario,
         file_robots,
