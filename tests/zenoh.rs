@@ -261,6 +261,26 @@ fn with_user_and_password_auth_an_agent_without_the_credentials_cannot_join() {
     let m = metrics(&out);
     assert_eq!(m["success_rate"], 1.0, "{m:#}");
     assert_eq!(count_events(&out, "agent_joined", "a"), 1);
+    // The world says so too, naming where the attempts came from, and
+    // counts every refused attempt (each agent retried until its timeout).
+    let said = child_stderr(&mut world);
+    assert!(
+        said.contains("from tcp/127.0.0.1: authentication failed"),
+        "{said}"
+    );
+    let refused = m["auth_refused"].as_u64().unwrap_or(0);
+    assert!(refused >= 2, "both agents' attempts counted: {m:#}");
+    assert_eq!(m["agents_lost"], 0, "{m:#}");
+}
+
+/// What a finished child wrote on its piped stderr.
+fn child_stderr(child: &mut Child) -> String {
+    use std::io::Read;
+    let mut s = String::new();
+    if let Some(mut e) = child.stderr.take() {
+        let _ = e.read_to_string(&mut s);
+    }
+    s
 }
 
 // ---------------------------------------------------------------------

@@ -42,6 +42,7 @@
 //! `wire`, `inbox` and the session configuration here.
 
 mod agent;
+mod auth;
 mod inbox;
 pub mod keys;
 mod observer;
@@ -52,7 +53,7 @@ mod world;
 
 pub use agent::ZenohAgent;
 pub use observer::ZenohObserver;
-pub use world::ZenohWorld;
+pub use world::{NetworkCounts, ZenohWorld};
 
 use crate::TransportError;
 use std::path::PathBuf;
