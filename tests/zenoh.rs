@@ -573,3 +573,80 @@ fn agents_behind_a_cut_link_are_lost_and_rejoin_once_it_is_back() {
         assert_eq!(count_events(&out, "agent_lost", r), 0, "{r} stayed");
     }
 }
+
+#[test]
+fn garbage_another_runs_messages_and_forged_commands_are_counted_and_the_world_runs_on() {
+    use mrsim_transport::Namespace;
+    use mrsim_transport::zenoh::{ZenohOptions, keys::Keys, publish_raw, wire};
+    let dir = fresh_dir("zbad");
+    let file = dir.join("row.toml");
+    // Long enough that every stranger's message arrives while it runs.
+    std::fs::write(&file, realtime_row(2, 25.0, 8.0)).expect("write");
+    let out = dir.join("out");
+    let id = run_id("zbad");
+    let ep = free_endpoint();
+    let mut world = zenoh_world(&file, &out, &id, &ep, &[]);
+    let mut agents: Vec<Child> = ["r0", "r1"]
+        .iter()
+        .map(|r| zenoh_agent(r, &id, &ep).spawn().expect("agent"))
+        .collect();
+    for r in ["r0", "r1"] {
+        wait_for_event(&out, 60, &format!("{r} joined"), |e| {
+            e["type"] == "agent_joined" && e["robot"] == r
+        });
+    }
+    let opts = ZenohOptions {
+        endpoint: Some(ep.clone()),
+        config_file: None,
+    };
+    let ns = Namespace::new(&id).expect("run id");
+    let command = Keys::new(&ns).command;
+    // 200 messages that are no command at all.
+    let garbage: Vec<Vec<u8>> = (0..200u32)
+        .map(|i| vec![i as u8; (i % 40) as usize])
+        .collect();
+    publish_raw(&opts, &ns, &command, &garbage).expect("garbage");
+    // 20 well-formed commands for r0 with a token it was never given (a
+    // command of another run, or forged).
+    let forged: Vec<Vec<u8>> = (0..20u64)
+        .map(|i| {
+            wire::encode(&mrsim_proto::CommandMsg {
+                robot_id: 0,
+                token: 0xdead_beef + i,
+                tick: i,
+                ..Default::default()
+            })
+        })
+        .collect();
+    publish_raw(&opts, &ns, &command, &forged).expect("forged");
+    // Commands on another run's key never reach this world.
+    let other = Keys::new(&Namespace::new("zbad-other-run").expect("run id")).command;
+    let _ = publish_raw(
+        &ZenohOptions {
+            endpoint: Some(ep.clone()),
+            config_file: None,
+        },
+        &Namespace::new("zbad-other-run").expect("run id"),
+        &other,
+        &forged,
+    );
+    let ws = wait_timeout(&mut world, 90).expect("world ended");
+    assert!(ws.success(), "the world ran to its end");
+    for a in &mut agents {
+        wait_timeout(a, 10);
+    }
+    let said = child_stderr(&mut world);
+    assert!(said.contains("refused 200 malformed message(s)"), "{said}");
+    let m = metrics(&out);
+    assert_eq!(m["agents_lost"], 0, "{m:#}");
+    assert_eq!(m["commands_rejected_unknown"], 200, "the garbage: {m:#}");
+    let forged_seen = m["robots"]["r0"]["commands_rejected"].as_u64().unwrap_or(0)
+        + m["messages_dropped"].as_u64().unwrap_or(0);
+    assert_eq!(
+        forged_seen, 20,
+        "the forged commands, not the other run's: {m:#}"
+    );
+    assert_eq!(m["robots"]["r1"]["commands_rejected"], 0, "{m:#}");
+    assert_eq!(m["joins_malformed"], 0, "{m:#}");
+    assert_eq!(m["auth_refused"], 0, "{m:#}");
+}

@@ -165,6 +165,34 @@ fn open(opts: &ZenohOptions, role: Role) -> Result<zenoh::Session, TransportErro
     })
 }
 
+/// Publishes each of `payloads` on `key` as any Zenoh client on the
+/// network could (garbage, another run's messages, a flood), then asks the
+/// world of run `ns` for its setup over the same connection, so that
+/// everything sent has reached it on return. For tests and for probing a
+/// world; mrsim itself never calls it.
+pub fn publish_raw(
+    opts: &ZenohOptions,
+    ns: &crate::Namespace,
+    key: &str,
+    payloads: &[Vec<u8>],
+) -> Result<(), TransportError> {
+    use zenoh::Wait;
+    let session = open(opts, Role::Client)?;
+    let publisher = session
+        .declare_publisher(key.to_string())
+        .congestion_control(zenoh::qos::CongestionControl::Block)
+        .wait()
+        .map_err(|e| declare_err("raw publisher", e))?;
+    for p in payloads {
+        publisher
+            .put(p.clone())
+            .wait()
+            .map_err(|e| send_err("raw message", e))?;
+    }
+    agent::query_setup(&session, &keys::Keys::new(ns))?;
+    Ok(())
+}
+
 /// A declaration failed.
 fn declare_err(what: &str, e: impl std::fmt::Display) -> TransportError {
     TransportError::Setup {
