@@ -385,8 +385,9 @@ impl NetPair {
             .expect("world in its namespace")
     }
 
-    /// An agent in the agents' namespace (or, `local`, in the world's).
-    fn agent(&self, robot: &str, id: &str, local: bool) -> Child {
+    /// An agent in the agents' namespace (or, `local`, in the world's),
+    /// with `extra` arguments.
+    fn agent(&self, robot: &str, id: &str, local: bool, extra: &[&str]) -> Child {
         Self::mrsim_in(if local { &self.w } else { &self.a })
             .args([
                 "agent",
@@ -398,6 +399,7 @@ impl NetPair {
                 "zenoh",
             ])
             .args(["--connect", &self.endpoint(), "--timeout", "30"])
+            .args(extra)
             .stdout(Stdio::null())
             .stderr(Stdio::null())
             .spawn()
@@ -475,7 +477,7 @@ fn across_namespaces_with_1ms_delay_lockstep_matches_shm_and_16_realtime_agents_
     let mut world = net.world(&scenario, &out, &id, &["--mode", "lockstep"]);
     let mut agents: Vec<Child> = ["a0", "a1", "a2", "a3", "b0", "b1", "b2", "b3"]
         .iter()
-        .map(|r| net.agent(r, &id, false))
+        .map(|r| net.agent(r, &id, false, &[]))
         .collect();
     let ws = wait_timeout(&mut world, 120).expect("world ended");
     assert!(ws.success(), "lockstep world failed");
@@ -495,7 +497,7 @@ fn across_namespaces_with_1ms_delay_lockstep_matches_shm_and_16_realtime_agents_
     let id = run_id("znrt");
     let mut world = net.world(&file, &out, &id, &[]);
     let mut agents: Vec<Child> = (0..16)
-        .map(|i| net.agent(&format!("r{i}"), &id, false))
+        .map(|i| net.agent(&format!("r{i}"), &id, false, &[]))
         .collect();
     let ws = wait_timeout(&mut world, 120).expect("world ended");
     assert!(ws.success(), "realtime world failed");
@@ -516,21 +518,42 @@ fn across_namespaces_with_1ms_delay_lockstep_matches_shm_and_16_realtime_agents_
 #[test]
 fn agents_behind_a_cut_link_are_lost_and_rejoin_once_it_is_back() {
     let Some(net) = net_pair("c") else { return };
-    let dir = fresh_dir("zn-cut");
-    let file = dir.join("row.toml");
     // Slow enough that nobody arrives before the end: 25 m at 1 m/s, 20 s.
-    std::fs::write(&file, realtime_row(4, 25.0, 20.0)).expect("write");
+    cut_link_mid_run(&net, &realtime_row(4, 25.0, 20.0), &[], "zn-cut");
+}
+
+#[test]
+fn in_lockstep_agents_behind_a_cut_link_are_lost_the_run_finishes_and_they_rejoin() {
+    let Some(net) = net_pair("l") else { return };
+    // Lockstep waits for the agents behind the cut until stall_timeout
+    // (2 s), then goes on without them. The agents beside the world take
+    // 20 ms a tick so that the run (600 ticks) outlasts the cut and the
+    // rejoin.
+    let scenario =
+        realtime_row(4, 25.0, 30.0).replace("mode = \"realtime\"", "mode = \"lockstep\"");
+    assert!(scenario.contains("lockstep"));
+    cut_link_mid_run(&net, &scenario, &["--fault", "slow-ms=20"], "zn-lcut");
+}
+
+/// Runs `scenario` (robots r0..r3) with the world and r0, r1 in one
+/// namespace (r0, r1 with `near_args`) and r2, r3 behind the link in the
+/// other; once all joined the link goes down: r2 and r3 are lost and their
+/// agents end; the link comes up, they are started again (by hand, as a
+/// remote agent is) and rejoin; the run finishes with its outputs.
+fn cut_link_mid_run(net: &NetPair, scenario: &str, near_args: &[&str], tag: &str) {
+    let dir = fresh_dir(tag);
+    let file = dir.join("row.toml");
+    std::fs::write(&file, scenario).expect("write");
     let out = dir.join("out");
-    let id = run_id("zncut");
+    let id = run_id(tag);
     let mut world = net.world(&file, &out, &id, &[]);
-    // r0, r1 beside the world; r2, r3 behind the link.
     let mut near: Vec<Child> = ["r0", "r1"]
         .iter()
-        .map(|r| net.agent(r, &id, true))
+        .map(|r| net.agent(r, &id, true, near_args))
         .collect();
     let mut far: Vec<Child> = ["r2", "r3"]
         .iter()
-        .map(|r| net.agent(r, &id, false))
+        .map(|r| net.agent(r, &id, false, &[]))
         .collect();
     for r in ["r0", "r1", "r2", "r3"] {
         wait_for_event(&out, 60, &format!("{r} joined"), |e| {
@@ -554,20 +577,21 @@ fn agents_behind_a_cut_link_are_lost_and_rejoin_once_it_is_back() {
     net.link(true);
     let mut back: Vec<Child> = ["r2", "r3"]
         .iter()
-        .map(|r| net.agent(r, &id, false))
+        .map(|r| net.agent(r, &id, false, &[]))
         .collect();
     for r in ["r2", "r3"] {
         wait_for_event(&out, 30, &format!("{r} rejoined"), |e| {
             e["type"] == "agent_rejoined" && e["robot"] == r
         });
     }
-    let ws = wait_timeout(&mut world, 60).expect("world ended");
+    let ws = wait_timeout(&mut world, 90).expect("world ended");
     assert!(ws.success(), "the run finishes after the cut");
     for a in near.iter_mut().chain(back.iter_mut()) {
         wait_timeout(a, 10);
     }
     let m = metrics(&out);
     assert_eq!(m["agents_lost"], 2, "{m:#}");
+    assert!(m["ticks"].as_u64().unwrap_or(0) > 0, "{m:#}");
     assert!(out.join("trajectory.csv").exists());
     for r in ["r0", "r1"] {
         assert_eq!(count_events(&out, "agent_lost", r), 0, "{r} stayed");

@@ -268,7 +268,18 @@ impl WorldTransport for ZenohWorld {
     }
 
     fn joins_answered(&mut self) -> Result<(), TransportError> {
-        // Each reply wakes its agent when it arrives.
+        // Each reply wakes its agent when it arrives. An agent that joins
+        // mid-run subscribed after the current tick's snapshot went out
+        // (shared memory keeps the last one for it; Zenoh does not): it
+        // goes out again, after the replies on the same link, or a
+        // lockstep world would wait for an answer to a snapshot its new
+        // agent never saw. Agents that answered it already skip it.
+        if !self.buf.is_empty() {
+            self.snap_pub
+                .put(self.buf.clone())
+                .wait()
+                .map_err(|e| send_err("snapshot", e))?;
+        }
         Ok(())
     }
 
