@@ -674,3 +674,35 @@ fn garbage_another_runs_messages_and_forged_commands_are_counted_and_the_world_r
     assert_eq!(m["joins_malformed"], 0, "{m:#}");
     assert_eq!(m["auth_refused"], 0, "{m:#}");
 }
+
+#[test]
+fn a_zenoh_run_shows_its_progress_like_a_shared_memory_run() {
+    let dir = fresh_dir("zprog");
+    let file = dir.join("row.toml");
+    // Realtime, 8 s: the launcher's observer has time to attach.
+    std::fs::write(&file, realtime_row(2, 25.0, 8.0)).expect("write");
+    let out = dir.join("out");
+    let o = mrsim()
+        .env("MRSIM_PROGRESS", "lines")
+        .arg("run")
+        .arg(&file)
+        .arg("--out")
+        .arg(&out)
+        .args([
+            "--run",
+            &run_id("zprog"),
+            "--no-report",
+            "--transport",
+            "zenoh",
+        ])
+        .output()
+        .expect("run");
+    assert_ok(&o);
+    let said = stderr_of(&o);
+    let lines: Vec<&str> = said
+        .lines()
+        .filter(|l| l.starts_with("run: ") && l.contains("at goal"))
+        .collect();
+    assert!(!lines.is_empty(), "no progress lines:\n{said}");
+    assert!(lines.iter().any(|l| l.contains("/160 (")), "{said}");
+}
