@@ -527,12 +527,12 @@ fn in_lockstep_agents_behind_a_cut_link_are_lost_the_run_finishes_and_they_rejoi
     let Some(net) = net_pair("l") else { return };
     // Lockstep waits for the agents behind the cut until stall_timeout
     // (2 s), then goes on without them. The agents beside the world take
-    // 20 ms a tick so that the run (600 ticks) outlasts the cut and the
-    // rejoin.
+    // 50 ms a tick so that the run (600 ticks, 30 s) outlasts the cut and
+    // the rejoin (about 5 s) on a busy machine.
     let scenario =
         realtime_row(4, 25.0, 30.0).replace("mode = \"realtime\"", "mode = \"lockstep\"");
     assert!(scenario.contains("lockstep"));
-    cut_link_mid_run(&net, &scenario, &["--fault", "slow-ms=20"], "zn-lcut");
+    cut_link_mid_run(&net, &scenario, &["--fault", "slow-ms=50"], "zn-lcut");
 }
 
 /// Runs `scenario` (robots r0..r3) with the world and r0, r1 in one

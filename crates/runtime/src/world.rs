@@ -113,7 +113,9 @@ pub fn serve(
     let (mut shm, mut zenoh) = (None, None);
     let link: &mut dyn WorldTransport = match &req.zenoh {
         None => shm.insert(ShmWorld::create(&ns, cap, bodies, setup_len).map_err(create)?),
-        Some(z) => zenoh.insert(ZenohWorld::create(&ns, z, cap, bodies).map_err(create)?),
+        Some(z) => {
+            zenoh.insert(ZenohWorld::create(&ns, z, cap, bodies, setup_len).map_err(create)?)
+        }
     };
     if !req.launched {
         on_open(run_id, &scenario);

@@ -76,9 +76,17 @@ pub struct ZenohOptions {
 /// The side a session is opened for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Role {
-    World,
+    /// The world, whose largest message (snapshot, statistics or setup)
+    /// is this many bytes.
+    World { largest_message: usize },
+    /// An agent, observer or other client.
     Client,
 }
+
+/// Largest message that Zenoh's low-latency transport carries (it does
+/// not fragment: a message must fit one batch, 65535 bytes by default,
+/// with room for Zenoh's own framing).
+const LOW_LATENCY_MAX: usize = 60_000;
 
 /// How long a session may be silent before the other side counts it gone
 /// (when no config file says otherwise): a vanished agent's token goes
@@ -102,10 +110,23 @@ fn config(opts: &ZenohOptions, role: Role) -> Result<zenoh::Config, TransportErr
             .map_err(|e| err(format!("{key} = {value}: {e}")))
     };
     let mode = match role {
-        Role::World => r#""peer""#,
+        Role::World { .. } => r#""peer""#,
         Role::Client => r#""client""#,
     };
     set(&mut cfg, "mode", mode)?;
+    // Zenoh's low-latency transport writes each message from the sending
+    // thread (no hand-over to a transmit task, no batching, no priority
+    // lanes): used when both sides ask for it, so clients always ask and
+    // the world only when every message of its run fits one batch. A
+    // config file decides for itself.
+    let low_latency = match role {
+        Role::World { largest_message } => largest_message <= LOW_LATENCY_MAX,
+        Role::Client => true,
+    };
+    if opts.config_file.is_none() && low_latency {
+        set(&mut cfg, "transport/unicast/qos/enabled", "false")?;
+        set(&mut cfg, "transport/unicast/lowlatency", "true")?;
+    }
     // A run is found by its address, never by multicast: two runs on one
     // network, or a lab's other Zenoh programs, must not meet by chance.
     set(&mut cfg, "scouting/multicast/enabled", "false")?;
@@ -120,11 +141,11 @@ fn config(opts: &ZenohOptions, role: Role) -> Result<zenoh::Config, TransportErr
     if let Some(e) = endpoint {
         let list = serde_json_list(&e);
         match role {
-            Role::World => set(&mut cfg, "listen/endpoints", &list)?,
+            Role::World { .. } => set(&mut cfg, "listen/endpoints", &list)?,
             Role::Client => set(&mut cfg, "connect/endpoints", &list)?,
         }
     }
-    if role == Role::World {
+    if matches!(role, Role::World { .. }) {
         // The world is nobody's client: no connecting out unless a config
         // file asks for routers.
         if opts.config_file.is_none() {
@@ -152,7 +173,7 @@ fn open(opts: &ZenohOptions, role: Role) -> Result<zenoh::Session, TransportErro
     let cfg = config(opts, role)?;
     zenoh::open(cfg).wait().map_err(|e| TransportError::Setup {
         what: match role {
-            Role::World => format!(
+            Role::World { .. } => format!(
                 "zenoh session listening on {}",
                 opts.endpoint.as_deref().unwrap_or(DEFAULT_ENDPOINT)
             ),
@@ -221,9 +242,35 @@ fn terminated(seen: &std::cell::Cell<bool>) -> bool {
 mod config_tests {
     use super::*;
 
+    const WORLD: Role = Role::World {
+        largest_message: 1000,
+    };
+
+    #[test]
+    fn a_world_whose_messages_fit_a_batch_asks_for_low_latency_a_larger_one_not() {
+        let small = config(&ZenohOptions::default(), WORLD).unwrap();
+        assert_eq!(
+            small.get_json("transport/unicast/lowlatency").unwrap(),
+            "true"
+        );
+        let large = Role::World {
+            largest_message: 1 << 20,
+        };
+        let large = config(&ZenohOptions::default(), large).unwrap();
+        assert_eq!(
+            large.get_json("transport/unicast/lowlatency").unwrap(),
+            "false"
+        );
+        let client = config(&ZenohOptions::default(), Role::Client).unwrap();
+        assert_eq!(
+            client.get_json("transport/unicast/lowlatency").unwrap(),
+            "true"
+        );
+    }
+
     #[test]
     fn the_world_listens_on_loopback_unless_told() {
-        let cfg = config(&ZenohOptions::default(), Role::World).unwrap();
+        let cfg = config(&ZenohOptions::default(), WORLD).unwrap();
         let listen = cfg.get_json("listen/endpoints").unwrap();
         assert!(listen.contains("127.0.0.1:7447"), "{listen}");
     }
@@ -249,7 +296,7 @@ mod config_tests {
             endpoint: None,
             config_file: Some("/nonexistent/zenoh.json5".into()),
         };
-        let e = config(&opts, Role::World).unwrap_err().to_string();
+        let e = config(&opts, WORLD).unwrap_err().to_string();
         assert!(e.contains("/nonexistent/zenoh.json5"), "{e}");
     }
 }

@@ -31,6 +31,7 @@ fn world(run: &str, endpoint: &str) -> ZenohWorld {
             group: 1,
         },
         4,
+        1000,
     )
     .expect("world session")
 }

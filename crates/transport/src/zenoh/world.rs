@@ -63,12 +63,14 @@ pub struct NetworkCounts {
 
 impl ZenohWorld {
     /// Opens the world's session (listening as `opts` says) and declares
-    /// everything of run `ns`. Fails if the address is taken.
+    /// everything of run `ns` (at most `max_bodies` bodies per snapshot, a
+    /// setup of about `setup_len` bytes). Fails if the address is taken.
     pub fn create(
         ns: &Namespace,
         opts: &ZenohOptions,
         cap: Capacity,
         max_bodies: usize,
+        setup_len: usize,
     ) -> Result<Self, TransportError> {
         // Listening for refused handshakes before the first can come.
         let auth = AuthWatch::new();
@@ -77,7 +79,11 @@ impl ZenohWorld {
                 "world: zenoh: another tracing subscriber owns this process: connections refused for failed authentication are not counted"
             );
         }
-        let session = open(opts, Role::World)?;
+        use wire::Wire;
+        let largest_message = (SnapshotHeader::LEN + max_bodies * BodyState::LEN)
+            .max(StatsHeader::LEN + cap.robots * RobotStats::LEN)
+            .max(setup_len);
+        let session = open(opts, Role::World { largest_message })?;
         let keys = Keys::new(ns);
         // Room for every agent's command of a few ticks, then a flood is
         // dropped rather than kept.
