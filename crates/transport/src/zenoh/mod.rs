@@ -37,6 +37,11 @@
 //! and hands received messages to callbacks that fill a small inbox per
 //! side ([`inbox`]), which the world's and agents' loops drain.
 //!
+//! **Refusals** are counted by the world ([`NetworkCounts`], for
+//! metrics.json): messages that do not decode, a flood beyond the inbox,
+//! and connections Zenoh refused for failed authentication (which only
+//! Zenoh's log tells of: `auth` listens to it).
+//!
 //! One module per side: `world` ([`ZenohWorld`]), `agent`
 //! ([`ZenohAgent`]), `observer` ([`ZenohObserver`]); they share `keys`,
 //! `wire`, `inbox` and the session configuration here.
