@@ -35,6 +35,7 @@ pub fn main(args: &RunArgs) -> Result<i32> {
         eprintln!("warning: {why}");
     }
     let ns = prepared.namespace().clone();
+    let zenoh = prepared.zenoh_observer();
     let external = prepared.validated().external_robots();
     if !external.is_empty() {
         eprintln!(
@@ -49,10 +50,10 @@ pub fn main(args: &RunArgs) -> Result<i32> {
     let outcome = prepared
         .start(&mut |event| match event {
             Event::Waiting => watch
-                .get_or_insert_with(|| RunWatch::new(&ns, max_ticks))
+                .get_or_insert_with(|| RunWatch::new(&ns, max_ticks, zenoh.clone()))
                 .update(),
             Event::WaitingInproc(obs) => watch
-                .get_or_insert_with(|| RunWatch::new(&ns, max_ticks))
+                .get_or_insert_with(|| RunWatch::new(&ns, max_ticks, zenoh.clone()))
                 .update_from(obs.0),
             Event::WorldEnded => {
                 if let Some(w) = watch.take() {

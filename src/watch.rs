@@ -1,34 +1,59 @@
 //! The launcher's view of its own run: `mrsim run` follows the world's live
-//! statistics as a read-only observer (the same channel `mrsim top` reads)
-//! and shows them as a [`Progress`] of ticks.
+//! statistics as a read-only observer (the same channel `mrsim top` reads:
+//! iceoryx2, or Zenoh for a Zenoh run) and shows them as a [`Progress`] of
+//! ticks.
 
 use crate::progress::{Progress, Style};
 use mrsim_proto::{RobotStats, StatsHeader, agent_state, run_phase};
 use mrsim_transport::shm::ShmObserver;
+use mrsim_transport::zenoh::{ZenohObserver, ZenohOptions};
 use mrsim_transport::{Namespace, ObserverTransport};
+use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
 /// Follows a run's progress while the launcher waits for its world.
 pub struct RunWatch {
     ns: Namespace,
-    obs: Option<ShmObserver>,
+    obs: Option<Box<dyn ObserverTransport>>,
+    /// Over Zenoh: the observer being connected on its own thread (a
+    /// connection attempt may take longer than the launcher's 20 ms round).
+    zenoh: Option<mpsc::Receiver<ZenohObserver>>,
     progress: Progress,
     last: Option<Instant>,
     stats: StatsHeader,
     robots: Vec<RobotStats>,
 }
 
+/// How long a Zenoh watch keeps trying to reach its world (a run's world
+/// waits a minute for its agents; progress is a courtesy).
+const CONNECT_LIMIT: Duration = Duration::from_secs(120);
+
 impl RunWatch {
     /// How often the statistics are read (the world publishes 5 per second).
     pub const INTERVAL: Duration = Duration::from_millis(100);
 
     /// A watch over run `ns` of `max_ticks` ticks, styled by
-    /// [`Style::detect`]; nothing is attached yet.
-    pub fn new(ns: &Namespace, max_ticks: u64) -> Self {
+    /// [`Style::detect`], over iceoryx2 or (with `zenoh`) Zenoh; nothing is
+    /// attached yet.
+    pub fn new(ns: &Namespace, max_ticks: u64, zenoh: Option<ZenohOptions>) -> Self {
+        let progress = Progress::new(max_ticks, "run");
+        let zenoh = zenoh
+            .filter(|_| progress.style() != Style::Off)
+            .map(|opts| {
+                let (tx, rx) = mpsc::channel();
+                let ns = ns.clone();
+                std::thread::spawn(move || {
+                    if let Ok(o) = ZenohObserver::connect(&ns, &opts, false, CONNECT_LIMIT) {
+                        let _ = tx.send(o);
+                    }
+                });
+                rx
+            });
         Self {
             ns: ns.clone(),
             obs: None,
-            progress: Progress::new(max_ticks, "run"),
+            zenoh,
+            progress,
             last: None,
             stats: StatsHeader::default(),
             robots: Vec::new(),
@@ -51,8 +76,15 @@ impl RunWatch {
         }
         self.last = Some(now);
         if self.obs.is_none() {
-            let node = format!("mrsim-run-{}", std::process::id());
-            self.obs = ShmObserver::try_connect(&self.ns, &node, false).ok();
+            self.obs = match &self.zenoh {
+                Some(rx) => rx.try_recv().ok().map(|o| Box::new(o) as _),
+                None => {
+                    let node = format!("mrsim-run-{}", std::process::id());
+                    ShmObserver::try_connect(&self.ns, &node, false)
+                        .ok()
+                        .map(|o| Box::new(o) as _)
+                }
+            };
         }
         let Some(obs) = self.obs.as_mut() else {
             return;

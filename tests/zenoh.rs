@@ -261,6 +261,26 @@ fn with_user_and_password_auth_an_agent_without_the_credentials_cannot_join() {
     let m = metrics(&out);
     assert_eq!(m["success_rate"], 1.0, "{m:#}");
     assert_eq!(count_events(&out, "agent_joined", "a"), 1);
+    // The world says so too, naming where the attempts came from, and
+    // counts every refused attempt (each agent retried until its timeout).
+    let said = child_stderr(&mut world);
+    assert!(
+        said.contains("from tcp/127.0.0.1: authentication failed"),
+        "{said}"
+    );
+    let refused = m["auth_refused"].as_u64().unwrap_or(0);
+    assert!(refused >= 2, "both agents' attempts counted: {m:#}");
+    assert_eq!(m["agents_lost"], 0, "{m:#}");
+}
+
+/// What a finished child wrote on its piped stderr.
+fn child_stderr(child: &mut Child) -> String {
+    use std::io::Read;
+    let mut s = String::new();
+    if let Some(mut e) = child.stderr.take() {
+        let _ = e.read_to_string(&mut s);
+    }
+    s
 }
 
 // ---------------------------------------------------------------------
@@ -365,8 +385,9 @@ impl NetPair {
             .expect("world in its namespace")
     }
 
-    /// An agent in the agents' namespace (or, `local`, in the world's).
-    fn agent(&self, robot: &str, id: &str, local: bool) -> Child {
+    /// An agent in the agents' namespace (or, `local`, in the world's),
+    /// with `extra` arguments.
+    fn agent(&self, robot: &str, id: &str, local: bool, extra: &[&str]) -> Child {
         Self::mrsim_in(if local { &self.w } else { &self.a })
             .args([
                 "agent",
@@ -378,6 +399,7 @@ impl NetPair {
                 "zenoh",
             ])
             .args(["--connect", &self.endpoint(), "--timeout", "30"])
+            .args(extra)
             .stdout(Stdio::null())
             .stderr(Stdio::null())
             .spawn()
@@ -455,7 +477,7 @@ fn across_namespaces_with_1ms_delay_lockstep_matches_shm_and_16_realtime_agents_
     let mut world = net.world(&scenario, &out, &id, &["--mode", "lockstep"]);
     let mut agents: Vec<Child> = ["a0", "a1", "a2", "a3", "b0", "b1", "b2", "b3"]
         .iter()
-        .map(|r| net.agent(r, &id, false))
+        .map(|r| net.agent(r, &id, false, &[]))
         .collect();
     let ws = wait_timeout(&mut world, 120).expect("world ended");
     assert!(ws.success(), "lockstep world failed");
@@ -475,7 +497,7 @@ fn across_namespaces_with_1ms_delay_lockstep_matches_shm_and_16_realtime_agents_
     let id = run_id("znrt");
     let mut world = net.world(&file, &out, &id, &[]);
     let mut agents: Vec<Child> = (0..16)
-        .map(|i| net.agent(&format!("r{i}"), &id, false))
+        .map(|i| net.agent(&format!("r{i}"), &id, false, &[]))
         .collect();
     let ws = wait_timeout(&mut world, 120).expect("world ended");
     assert!(ws.success(), "realtime world failed");
@@ -496,21 +518,42 @@ fn across_namespaces_with_1ms_delay_lockstep_matches_shm_and_16_realtime_agents_
 #[test]
 fn agents_behind_a_cut_link_are_lost_and_rejoin_once_it_is_back() {
     let Some(net) = net_pair("c") else { return };
-    let dir = fresh_dir("zn-cut");
-    let file = dir.join("row.toml");
     // Slow enough that nobody arrives before the end: 25 m at 1 m/s, 20 s.
-    std::fs::write(&file, realtime_row(4, 25.0, 20.0)).expect("write");
+    cut_link_mid_run(&net, &realtime_row(4, 25.0, 20.0), &[], "zn-cut");
+}
+
+#[test]
+fn in_lockstep_agents_behind_a_cut_link_are_lost_the_run_finishes_and_they_rejoin() {
+    let Some(net) = net_pair("l") else { return };
+    // Lockstep waits for the agents behind the cut until stall_timeout
+    // (2 s), then goes on without them. The agents beside the world take
+    // 50 ms a tick so that the run (600 ticks, 30 s) outlasts the cut and
+    // the rejoin (about 5 s) on a busy machine.
+    let scenario =
+        realtime_row(4, 25.0, 30.0).replace("mode = \"realtime\"", "mode = \"lockstep\"");
+    assert!(scenario.contains("lockstep"));
+    cut_link_mid_run(&net, &scenario, &["--fault", "slow-ms=50"], "zn-lcut");
+}
+
+/// Runs `scenario` (robots r0..r3) with the world and r0, r1 in one
+/// namespace (r0, r1 with `near_args`) and r2, r3 behind the link in the
+/// other; once all joined the link goes down: r2 and r3 are lost and their
+/// agents end; the link comes up, they are started again (by hand, as a
+/// remote agent is) and rejoin; the run finishes with its outputs.
+fn cut_link_mid_run(net: &NetPair, scenario: &str, near_args: &[&str], tag: &str) {
+    let dir = fresh_dir(tag);
+    let file = dir.join("row.toml");
+    std::fs::write(&file, scenario).expect("write");
     let out = dir.join("out");
-    let id = run_id("zncut");
+    let id = run_id(tag);
     let mut world = net.world(&file, &out, &id, &[]);
-    // r0, r1 beside the world; r2, r3 behind the link.
     let mut near: Vec<Child> = ["r0", "r1"]
         .iter()
-        .map(|r| net.agent(r, &id, true))
+        .map(|r| net.agent(r, &id, true, near_args))
         .collect();
     let mut far: Vec<Child> = ["r2", "r3"]
         .iter()
-        .map(|r| net.agent(r, &id, false))
+        .map(|r| net.agent(r, &id, false, &[]))
         .collect();
     for r in ["r0", "r1", "r2", "r3"] {
         wait_for_event(&out, 60, &format!("{r} joined"), |e| {
@@ -534,22 +577,132 @@ fn agents_behind_a_cut_link_are_lost_and_rejoin_once_it_is_back() {
     net.link(true);
     let mut back: Vec<Child> = ["r2", "r3"]
         .iter()
-        .map(|r| net.agent(r, &id, false))
+        .map(|r| net.agent(r, &id, false, &[]))
         .collect();
     for r in ["r2", "r3"] {
         wait_for_event(&out, 30, &format!("{r} rejoined"), |e| {
             e["type"] == "agent_rejoined" && e["robot"] == r
         });
     }
-    let ws = wait_timeout(&mut world, 60).expect("world ended");
+    let ws = wait_timeout(&mut world, 90).expect("world ended");
     assert!(ws.success(), "the run finishes after the cut");
     for a in near.iter_mut().chain(back.iter_mut()) {
         wait_timeout(a, 10);
     }
     let m = metrics(&out);
     assert_eq!(m["agents_lost"], 2, "{m:#}");
+    assert!(m["ticks"].as_u64().unwrap_or(0) > 0, "{m:#}");
     assert!(out.join("trajectory.csv").exists());
     for r in ["r0", "r1"] {
         assert_eq!(count_events(&out, "agent_lost", r), 0, "{r} stayed");
     }
+}
+
+#[test]
+fn garbage_another_runs_messages_and_forged_commands_are_counted_and_the_world_runs_on() {
+    use mrsim_transport::Namespace;
+    use mrsim_transport::zenoh::{ZenohOptions, keys::Keys, publish_raw, wire};
+    let dir = fresh_dir("zbad");
+    let file = dir.join("row.toml");
+    // Long enough that every stranger's message arrives while it runs.
+    std::fs::write(&file, realtime_row(2, 25.0, 8.0)).expect("write");
+    let out = dir.join("out");
+    let id = run_id("zbad");
+    let ep = free_endpoint();
+    let mut world = zenoh_world(&file, &out, &id, &ep, &[]);
+    let mut agents: Vec<Child> = ["r0", "r1"]
+        .iter()
+        .map(|r| zenoh_agent(r, &id, &ep).spawn().expect("agent"))
+        .collect();
+    for r in ["r0", "r1"] {
+        wait_for_event(&out, 60, &format!("{r} joined"), |e| {
+            e["type"] == "agent_joined" && e["robot"] == r
+        });
+    }
+    let opts = ZenohOptions {
+        endpoint: Some(ep.clone()),
+        config_file: None,
+    };
+    let ns = Namespace::new(&id).expect("run id");
+    let command = Keys::new(&ns).command;
+    // 200 messages that are no command at all.
+    let garbage: Vec<Vec<u8>> = (0..200u32)
+        .map(|i| vec![i as u8; (i % 40) as usize])
+        .collect();
+    publish_raw(&opts, &ns, &command, &garbage).expect("garbage");
+    // 20 well-formed commands for r0 with a token it was never given (a
+    // command of another run, or forged).
+    let forged: Vec<Vec<u8>> = (0..20u64)
+        .map(|i| {
+            wire::encode(&mrsim_proto::CommandMsg {
+                robot_id: 0,
+                token: 0xdead_beef + i,
+                tick: i,
+                ..Default::default()
+            })
+        })
+        .collect();
+    publish_raw(&opts, &ns, &command, &forged).expect("forged");
+    // Commands on another run's key never reach this world.
+    let other = Keys::new(&Namespace::new("zbad-other-run").expect("run id")).command;
+    let _ = publish_raw(
+        &ZenohOptions {
+            endpoint: Some(ep.clone()),
+            config_file: None,
+        },
+        &Namespace::new("zbad-other-run").expect("run id"),
+        &other,
+        &forged,
+    );
+    let ws = wait_timeout(&mut world, 90).expect("world ended");
+    assert!(ws.success(), "the world ran to its end");
+    for a in &mut agents {
+        wait_timeout(a, 10);
+    }
+    let said = child_stderr(&mut world);
+    assert!(said.contains("refused 200 malformed message(s)"), "{said}");
+    let m = metrics(&out);
+    assert_eq!(m["agents_lost"], 0, "{m:#}");
+    assert_eq!(m["commands_rejected_unknown"], 200, "the garbage: {m:#}");
+    let forged_seen = m["robots"]["r0"]["commands_rejected"].as_u64().unwrap_or(0)
+        + m["messages_dropped"].as_u64().unwrap_or(0);
+    assert_eq!(
+        forged_seen, 20,
+        "the forged commands, not the other run's: {m:#}"
+    );
+    assert_eq!(m["robots"]["r1"]["commands_rejected"], 0, "{m:#}");
+    assert_eq!(m["joins_malformed"], 0, "{m:#}");
+    assert_eq!(m["auth_refused"], 0, "{m:#}");
+}
+
+#[test]
+fn a_zenoh_run_shows_its_progress_like_a_shared_memory_run() {
+    let dir = fresh_dir("zprog");
+    let file = dir.join("row.toml");
+    // Realtime, 8 s: the launcher's observer has time to attach.
+    std::fs::write(&file, realtime_row(2, 25.0, 8.0)).expect("write");
+    let out = dir.join("out");
+    let o = mrsim()
+        .env("MRSIM_PROGRESS", "lines")
+        .arg("run")
+        .arg(&file)
+        .arg("--out")
+        .arg(&out)
+        .args([
+            "--run",
+            &run_id("zprog"),
+            "--no-report",
+            "--transport",
+            "zenoh",
+        ])
+        .output()
+        .expect("run");
+    assert_ok(&o);
+    let said = stderr_of(&o);
+    let lines: Vec<&str> = said
+        .lines()
+        .filter(|l| l.starts_with("run: ") && l.contains("at goal"))
+        .collect();
+    assert!(!lines.is_empty(), "no progress lines:\n{said}");
+    assert!(lines.iter().any(|l| l.contains("/160 (")), "{said}");
 }

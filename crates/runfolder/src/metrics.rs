@@ -103,11 +103,20 @@ pub struct RunMetrics {
     pub commands_late: u64,
     /// Commands rejected that named no robot of the scenario.
     pub commands_rejected_unknown: u64,
+    /// Connections the world refused because their credentials failed
+    /// (Zenoh with user/password auth; 0 elsewhere).
+    pub auth_refused: u64,
+    /// Commands and join requests the world dropped unread because more
+    /// came at once than it holds (a flood; Zenoh; 0 elsewhere).
+    pub messages_dropped: u64,
+    /// Join requests that did not decode (Zenoh; 0 elsewhere; commands
+    /// that do not decode are in `commands_rejected_unknown`).
+    pub joins_malformed: u64,
     /// The world process's id.
     pub world_pid: u32,
     /// The run id (iceoryx2 namespace).
     pub run_id: String,
-    /// The transport: `shm` or `inproc`.
+    /// The transport: `shm`, `inproc` or `zenoh`.
     pub transport: String,
     /// True if the run was stopped early by a signal.
     pub interrupted: bool,

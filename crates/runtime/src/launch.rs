@@ -183,6 +183,12 @@ pub fn prepare(validated: Validated, request: RunRequest) -> Result<Prepared, Ru
     claim_namespace(&ns)?;
     let applied = crate::sched::apply(&request.sched)?;
     mrsim_sys::signal::catch_termination();
+    let mut request = request;
+    if request.transport == Transport::Zenoh && request.zenoh.endpoint.is_none() {
+        // Chosen now, so that the launcher's own observer knows where to
+        // look before the world is up.
+        request.zenoh.endpoint = Some(free_loopback_endpoint()?);
+    }
     Ok(Prepared {
         validated,
         request,
@@ -324,6 +330,16 @@ impl Prepared {
     /// The run's namespace (where an observer finds its world).
     pub fn namespace(&self) -> &Namespace {
         &self.ns
+    }
+
+    /// Over Zenoh, how an observer on this machine reaches the world (as
+    /// its agents do); `None` with another transport.
+    pub fn zenoh_observer(&self) -> Option<ZenohOptions> {
+        let opts = &self.request.zenoh;
+        (self.request.transport == Transport::Zenoh).then(|| ZenohOptions {
+            endpoint: opts.endpoint.as_deref().map(loopback_of),
+            config_file: opts.config_file.clone(),
+        })
     }
 
     /// What the scheduling request gave.
@@ -629,6 +645,23 @@ fn usage_file(dir: &Path, robot: &str) -> PathBuf {
     dir.join(mrsim_runfolder::agent_usage_file(robot))
 }
 
+/// A loopback endpoint on a port free a moment ago.
+fn free_loopback_endpoint() -> Result<String, RunError> {
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .map_err(|e| Invalid(format!("cannot find a free loopback port for zenoh: {e}")))?
+        .port();
+    Ok(format!("tcp/127.0.0.1:{port}"))
+}
+
+/// Where a process on this machine connects to reach a world listening on
+/// `listen` (loopback when it listens on every address).
+fn loopback_of(listen: &str) -> String {
+    listen
+        .replace("0.0.0.0", "127.0.0.1")
+        .replace("[::]", "[::1]")
+}
+
 /// The world's and the agents' extra arguments of a Zenoh run started
 /// here: `--transport zenoh`, the world's `--listen` (a free loopback port
 /// unless given) and the agents' `--connect` to the same place (loopback
@@ -636,17 +669,9 @@ fn usage_file(dir: &Path, robot: &str) -> PathBuf {
 fn zenoh_args(opts: &ZenohOptions) -> Result<(Vec<String>, Vec<String>), RunError> {
     let listen = match &opts.endpoint {
         Some(e) => e.clone(),
-        None => {
-            let port = std::net::TcpListener::bind("127.0.0.1:0")
-                .and_then(|l| l.local_addr())
-                .map_err(|e| Invalid(format!("cannot find a free loopback port for zenoh: {e}")))?
-                .port();
-            format!("tcp/127.0.0.1:{port}")
-        }
+        None => free_loopback_endpoint()?,
     };
-    let connect = listen
-        .replace("0.0.0.0", "127.0.0.1")
-        .replace("[::]", "[::1]");
+    let connect = loopback_of(&listen);
     let mut world = vec![
         "--transport".into(),
         "zenoh".into(),

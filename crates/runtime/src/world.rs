@@ -6,7 +6,7 @@ use crate::finish::{Ending, FinishError, Outcome};
 use crate::validate::Validated;
 use mrsim_scenario::Scenario;
 use mrsim_transport::shm::ShmWorld;
-use mrsim_transport::zenoh::{ZenohOptions, ZenohWorld};
+use mrsim_transport::zenoh::{NetworkCounts, ZenohOptions, ZenohWorld};
 use mrsim_transport::{Capacity, Namespace, TransportError, WorldTransport};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -47,6 +47,10 @@ pub enum WorldError {
     /// The tick loop failed.
     #[error("world: {0}")]
     Run(mrsim_world::run::RunError),
+    /// metrics.json could not be written again with what the network
+    /// refused.
+    #[error("adding the network's refusals to metrics.json")]
+    Metrics(#[source] mrsim_runfolder::FileError),
     /// The run ended but could not be finished.
     #[error(transparent)]
     Finish(#[from] FinishError),
@@ -100,14 +104,19 @@ pub fn serve(
         robots: scenario.robots.len(),
         group: scenario.world.robots_per_agent.max(1) as usize,
     };
-    let mut link: Box<dyn WorldTransport> = match &req.zenoh {
-        None => ShmWorld::create(&ns, cap, bodies, setup_len).map(|w| Box::new(w) as _),
-        Some(z) => ZenohWorld::create(&ns, z, cap, bodies).map(|w| Box::new(w) as _),
-    }
-    .map_err(|source| WorldError::Create {
+    let create = |source| WorldError::Create {
         run_id: run_id.to_string(),
         source,
-    })?;
+    };
+    // Over Zenoh the world is kept by its type: what it refused goes into
+    // metrics.json after the run.
+    let (mut shm, mut zenoh) = (None, None);
+    let link: &mut dyn WorldTransport = match &req.zenoh {
+        None => shm.insert(ShmWorld::create(&ns, cap, bodies, setup_len).map_err(create)?),
+        Some(z) => {
+            zenoh.insert(ZenohWorld::create(&ns, z, cap, bodies, setup_len).map_err(create)?)
+        }
+    };
     if !req.launched {
         on_open(run_id, &scenario);
     }
@@ -118,10 +127,16 @@ pub fn serve(
         start_timeout: req.start_timeout,
         verbose: !req.launched || std::env::var_os("MRSIM_VERBOSE").is_some(),
     };
-    let outcome = mrsim_world::run(world, link.as_mut(), opts);
-    drop(link);
+    let outcome = mrsim_world::run(world, link, opts);
+    let counts = zenoh.as_ref().map(ZenohWorld::counts);
+    drop((shm, zenoh));
     let outcome = match outcome {
-        Ok(outcome) => outcome,
+        Ok(mut outcome) => {
+            if let Some(c) = counts {
+                add_network_counts(&mut outcome.metrics, c, &dir)?;
+            }
+            outcome
+        }
         Err(e) => {
             if !req.launched {
                 // A world started by hand cleans its namespace whatever the
@@ -155,6 +170,25 @@ pub fn serve(
         interrupted,
         finished: Some(finished),
     })
+}
+
+/// Adds what a Zenoh world refused on the network to its metrics.json:
+/// commands that did not decode are rejected commands that named no robot
+/// (as the loop counts them); the rest have keys of their own.
+fn add_network_counts(
+    m: &mut mrsim_world::metrics::RunMetrics,
+    c: NetworkCounts,
+    dir: &std::path::Path,
+) -> Result<(), WorldError> {
+    if c == NetworkCounts::default() {
+        return Ok(());
+    }
+    m.commands_rejected += c.commands_malformed;
+    m.commands_rejected_unknown += c.commands_malformed;
+    m.auth_refused = c.auth_refused;
+    m.messages_dropped = c.dropped;
+    m.joins_malformed = c.joins_malformed;
+    mrsim_runfolder::write_metrics(dir, m).map_err(WorldError::Metrics)
 }
 
 /// Waits (at most `limit`) until the agent processes of a hand-started run

@@ -9,7 +9,8 @@
 //! answers from Zenoh's callback (no hand-over to another thread), so this
 //! is what Zenoh itself costs per round trip, with the settings the
 //! transport uses (express, real-time priority, blocking congestion
-//! control).
+//! control; with `MRSIM_FLOOR_LOW_LATENCY=1`, Zenoh's low-latency
+//! transport on both sides).
 
 use std::sync::{Arc, Condvar, Mutex};
 use std::time::{Duration, Instant};
@@ -28,7 +29,15 @@ fn config(mode: &str, endpoint: &str) -> zenoh::Config {
         ("scouting/multicast/enabled", "false".to_string()),
         (key, format!("[\"{endpoint}\"]")),
     ];
-    for (k, v) in set {
+    // MRSIM_FLOOR_LOW_LATENCY=1: Zenoh's low-latency transport, as the
+    // transport uses when every message fits a batch.
+    let low_latency = std::env::var_os("MRSIM_FLOOR_LOW_LATENCY").is_some_and(|v| v == "1");
+    let ll = [
+        ("transport/unicast/qos/enabled", "false".to_string()),
+        ("transport/unicast/lowlatency", "true".to_string()),
+    ];
+    let extra = if low_latency { &ll[..] } else { &[][..] };
+    for (k, v) in set.iter().chain(extra).cloned() {
         if let Err(e) = c.insert_json5(k, &v) {
             eprintln!("zenoh_floor: config {k}: {e}");
             std::process::exit(2);

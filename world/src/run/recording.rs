@@ -394,6 +394,7 @@ impl Summary<'_> {
             transport: self.transport,
             interrupted: self.interrupted,
             timing: self.timing,
+            ..RunMetrics::default()
         }
     }
 }

@@ -65,8 +65,10 @@ pub(super) struct WorldState {
     answered: usize,
     /// Most commands (and, a quarter of it, joins) held at once.
     limit: usize,
-    /// Messages that did not decode.
-    pub(super) refused: u64,
+    /// Commands that did not decode.
+    pub(super) refused_commands: u64,
+    /// Join requests that did not decode.
+    pub(super) refused_joins: u64,
     /// Messages dropped because the inbox was full (a flood).
     pub(super) dropped: u64,
     /// Live liveliness tokens per agent process id.
@@ -90,7 +92,7 @@ impl WorldInbox {
         let received = now_ns();
         let mut s = lock(&self.state);
         let Some(mut cmd) = wire::decode::<CommandMsg>(bytes) else {
-            s.refused += 1;
+            s.refused_commands += 1;
             return;
         };
         // An agent's clock may be another host's: the world never compares
@@ -123,7 +125,7 @@ impl WorldInbox {
     pub(super) fn join(&self, bytes: &[u8]) {
         let mut s = lock(&self.state);
         let Some(req) = wire::decode::<JoinRequest>(bytes) else {
-            s.refused += 1;
+            s.refused_joins += 1;
             return;
         };
         if s.joins.len() >= s.limit / 4 + 16 {
@@ -266,7 +268,10 @@ mod tests {
         inbox.command(b"not a command");
         inbox.join(&[0xff; 3]);
         let s = lock(&inbox.state);
-        assert_eq!((s.refused, s.commands.len(), s.joins.len()), (2, 0, 0));
+        assert_eq!(
+            (s.refused_commands, s.refused_joins, s.commands.len()),
+            (1, 1, 0)
+        );
     }
 
     #[test]

@@ -37,11 +37,17 @@
 //! and hands received messages to callbacks that fill a small inbox per
 //! side ([`inbox`]), which the world's and agents' loops drain.
 //!
+//! **Refusals** are counted by the world ([`NetworkCounts`], for
+//! metrics.json): messages that do not decode, a flood beyond the inbox,
+//! and connections Zenoh refused for failed authentication (which only
+//! Zenoh's log tells of: `auth` listens to it).
+//!
 //! One module per side: `world` ([`ZenohWorld`]), `agent`
 //! ([`ZenohAgent`]), `observer` ([`ZenohObserver`]); they share `keys`,
 //! `wire`, `inbox` and the session configuration here.
 
 mod agent;
+mod auth;
 mod inbox;
 pub mod keys;
 mod observer;
@@ -52,7 +58,7 @@ mod world;
 
 pub use agent::ZenohAgent;
 pub use observer::ZenohObserver;
-pub use world::ZenohWorld;
+pub use world::{NetworkCounts, ZenohWorld};
 
 use crate::TransportError;
 use std::path::PathBuf;
@@ -75,9 +81,17 @@ pub struct ZenohOptions {
 /// The side a session is opened for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Role {
-    World,
+    /// The world, whose largest message (snapshot, statistics or setup)
+    /// is this many bytes.
+    World { largest_message: usize },
+    /// An agent, observer or other client.
     Client,
 }
+
+/// Largest message that Zenoh's low-latency transport carries (it does
+/// not fragment: a message must fit one batch, 65535 bytes by default,
+/// with room for Zenoh's own framing).
+const LOW_LATENCY_MAX: usize = 60_000;
 
 /// How long a session may be silent before the other side counts it gone
 /// (when no config file says otherwise): a vanished agent's token goes
@@ -101,10 +115,23 @@ fn config(opts: &ZenohOptions, role: Role) -> Result<zenoh::Config, TransportErr
             .map_err(|e| err(format!("{key} = {value}: {e}")))
     };
     let mode = match role {
-        Role::World => r#""peer""#,
+        Role::World { .. } => r#""peer""#,
         Role::Client => r#""client""#,
     };
     set(&mut cfg, "mode", mode)?;
+    // Zenoh's low-latency transport writes each message from the sending
+    // thread (no hand-over to a transmit task, no batching, no priority
+    // lanes): used when both sides ask for it, so clients always ask and
+    // the world only when every message of its run fits one batch. A
+    // config file decides for itself.
+    let low_latency = match role {
+        Role::World { largest_message } => largest_message <= LOW_LATENCY_MAX,
+        Role::Client => true,
+    };
+    if opts.config_file.is_none() && low_latency {
+        set(&mut cfg, "transport/unicast/qos/enabled", "false")?;
+        set(&mut cfg, "transport/unicast/lowlatency", "true")?;
+    }
     // A run is found by its address, never by multicast: two runs on one
     // network, or a lab's other Zenoh programs, must not meet by chance.
     set(&mut cfg, "scouting/multicast/enabled", "false")?;
@@ -119,11 +146,11 @@ fn config(opts: &ZenohOptions, role: Role) -> Result<zenoh::Config, TransportErr
     if let Some(e) = endpoint {
         let list = serde_json_list(&e);
         match role {
-            Role::World => set(&mut cfg, "listen/endpoints", &list)?,
+            Role::World { .. } => set(&mut cfg, "listen/endpoints", &list)?,
             Role::Client => set(&mut cfg, "connect/endpoints", &list)?,
         }
     }
-    if role == Role::World {
+    if matches!(role, Role::World { .. }) {
         // The world is nobody's client: no connecting out unless a config
         // file asks for routers.
         if opts.config_file.is_none() {
@@ -151,7 +178,7 @@ fn open(opts: &ZenohOptions, role: Role) -> Result<zenoh::Session, TransportErro
     let cfg = config(opts, role)?;
     zenoh::open(cfg).wait().map_err(|e| TransportError::Setup {
         what: match role {
-            Role::World => format!(
+            Role::World { .. } => format!(
                 "zenoh session listening on {}",
                 opts.endpoint.as_deref().unwrap_or(DEFAULT_ENDPOINT)
             ),
@@ -162,6 +189,34 @@ fn open(opts: &ZenohOptions, role: Role) -> Result<zenoh::Session, TransportErro
         },
         detail: e.to_string(),
     })
+}
+
+/// Publishes each of `payloads` on `key` as any Zenoh client on the
+/// network could (garbage, another run's messages, a flood), then asks the
+/// world of run `ns` for its setup over the same connection, so that
+/// everything sent has reached it on return. For tests and for probing a
+/// world; mrsim itself never calls it.
+pub fn publish_raw(
+    opts: &ZenohOptions,
+    ns: &crate::Namespace,
+    key: &str,
+    payloads: &[Vec<u8>],
+) -> Result<(), TransportError> {
+    use zenoh::Wait;
+    let session = open(opts, Role::Client)?;
+    let publisher = session
+        .declare_publisher(key.to_string())
+        .congestion_control(zenoh::qos::CongestionControl::Block)
+        .wait()
+        .map_err(|e| declare_err("raw publisher", e))?;
+    for p in payloads {
+        publisher
+            .put(p.clone())
+            .wait()
+            .map_err(|e| send_err("raw message", e))?;
+    }
+    agent::query_setup(&session, &keys::Keys::new(ns))?;
+    Ok(())
 }
 
 /// A declaration failed.
@@ -192,9 +247,35 @@ fn terminated(seen: &std::cell::Cell<bool>) -> bool {
 mod config_tests {
     use super::*;
 
+    const WORLD: Role = Role::World {
+        largest_message: 1000,
+    };
+
+    #[test]
+    fn a_world_whose_messages_fit_a_batch_asks_for_low_latency_a_larger_one_not() {
+        let small = config(&ZenohOptions::default(), WORLD).unwrap();
+        assert_eq!(
+            small.get_json("transport/unicast/lowlatency").unwrap(),
+            "true"
+        );
+        let large = Role::World {
+            largest_message: 1 << 20,
+        };
+        let large = config(&ZenohOptions::default(), large).unwrap();
+        assert_eq!(
+            large.get_json("transport/unicast/lowlatency").unwrap(),
+            "false"
+        );
+        let client = config(&ZenohOptions::default(), Role::Client).unwrap();
+        assert_eq!(
+            client.get_json("transport/unicast/lowlatency").unwrap(),
+            "true"
+        );
+    }
+
     #[test]
     fn the_world_listens_on_loopback_unless_told() {
-        let cfg = config(&ZenohOptions::default(), Role::World).unwrap();
+        let cfg = config(&ZenohOptions::default(), WORLD).unwrap();
         let listen = cfg.get_json("listen/endpoints").unwrap();
         assert!(listen.contains("127.0.0.1:7447"), "{listen}");
     }
@@ -220,7 +301,7 @@ mod config_tests {
             endpoint: None,
             config_file: Some("/nonexistent/zenoh.json5".into()),
         };
-        let e = config(&opts, Role::World).unwrap_err().to_string();
+        let e = config(&opts, WORLD).unwrap_err().to_string();
         assert!(e.contains("/nonexistent/zenoh.json5"), "{e}");
     }
 }

@@ -385,7 +385,7 @@ mod tests {
     #[test]
     fn garbage_of_the_wrong_length_is_refused() {
         assert_eq!(decode::<CommandMsg>(&[0u8; 7]), None);
-        assert_eq!(decode::<CommandMsg>(&vec![0u8; CommandMsg::LEN + 1]), None);
+        assert_eq!(decode::<CommandMsg>(&[0u8; CommandMsg::LEN + 1]), None);
         assert_eq!(decode::<JoinRequest>(&[]), None);
         let (mut h, mut b) = (SnapshotHeader::default(), vec![BodyState::default()]);
         assert!(!decode_slice(&[1u8; 3], 10, &mut h, &mut b));

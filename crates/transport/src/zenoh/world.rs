@@ -3,6 +3,7 @@
 //! and statistics, and takes in commands and join requests through its
 //! inbox.
 
+use super::auth::AuthWatch;
 use super::inbox::{WorldInbox, lock};
 use super::keys::Keys;
 use super::wire::{self, encode_slice};
@@ -12,7 +13,7 @@ use mrsim_proto::{
     BodyState, CommandMsg, JoinReply, JoinRequest, RobotStats, SnapshotHeader, StatsHeader,
 };
 use std::sync::Arc;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 use zenoh::Wait;
 use zenoh::liveliness::LivelinessToken;
 use zenoh::pubsub::{Publisher, Subscriber};
@@ -39,18 +40,50 @@ pub struct ZenohWorld {
     terminated: std::cell::Cell<bool>,
     /// Refused and dropped messages already reported.
     reported: (u64, u64),
+    /// Connections refused for failed authentication (`None`: cannot be
+    /// heard in this process).
+    auth: Option<AuthWatch>,
+    auth_lines: AuthLines,
+}
+
+/// What the world's Zenoh session refused or dropped so far (for
+/// metrics.json).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct NetworkCounts {
+    /// Connections refused because their credentials failed.
+    pub auth_refused: u64,
+    /// Commands that did not decode.
+    pub commands_malformed: u64,
+    /// Join requests that did not decode.
+    pub joins_malformed: u64,
+    /// Commands and join requests dropped unread because more came than
+    /// the inbox holds (a flood).
+    pub dropped: u64,
 }
 
 impl ZenohWorld {
     /// Opens the world's session (listening as `opts` says) and declares
-    /// everything of run `ns`. Fails if the address is taken.
+    /// everything of run `ns` (at most `max_bodies` bodies per snapshot, a
+    /// setup of about `setup_len` bytes). Fails if the address is taken.
     pub fn create(
         ns: &Namespace,
         opts: &ZenohOptions,
         cap: Capacity,
         max_bodies: usize,
+        setup_len: usize,
     ) -> Result<Self, TransportError> {
-        let session = open(opts, Role::World)?;
+        // Listening for refused handshakes before the first can come.
+        let auth = AuthWatch::new();
+        if auth.is_none() {
+            eprintln!(
+                "world: zenoh: another tracing subscriber owns this process: connections refused for failed authentication are not counted"
+            );
+        }
+        use wire::Wire;
+        let largest_message = (SnapshotHeader::LEN + max_bodies * BodyState::LEN)
+            .max(StatsHeader::LEN + cap.robots * RobotStats::LEN)
+            .max(setup_len);
+        let session = open(opts, Role::World { largest_message })?;
         let keys = Keys::new(ns);
         // Room for every agent's command of a few ticks, then a flood is
         // dropped rather than kept.
@@ -125,24 +158,40 @@ impl ZenohWorld {
             max_robots: cap.robots,
             terminated: std::cell::Cell::new(false),
             reported: (0, 0),
+            auth,
+            auth_lines: AuthLines::default(),
         })
     }
 
-    /// Messages refused (did not decode) and dropped (inbox full) so far.
-    pub fn refused_and_dropped(&self) -> (u64, u64) {
+    /// What was refused or dropped so far.
+    pub fn counts(&self) -> NetworkCounts {
         let s = lock(&self.inbox.state);
-        (s.refused, s.dropped)
+        NetworkCounts {
+            auth_refused: self.auth.as_ref().map_or(0, AuthWatch::total),
+            commands_malformed: s.refused_commands,
+            joins_malformed: s.refused_joins,
+            dropped: s.dropped,
+        }
     }
 
     /// Says on stderr when more bad or excess messages came since the last
-    /// report (at most a line per call, called with each drain).
+    /// report (at most a line per call, called with each drain), and each
+    /// connection refused for failed authentication.
     fn report_refusals(&mut self) {
-        let (refused, dropped) = self.refused_and_dropped();
-        if (refused, dropped) != self.reported {
+        let c = self.counts();
+        let refused = c.commands_malformed + c.joins_malformed;
+        if (refused, c.dropped) != self.reported {
             eprintln!(
-                "world: zenoh: refused {refused} malformed message(s), dropped {dropped} over the inbox limit (so far)"
+                "world: zenoh: refused {refused} malformed message(s), dropped {} over the inbox limit (so far)",
+                c.dropped
             );
-            self.reported = (refused, dropped);
+            self.reported = (refused, c.dropped);
+        }
+        if let Some(auth) = &self.auth {
+            let (peers, _) = auth.take();
+            for line in self.auth_lines.add(hosts(peers), Instant::now()) {
+                eprintln!("world: zenoh: {line}: authentication failed");
+            }
         }
     }
 }
@@ -205,6 +254,7 @@ impl WorldTransport for ZenohWorld {
         for j in taken {
             f(j);
         }
+        self.report_refusals();
         Ok(())
     }
 
@@ -224,7 +274,18 @@ impl WorldTransport for ZenohWorld {
     }
 
     fn joins_answered(&mut self) -> Result<(), TransportError> {
-        // Each reply wakes its agent when it arrives.
+        // Each reply wakes its agent when it arrives. An agent that joins
+        // mid-run subscribed after the current tick's snapshot went out
+        // (shared memory keeps the last one for it; Zenoh does not): it
+        // goes out again, after the replies on the same link, or a
+        // lockstep world would wait for an answer to a snapshot its new
+        // agent never saw. Agents that answered it already skip it.
+        if !self.buf.is_empty() {
+            self.snap_pub
+                .put(self.buf.clone())
+                .wait()
+                .map_err(|e| send_err("snapshot", e))?;
+        }
         Ok(())
     }
 
@@ -259,5 +320,81 @@ impl WorldTransport for ZenohWorld {
 
     fn agent_alive(&self, pid: u32) -> Option<bool> {
         Some(self.inbox.alive(pid))
+    }
+}
+
+/// The host of each refused peer (an agent retries from a fresh port
+/// each time: the port says nothing).
+fn hosts(peers: Vec<Option<String>>) -> Vec<String> {
+    peers
+        .into_iter()
+        .map(|p| match p {
+            Some(p) => match p.rsplit_once(':') {
+                Some((host, _)) => host.to_string(),
+                None => p,
+            },
+            None => "an unknown address".to_string(),
+        })
+        .collect()
+}
+
+/// How often at most the world repeats that a host keeps failing.
+const AUTH_REPEAT: Duration = Duration::from_secs(5);
+
+/// The world's lines about refused connections: a host's first refusal
+/// at once, then (an agent retries for as long as its timeout) at most a
+/// line per host every [`AUTH_REPEAT`] with how many came since.
+#[derive(Default)]
+struct AuthLines {
+    /// Per host: when it was last reported, refusals not reported yet.
+    hosts: Vec<(String, Instant, u64)>,
+}
+
+impl AuthLines {
+    /// The lines to print now, given the hosts refused since the last call.
+    fn add(&mut self, refused: Vec<String>, now: Instant) -> Vec<String> {
+        let mut lines = Vec::new();
+        for host in refused {
+            match self.hosts.iter_mut().find(|(h, _, _)| *h == host) {
+                Some((_, _, n)) => *n += 1,
+                None => {
+                    lines.push(format!("refused a connection from {host}"));
+                    self.hosts.push((host, now, 0));
+                }
+            }
+        }
+        for (host, last, n) in &mut self.hosts {
+            if *n > 0 && now.duration_since(*last) >= AUTH_REPEAT {
+                lines.push(match *n {
+                    1 => format!("refused a connection from {host}"),
+                    n => format!("refused {n} connections from {host}"),
+                });
+                (*last, *n) = (now, 0);
+            }
+        }
+        lines
+    }
+}
+
+#[cfg(test)]
+mod auth_line_tests {
+    use super::*;
+
+    #[test]
+    fn a_host_that_keeps_failing_is_reported_at_once_then_summed_up() {
+        let mut l = AuthLines::default();
+        let t = Instant::now();
+        let h = || vec!["tcp/10.0.0.2".to_string()];
+        assert_eq!(l.add(h(), t), ["refused a connection from tcp/10.0.0.2"]);
+        assert!(l.add(h(), t + Duration::from_secs(1)).is_empty());
+        assert!(l.add(h(), t + Duration::from_secs(2)).is_empty());
+        assert_eq!(
+            l.add(vec![], t + AUTH_REPEAT),
+            ["refused 2 connections from tcp/10.0.0.2"]
+        );
+        assert_eq!(
+            hosts(vec![Some("tcp/10.0.0.2:5001".into()), None]),
+            ["tcp/10.0.0.2", "an unknown address"]
+        );
     }
 }
