@@ -104,14 +104,17 @@ pub struct RunMetrics {
     /// Commands rejected that named no robot of the scenario.
     pub commands_rejected_unknown: u64,
     /// Connections the world refused because their credentials failed
-    /// (Zenoh with user/password auth; 0 elsewhere).
-    pub auth_refused: u64,
+    /// (Zenoh with user/password auth; absent with the other transports).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub auth_refused: Option<u64>,
     /// Commands and join requests the world dropped unread because more
-    /// came at once than it holds (a flood; Zenoh; 0 elsewhere).
-    pub messages_dropped: u64,
-    /// Join requests that did not decode (Zenoh; 0 elsewhere; commands
-    /// that do not decode are in `commands_rejected_unknown`).
-    pub joins_malformed: u64,
+    /// came at once than it holds (a flood; Zenoh only, absent elsewhere).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub messages_dropped: Option<u64>,
+    /// Join requests that did not decode (Zenoh only, absent elsewhere;
+    /// commands that do not decode are in `commands_rejected_unknown`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub joins_malformed: Option<u64>,
     /// The world process's id.
     pub world_pid: u32,
     /// The run id (iceoryx2 namespace).

@@ -180,14 +180,11 @@ fn add_network_counts(
     c: NetworkCounts,
     dir: &std::path::Path,
 ) -> Result<(), WorldError> {
-    if c == NetworkCounts::default() {
-        return Ok(());
-    }
     m.commands_rejected += c.commands_malformed;
     m.commands_rejected_unknown += c.commands_malformed;
-    m.auth_refused = c.auth_refused;
-    m.messages_dropped = c.dropped;
-    m.joins_malformed = c.joins_malformed;
+    m.auth_refused = Some(c.auth_refused);
+    m.messages_dropped = Some(c.dropped);
+    m.joins_malformed = Some(c.joins_malformed);
     mrsim_runfolder::write_metrics(dir, m).map_err(WorldError::Metrics)
 }
 
