@@ -9,6 +9,12 @@ use std::path::{Path, PathBuf};
 /// Runs the lockstep crossing scene (8 robots, 5 s) in-process with
 /// `extra` settings; returns its folder.
 fn crossing(tag: &str, extra: &[&str]) -> PathBuf {
+    five_seconds_of("crossing.toml", tag, extra)
+}
+
+/// Runs `scenarios/{file}` in lockstep for 5 s in-process with `extra`
+/// settings; returns its folder.
+fn five_seconds_of(file: &str, tag: &str, extra: &[&str]) -> PathBuf {
     let dir = fresh_dir(tag);
     let mut args = vec![
         "--transport",
@@ -21,7 +27,7 @@ fn crossing(tag: &str, extra: &[&str]) -> PathBuf {
         args.extend(["--set", s]);
     }
     let out = run(
-        &root().join("scenarios/crossing.toml"),
+        &root().join("scenarios").join(file),
         &dir,
         &run_id(tag),
         &args,
@@ -143,25 +149,7 @@ fn without_a_trajectory_the_metrics_are_the_same_and_the_report_draws_the_scene(
 /// Runs the lockstep unicycle crossing (4 unicycles, 5 s) in-process with
 /// `extra` settings; returns its folder.
 fn unicycle_crossing(tag: &str, extra: &[&str]) -> PathBuf {
-    let dir = fresh_dir(tag);
-    let mut args = vec![
-        "--transport",
-        "inproc",
-        "--quiet",
-        "--set",
-        "world.duration=5",
-    ];
-    for s in extra {
-        args.extend(["--set", s]);
-    }
-    let out = run(
-        &root().join("scenarios/unicycle-crossing.toml"),
-        &dir,
-        &run_id(tag),
-        &args,
-    );
-    assert_ok(&out);
-    dir
+    five_seconds_of("unicycle-crossing.toml", tag, extra)
 }
 
 #[test]
