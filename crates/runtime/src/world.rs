@@ -6,7 +6,7 @@ use crate::finish::{Ending, FinishError, Outcome};
 use crate::validate::Validated;
 use mrsim_scenario::Scenario;
 use mrsim_transport::shm::ShmWorld;
-use mrsim_transport::zenoh::{NetworkCounts, ZenohOptions, ZenohWorld};
+use mrsim_transport::zenoh::{ZenohOptions, ZenohWorld};
 use mrsim_transport::{Capacity, Namespace, TransportError, WorldTransport};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -47,10 +47,6 @@ pub enum WorldError {
     /// The tick loop failed.
     #[error("world: {0}")]
     Run(mrsim_world::run::RunError),
-    /// metrics.json could not be written again with what the network
-    /// refused.
-    #[error("adding the network's refusals to metrics.json")]
-    Metrics(#[source] mrsim_runfolder::FileError),
     /// The run ended but could not be finished.
     #[error(transparent)]
     Finish(#[from] FinishError),
@@ -128,15 +124,9 @@ pub fn serve(
         verbose: !req.launched || std::env::var_os("MRSIM_VERBOSE").is_some(),
     };
     let outcome = mrsim_world::run(world, link, opts);
-    let counts = zenoh.as_ref().map(ZenohWorld::counts);
     drop((shm, zenoh));
     let outcome = match outcome {
-        Ok(mut outcome) => {
-            if let Some(c) = counts {
-                add_network_counts(&mut outcome.metrics, c, &dir)?;
-            }
-            outcome
-        }
+        Ok(outcome) => outcome,
         Err(e) => {
             if !req.launched {
                 // A world started by hand cleans its namespace whatever the
@@ -170,22 +160,6 @@ pub fn serve(
         interrupted,
         finished: Some(finished),
     })
-}
-
-/// Adds what a Zenoh world refused on the network to its metrics.json:
-/// commands that did not decode are rejected commands that named no robot
-/// (as the loop counts them); the rest have keys of their own.
-fn add_network_counts(
-    m: &mut mrsim_world::metrics::RunMetrics,
-    c: NetworkCounts,
-    dir: &std::path::Path,
-) -> Result<(), WorldError> {
-    m.commands_rejected += c.commands_malformed;
-    m.commands_rejected_unknown += c.commands_malformed;
-    m.auth_refused = Some(c.auth_refused);
-    m.messages_dropped = Some(c.dropped);
-    m.joins_malformed = Some(c.joins_malformed);
-    mrsim_runfolder::write_metrics(dir, m).map_err(WorldError::Metrics)
 }
 
 /// Waits (at most `limit`) until the agent processes of a hand-started run

@@ -206,6 +206,27 @@ pub trait WorldTransport {
         let _ = pid;
         None
     }
+    /// What the network refused or dropped before the tick loop saw it,
+    /// for metrics.json; `None` (the default) for a transport that hands
+    /// the loop everything (shared memory, in-process).
+    fn network_counts(&self) -> Option<NetworkCounts> {
+        None
+    }
+}
+
+/// What a networked world transport refused or dropped so far (for
+/// metrics.json).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct NetworkCounts {
+    /// Connections refused because their credentials failed.
+    pub auth_refused: u64,
+    /// Commands that did not decode.
+    pub commands_malformed: u64,
+    /// Join requests that did not decode.
+    pub joins_malformed: u64,
+    /// Commands and join requests dropped unread because more came than
+    /// the inbox holds (a flood).
+    pub dropped: u64,
 }
 
 /// An agent's side of the channels.

@@ -701,7 +701,7 @@ fn finish(
         ..
     } = lp.recording;
     let tracker = rec.finish().map_err(out_err(TRAJECTORY_FILE))?;
-    let metrics = Summary {
+    let mut metrics = Summary {
         scenario: &lp.world.scenario,
         ticks: lp.window.tick,
         sim_time: lp.world.time(),
@@ -712,6 +712,9 @@ fn finish(
         timing,
     }
     .metrics(counts, &acc, &mut timings.robots, &tracker);
+    if let Some(c) = lp.link.network_counts() {
+        recording::add_network_counts(&mut metrics, c);
+    }
     mrsim_runfolder::write_metrics(&lp.opts.out_dir, &metrics).map_err(|e| match e {
         FileError::Io { source, .. } => out_err(METRICS_FILE)(source),
         FileError::Json { source, .. } => out_err(METRICS_FILE)(source.into()),

@@ -398,3 +398,15 @@ impl Summary<'_> {
         }
     }
 }
+
+/// Adds what a networked transport refused before the loop saw it
+/// (Zenoh's counts) to `m`: commands that did not decode are rejected
+/// commands that named no robot (as the loop counts them); the rest have
+/// keys of their own, written only for such a transport.
+pub(super) fn add_network_counts(m: &mut RunMetrics, c: mrsim_transport::NetworkCounts) {
+    m.commands_rejected += c.commands_malformed;
+    m.commands_rejected_unknown += c.commands_malformed;
+    m.auth_refused = Some(c.auth_refused);
+    m.messages_dropped = Some(c.dropped);
+    m.joins_malformed = Some(c.joins_malformed);
+}

@@ -56,9 +56,10 @@ mod tests;
 pub mod wire;
 mod world;
 
+pub use crate::NetworkCounts;
 pub use agent::ZenohAgent;
 pub use observer::ZenohObserver;
-pub use world::{NetworkCounts, ZenohWorld};
+pub use world::ZenohWorld;
 
 use crate::TransportError;
 use std::path::PathBuf;

@@ -8,7 +8,7 @@ use super::inbox::{WorldInbox, lock};
 use super::keys::Keys;
 use super::wire::{self, encode_slice};
 use super::{Role, ZenohOptions, declare_err, open, send_err, terminated};
-use crate::{Capacity, Namespace, TransportError, WorldTransport};
+use crate::{Capacity, Namespace, NetworkCounts, TransportError, WorldTransport};
 use mrsim_proto::{
     BodyState, CommandMsg, JoinReply, JoinRequest, RobotStats, SnapshotHeader, StatsHeader,
 };
@@ -44,21 +44,6 @@ pub struct ZenohWorld {
     /// heard in this process).
     auth: Option<AuthWatch>,
     auth_lines: AuthLines,
-}
-
-/// What the world's Zenoh session refused or dropped so far (for
-/// metrics.json).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct NetworkCounts {
-    /// Connections refused because their credentials failed.
-    pub auth_refused: u64,
-    /// Commands that did not decode.
-    pub commands_malformed: u64,
-    /// Join requests that did not decode.
-    pub joins_malformed: u64,
-    /// Commands and join requests dropped unread because more came than
-    /// the inbox holds (a flood).
-    pub dropped: u64,
 }
 
 impl ZenohWorld {
@@ -197,6 +182,10 @@ impl ZenohWorld {
 }
 
 impl WorldTransport for ZenohWorld {
+    fn network_counts(&self) -> Option<NetworkCounts> {
+        Some(self.counts())
+    }
+
     fn publish_setup(&mut self, setup: &[u8]) -> Result<(), TransportError> {
         let bytes = zenoh::bytes::ZBytes::from(setup.to_vec());
         let key = self.keys.setup.clone();
