@@ -316,15 +316,12 @@ fn a_hand_started_agent_writes_its_diagnostics_into_the_worlds_folder() {
     let dir = fresh_dir("handdiag");
     let out = dir.join("out");
     let id = run_id("handdiag");
-    let mut world = mrsim()
-        .arg("world")
-        .arg(root().join("scenarios/papers/yamada-side.toml"))
-        .args(["--run", &id, "--start-timeout", "30", "--out"])
-        .arg(&out)
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("world");
+    let mut world = hand_started_world(
+        &root().join("scenarios/papers/yamada-side.toml"),
+        &out,
+        &id,
+        30,
+    );
     // Started from another folder: it learns the run folder from the world.
     let mut agent = mrsim()
         .args(["agent", "--robot", "robot", "--run", &id])

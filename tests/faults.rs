@@ -35,7 +35,7 @@ const REALTIME_LONG: &str = "dt = 0.05\nduration = 60.0\nmode = \"realtime\"";
 /// Starts `mrsim run` and waits for its world and both agents to exist;
 /// returns the launcher and their pids (world first).
 fn launched(file: &Path, out: &Path, id: &str) -> (Child, u32, Vec<u32>) {
-    let l = launcher(file, out, id, &[]);
+    let l = launcher(file, out, id, &[], Stdio::piped());
     let world = wait_for_process(&["--run", id, "--start-timeout"], &[], 30);
     let agents = ["a", "b"]
         .iter()
@@ -87,12 +87,6 @@ fn stderr_of(child: &mut Child) -> String {
         let _ = e.read_to_string(&mut s);
     }
     s
-}
-
-fn of<'a>(ev: &'a [Value], kind: &str, robot: &str) -> Vec<&'a Value> {
-    ev.iter()
-        .filter(|e| e["type"] == kind && e["robot"] == robot)
-        .collect()
 }
 
 fn tick(e: &Value) -> u64 {
@@ -150,7 +144,7 @@ fn wait_for_both_joined(out: &Path) {
     wait_for_events(out, 60, |ev| {
         ["a", "b"]
             .iter()
-            .all(|r| !of(ev, "agent_joined", r).is_empty())
+            .all(|r| !events_of(ev, "agent_joined", r).is_empty())
     });
 }
 
@@ -200,20 +194,6 @@ fn longest_streak(ticks: &[u64]) -> (u64, u64) {
     (best, end)
 }
 
-fn launcher(file: &Path, out: &Path, id: &str, extra: &[&str]) -> Child {
-    mrsim()
-        .arg("run")
-        .arg(file)
-        .arg("--out")
-        .arg(out)
-        .args(["--run", id, "--quiet"])
-        .args(extra)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("start launcher")
-}
-
 #[test]
 fn an_agent_killed_mid_run_in_lockstep_is_lost_at_once_braked_and_the_others_finish() {
     let text = lanes(
@@ -241,7 +221,7 @@ fn an_agent_killed_mid_run_in_lockstep_is_lost_at_once_braked_and_the_others_fin
     wait_timeout(&mut c, 10);
 
     let ev = events(&out);
-    let lost = of(&ev, "agent_lost", "a");
+    let lost = events_of(&ev, "agent_lost", "a");
     assert_eq!(lost.len(), 1, "{lost:?}");
     let lost_tick = tick(lost[0]);
     assert!(
@@ -286,7 +266,7 @@ fn a_killed_agent_in_realtime_is_restarted_by_the_launcher_and_rejoins_its_robot
     let text = two(4.0, "dt = 0.05\nduration = 30.0\nmode = \"realtime\"");
     let (file, out) = scenario("restart", &text);
     let id = run_id("rs");
-    let mut l = launcher(&file, &out, &id, &["--restart-agents"]);
+    let mut l = launcher(&file, &out, &id, &["--restart-agents"], Stdio::piped());
     let first = wait_for_process(&["agent", "--robot", "a", "--run", &id], &[], 30);
     // Killed mid-run: once both agents have joined (the clock then runs).
     wait_for_both_joined(&out);
@@ -306,8 +286,8 @@ fn a_killed_agent_in_realtime_is_restarted_by_the_launcher_and_rejoins_its_robot
     );
 
     let ev = events(&out);
-    let lost = of(&ev, "agent_lost", "a");
-    let back = of(&ev, "agent_rejoined", "a");
+    let lost = events_of(&ev, "agent_lost", "a");
+    let back = events_of(&ev, "agent_rejoined", "a");
     assert_eq!(lost.len(), 1, "{lost:?}");
     assert_eq!(back.len(), 1, "{back:?}");
     assert_eq!(lost[0]["pid"], first);
@@ -379,8 +359,8 @@ fn an_agent_killed_twenty_times_still_rejoins_within_the_port_limits() {
     wait_timeout(&mut a, 10);
     wait_timeout(&mut b, 10);
     let ev = events(&out);
-    assert_eq!(of(&ev, "agent_lost", "a").len(), 20);
-    assert_eq!(of(&ev, "agent_rejoined", "a").len(), 20);
+    assert_eq!(events_of(&ev, "agent_lost", "a").len(), 20);
+    assert_eq!(events_of(&ev, "agent_rejoined", "a").len(), 20);
     let m = metrics(&out);
     assert_eq!(m["agents_lost"], 20);
     assert_eq!(m["success_rate"], 1.0, "{m:#}");
@@ -395,13 +375,13 @@ fn an_agent_stopped_in_realtime_misses_deadlines_while_the_world_keeps_ticking()
     let text = two(100.0, "dt = 0.05\nduration = 10.0\nmode = \"realtime\"");
     let (file, out) = scenario("stop-rt", &text);
     let id = run_id("srt");
-    let mut l = launcher(&file, &out, &id, &[]);
+    let mut l = launcher(&file, &out, &id, &[], Stdio::piped());
     let pid = wait_for_process(&["agent", "--robot", "a", "--run", &id], &[], 30);
     wait_for_both_joined(&out);
     send_signal(pid, libc::SIGSTOP);
     // Stopped until the world has logged ten misses of a in a row.
     wait_for_events(&out, 60, |ev| {
-        let t: Vec<u64> = of(ev, "deadline_miss", "a")
+        let t: Vec<u64> = events_of(ev, "deadline_miss", "a")
             .iter()
             .map(|e| tick(e))
             .collect();
@@ -416,7 +396,7 @@ fn an_agent_stopped_in_realtime_misses_deadlines_while_the_world_keeps_ticking()
     assert_eq!(m["ticks"], 200, "{m:#}");
     assert_eq!(m["agents_lost"], 0, "{m:#}");
     let ev = events(&out);
-    let misses: Vec<u64> = of(&ev, "deadline_miss", "a")
+    let misses: Vec<u64> = events_of(&ev, "deadline_miss", "a")
         .iter()
         .map(|e| tick(e))
         .collect();
@@ -456,7 +436,7 @@ fn an_agent_stopped_in_lockstep_is_lost_after_stall_timeout_and_rejoins_on_sigco
         "{lost}"
     );
     let ev = events(&out);
-    let back = of(&ev, "agent_rejoined", "a");
+    let back = events_of(&ev, "agent_rejoined", "a");
     assert_eq!(back.len(), 1, "{back:?}");
     let back_tick = tick(back[0]);
     let m = metrics(&out);
@@ -485,7 +465,7 @@ fn a_planner_stuck_in_a_loop_is_lost_in_lockstep_and_misses_every_deadline_in_re
     wait_timeout(&mut a, 10);
     wait_timeout(&mut b, 10);
     let ev = events(&out);
-    let lost = of(&ev, "agent_lost", "a");
+    let lost = events_of(&ev, "agent_lost", "a");
     assert_eq!(lost.len(), 1);
     assert_eq!(tick(lost[0]), 5);
     assert!(
@@ -508,7 +488,7 @@ fn a_planner_stuck_in_a_loop_is_lost_in_lockstep_and_misses_every_deadline_in_re
     let m = metrics(&out);
     assert_eq!(m["ticks"], 40, "{m:#}");
     assert_eq!(m["agents_lost"], 0);
-    let misses: Vec<u64> = of(&events(&out), "deadline_miss", "a")
+    let misses: Vec<u64> = events_of(&events(&out), "deadline_miss", "a")
         .iter()
         .map(|e| tick(e))
         .collect();
@@ -758,7 +738,7 @@ fn bad_commands_are_rejected_counted_logged_and_never_drive_a_robot() {
     assert!(still("other"));
     assert_eq!(m["robots"]["twice"]["reached_goal"], true);
     assert_eq!(m["robots"]["twice"]["commands_rejected"], 0);
-    assert_eq!(of(&ev, "agent_joined", "twice").len(), 1);
+    assert_eq!(events_of(&ev, "agent_joined", "twice").len(), 1);
     assert_eq!(m["agents_lost"], 3, "{m:#}");
     assert_clean(&id);
 }

@@ -168,26 +168,6 @@ fn wait_for_events(out: &Path, secs: u64, f: impl Fn(&[Value]) -> bool) {
     }
 }
 
-fn of<'a>(ev: &'a [Value], kind: &str, robot: &str) -> Vec<&'a Value> {
-    ev.iter()
-        .filter(|e| e["type"] == kind && e["robot"] == robot)
-        .collect()
-}
-
-fn launcher(file: &Path, out: &Path, id: &str, extra: &[&str]) -> Child {
-    mrsim()
-        .arg("run")
-        .arg(file)
-        .arg("--out")
-        .arg(out)
-        .args(["--run", id, "--quiet"])
-        .args(extra)
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("start launcher")
-}
-
 fn stderr_of(c: &mut Child) -> String {
     use std::io::Read;
     let mut s = String::new();
@@ -209,13 +189,14 @@ fn a_killed_group_process_loses_all_its_robots_and_its_restart_rejoins_them_toge
         &out,
         &id,
         &["--robots-per-agent", "2", "--restart-agents"],
+        Stdio::null(),
     );
     let first = wait_for_process(&["agent", "--robots", "a,b", "--run", &id], &[], 30);
     let other = wait_for_process(&["agent", "--robots", "c,d", "--run", &id], &[], 30);
     wait_for_events(&out, 60, |ev| {
         ["a", "b", "c", "d"]
             .iter()
-            .all(|r| !of(ev, "agent_joined", r).is_empty())
+            .all(|r| !events_of(ev, "agent_joined", r).is_empty())
     });
     assert!(!process_gone(first), "the group's agent ended early");
     send_signal(first, libc::SIGKILL);
@@ -223,7 +204,7 @@ fn a_killed_group_process_loses_all_its_robots_and_its_restart_rejoins_them_toge
     wait_for_events(&out, 60, |ev| {
         ["a", "b"]
             .iter()
-            .all(|r| !of(ev, "agent_rejoined", r).is_empty())
+            .all(|r| !events_of(ev, "agent_rejoined", r).is_empty())
     });
     send_signal(l.id(), libc::SIGINT);
     let status = wait_timeout(&mut l, 60).expect("launcher ended");
@@ -233,15 +214,15 @@ fn a_killed_group_process_loses_all_its_robots_and_its_restart_rejoins_them_toge
 
     let ev = events(&out);
     for r in ["a", "b"] {
-        let lost = of(&ev, "agent_lost", r);
-        let back = of(&ev, "agent_rejoined", r);
+        let lost = events_of(&ev, "agent_lost", r);
+        let back = events_of(&ev, "agent_rejoined", r);
         assert_eq!(lost.len(), 1, "{r}: {lost:?}");
         assert_eq!(back.len(), 1, "{r}: {back:?}");
         assert_eq!(lost[0]["pid"], first);
         assert_eq!(back[0]["pid"], second, "{r} rejoined from another process");
     }
     for r in ["c", "d"] {
-        assert!(of(&ev, "agent_lost", r).is_empty(), "{r} lost");
+        assert!(events_of(&ev, "agent_lost", r).is_empty(), "{r} lost");
     }
     let m = metrics(&out);
     assert_eq!(m["robots"]["a"]["agent_pid"], second);
@@ -256,15 +237,7 @@ fn an_agent_asked_for_robots_the_world_does_not_have_names_the_first_few_and_a_c
     let out = fresh_dir("strangers").join("out");
     let id = run_id("st");
     // A world waiting for its one robot; the agent asks for many others.
-    let mut w = mrsim()
-        .arg("world")
-        .arg(root().join("scenarios/crossing.toml"))
-        .args(["--run", &id, "--start-timeout", "30", "--out"])
-        .arg(&out)
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("world");
+    let mut w = hand_started_world(&root().join("scenarios/crossing.toml"), &out, &id, 30);
     let names: Vec<String> = (0..50).map(|i| format!("nobody{i}")).collect();
     let agent = mrsim()
         .args(["agent", "--run", &id, "--timeout", "30", "--robots"])

@@ -57,19 +57,6 @@ goal = [-4.0, -5.0]
     path
 }
 
-fn start_world(scenario: &Path, out: &Path, run_id: &str) -> Child {
-    mrsim()
-        .arg("world")
-        .arg(scenario)
-        .args(["--run", run_id, "--start-timeout", "60", "--out"])
-        .arg(out)
-        .stdin(Stdio::null())
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("start world")
-}
-
 fn start_agents(run_id: &str) -> Vec<Child> {
     ROBOTS
         .iter()
@@ -142,7 +129,7 @@ fn the_dashboard_shows_every_robot_of_a_real_world_waiting_then_at_goal() {
     let scen = scenario(&dir);
     let id = run_id("topb");
     let out = dir.join("run");
-    let mut world = start_world(&scen, &out, &id);
+    let mut world = hand_started_world(&scen, &out, &id, 60);
 
     let ns = Namespace::new(&id).expect("run id");
     let mut obs = ShmObserver::connect(&ns, "mrsim-test-observer", true, Duration::from_secs(30))
@@ -221,7 +208,7 @@ fn mrsim_top_in_tmux_shows_every_robot_and_ends_with_the_run() {
     let scen = scenario(&dir);
     let id = run_id("topt");
     let out = dir.join("run");
-    let mut world = start_world(&scen, &out, &id);
+    let mut world = hand_started_world(&scen, &out, &id, 60);
 
     let socket = dir.join("tmux.sock");
     let cmd = format!(

@@ -3,7 +3,7 @@
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::{Child, Command, Output, Stdio};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// The binary under test.
@@ -321,3 +321,52 @@ start = [0.0, 4.0]
 goal = [3.0, 4.0]
 planner = "social-force"
 "#;
+
+/// The events of `kind` about `robot` in `ev` (events.jsonl's lines).
+pub fn events_of<'a>(
+    ev: &'a [serde_json::Value],
+    kind: &str,
+    robot: &str,
+) -> Vec<&'a serde_json::Value> {
+    ev.iter()
+        .filter(|e| e["type"] == kind && e["robot"] == robot)
+        .collect()
+}
+
+/// Starts `mrsim run file` quietly into `out` as run `id` with `extra`
+/// arguments, its stdout going to `stdout` and its stderr piped.
+pub fn launcher(file: &Path, out: &Path, id: &str, extra: &[&str], stdout: Stdio) -> Child {
+    mrsim()
+        .arg("run")
+        .arg(file)
+        .arg("--out")
+        .arg(out)
+        .args(["--run", id, "--quiet"])
+        .args(extra)
+        .stdout(stdout)
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start launcher")
+}
+
+/// Starts a world started by hand (`mrsim world`) for `scenario` as run
+/// `id` into `out`, waiting up to `start_timeout` seconds for its agents;
+/// its output goes nowhere.
+pub fn hand_started_world(scenario: &Path, out: &Path, id: &str, start_timeout: u32) -> Child {
+    mrsim()
+        .arg("world")
+        .arg(scenario)
+        .args([
+            "--run",
+            id,
+            "--start-timeout",
+            &start_timeout.to_string(),
+            "--out",
+        ])
+        .arg(out)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("start world")
+}
