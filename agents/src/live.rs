@@ -453,7 +453,7 @@ fn owned(
     bodies: &[BodyState],
     near: Option<&[u32]>,
 ) -> OwnedObservation {
-    let (all_walls, path) = (seat.walls.clone(), seat.path.clone());
+    let (all_walls, path) = (seat.walls().clone(), seat.path.clone());
     let o = seat.observe_among(header, bodies, near);
     // The walls the observation holds: all of them (shared), or those
     // within the sensing range when it is short of the walls' extent.

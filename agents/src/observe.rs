@@ -38,6 +38,7 @@ use mrsim_planners::{
 use mrsim_proto::{BodyState, SnapshotHeader, body_kind};
 use mrsim_scenario::rng::Rng;
 use mrsim_scenario::{RobotSpec, Scenario, VelocitySource, WorldConfig};
+use std::sync::Arc;
 
 /// Turns snapshots into observations for one robot; keeps the buffers.
 pub struct Observer {
@@ -52,12 +53,29 @@ pub struct Observer {
     seed: u64,
     /// The last scan, if the robot has a lidar.
     scan: LaserScan,
-    /// The scanner among the walls it was built for (their address and
-    /// length: a run's walls are fixed), built at the first scan.
-    scanner: Option<((usize, usize), Scanner)>,
-    /// The walls near the robot, if its sensing range is finite: the
-    /// index among the walls it was built for (as `scanner`).
-    near_walls: Option<((usize, usize), WallsBox)>,
+    /// The run's walls (fixed for the run).
+    walls: Arc<[Segment]>,
+    /// The scanner among `walls`, built at the first scan.
+    scanner: Option<Scanner>,
+    /// The box of `walls` and, once the robot is out of reach of some
+    /// wall, their index; built at the first observation with a finite
+    /// sensing range.
+    near_walls: Option<WallsBox>,
+}
+
+/// A run's walls as planners see them: its `[[wall]]`s (a map's traced
+/// outlines among them) and the arena's four sides.
+pub fn walls_of(
+    walls: &[mrsim_scenario::WallSpec],
+    arena: Option<mrsim_scenario::Arena>,
+) -> Arc<[Segment]> {
+    mrsim_scenario::walls_and_arena(walls, arena)
+        .iter()
+        .map(|w| Segment {
+            a: Vec2::new(w[0][0], w[0][1]),
+            b: Vec2::new(w[1][0], w[1][1]),
+        })
+        .collect()
 }
 
 /// The box of a run's walls, and their [`NearWalls`] index once a robot
@@ -256,13 +274,15 @@ impl NearWalls {
 }
 
 impl Observer {
-    /// An observer for robot `me` of `scenario`.
+    /// An observer for robot `me` of `scenario`, among its walls and
+    /// arena ([`walls_of`]).
     pub fn new(scenario: &Scenario, me: usize) -> Self {
         Self::for_robot(
             &scenario.world,
             scenario.robots.get(me),
             me,
             scenario.robots.len() + scenario.obstacles.len(),
+            walls_of(&scenario.walls, scenario.world.arena),
         )
     }
 
@@ -273,6 +293,7 @@ impl Observer {
         spec: Option<&RobotSpec>,
         me: usize,
         bodies: usize,
+        walls: Arc<[Segment]>,
     ) -> Self {
         Self {
             me,
@@ -287,9 +308,16 @@ impl Observer {
             rng: Rng::stream(world.seed, "position-noise", me as u64),
             seed: world.seed,
             scan: LaserScan::default(),
+            walls,
             scanner: None,
             near_walls: None,
         }
+    }
+
+    /// The run's walls, all of them (an observation holds those within
+    /// the sensing range).
+    pub fn walls(&self) -> &Arc<[Segment]> {
+        &self.walls
     }
 
     /// The observation of this tick.
@@ -298,10 +326,9 @@ impl Observer {
         header: &SnapshotHeader,
         bodies: &[BodyState],
         spec: &RobotSpec,
-        walls: &'a [Segment],
         path: Option<&'a DesignatedPath>,
     ) -> Observation<'a> {
-        self.observe_among(header, bodies, None, spec, walls, path)
+        self.observe_among(header, bodies, None, spec, path)
     }
 
     /// [`Self::observe`], looking only at the bodies of indices `near`
@@ -315,9 +342,9 @@ impl Observer {
         bodies: &[BodyState],
         near: Option<&[u32]>,
         spec: &RobotSpec,
-        walls: &'a [Segment],
         path: Option<&'a DesignatedPath>,
     ) -> Observation<'a> {
+        let walls: &[Segment] = &self.walls;
         let s = &bodies[self.me];
         let position = Vec2::new(s.position[0], s.position[1]);
         let velocity = Vec2::new(s.velocity[0], s.velocity[1]);
@@ -389,15 +416,9 @@ impl Observer {
             e.apply(header.sim_time, &mut self.others);
         }
         let scanned = spec.sensor.is_some() && {
-            let key = (walls.as_ptr() as usize, walls.len());
-            let scanner = match &mut self.scanner {
-                Some((k, s)) if *k == key => s,
-                slot => {
-                    &mut slot
-                        .insert((key, Scanner::new(Walls::from_segments(walls))))
-                        .1
-                }
-            };
+            let scanner = self
+                .scanner
+                .get_or_insert_with(|| Scanner::new(Walls::from_segments(walls)));
             scanner.scan_robot(
                 &mut self.scan,
                 self.seed,
@@ -409,17 +430,14 @@ impl Observer {
         };
         let reach = spec.sensing_range + spec.radius;
         let near_walls = if reach.is_finite() && !walls.is_empty() {
-            let key = (walls.as_ptr() as usize, walls.len());
-            if !matches!(&self.near_walls, Some((k, _)) if *k == key) {
-                self.near_walls = Some((key, WallsBox::new(walls)));
-            }
-            match &mut self.near_walls {
-                Some((_, b)) if !b.all_within(position, reach) => b
-                    .index
+            let b = self.near_walls.get_or_insert_with(|| WallsBox::new(walls));
+            if b.all_within(position, reach) {
+                walls
+            } else {
+                b.index
                     .get_or_insert_with(|| NearWalls::new(walls, reach))
                     .near(walls, position, reach)
-                    .unwrap_or(walls),
-                _ => walls,
+                    .unwrap_or(walls)
             }
         } else {
             walls

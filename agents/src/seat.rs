@@ -25,7 +25,6 @@ pub(crate) struct Seat {
     robot_count: usize,
     pub(crate) capacity: usize,
     pub(crate) spec: RobotSpec,
-    pub(crate) walls: Arc<[Segment]>,
     pub(crate) path: Option<Arc<DesignatedPath>>,
     observer: observe::Observer,
     diag: Option<diagnostics::DiagnosticsWriter>,
@@ -42,13 +41,7 @@ pub(crate) struct Seat {
 /// The walls every robot of the run whose setup is `view` sees (its
 /// `[[wall]]`s, map and arena), shared by the seats of one process.
 pub(crate) fn walls(view: &SetupView<'_>) -> Arc<[Segment]> {
-    mrsim_scenario::walls_and_arena(&view.scenario.walls, view.scenario.world.arena)
-        .iter()
-        .map(|w| Segment {
-            a: Vec2::new(w[0][0], w[0][1]),
-            b: Vec2::new(w[1][0], w[1][1]),
-        })
-        .collect()
+    observe::walls_of(&view.scenario.walls, view.scenario.world.arena)
 }
 
 /// The seat of the robot the world gave `reply` in the run whose setup is
@@ -68,7 +61,6 @@ pub(crate) fn seat_of(
         .and_then(|raw| {
             serde_json::from_str(raw.get()).map_err(|e| AgentError::BadSetup(e.to_string()))
         })?;
-    let walls = walls.clone();
     let path = (!spec.path.is_empty()).then(|| {
         Arc::new(DesignatedPath {
             points: spec.path.iter().map(|p| Vec2::new(p[0], p[1])).collect(),
@@ -77,7 +69,8 @@ pub(crate) fn seat_of(
     });
     let robot_count = scenario.robots.len();
     let capacity = robot_count + scenario.obstacles;
-    let observer = observe::Observer::for_robot(&scenario.world, Some(&spec), me, capacity);
+    let observer =
+        observe::Observer::for_robot(&scenario.world, Some(&spec), me, capacity, walls.clone());
     let diag = start_diagnostics(view.out_dir.as_deref(), me, &spec.name);
     Ok(Seat {
         me,
@@ -88,7 +81,6 @@ pub(crate) fn seat_of(
         lockstep: scenario.world.mode == mrsim_scenario::Mode::Lockstep,
         diag,
         spec,
-        walls,
         path,
         observer,
         answered: None,
@@ -212,14 +204,14 @@ impl Seat {
         bodies: &[BodyState],
         near: Option<&[u32]>,
     ) -> Observation<'_> {
-        self.observer.observe_among(
-            header,
-            bodies,
-            near,
-            &self.spec,
-            &self.walls,
-            self.path.as_deref(),
-        )
+        self.observer
+            .observe_among(header, bodies, near, &self.spec, self.path.as_deref())
+    }
+
+    /// The run's walls, all of them (an observation holds those within
+    /// the sensing range).
+    pub(crate) fn walls(&self) -> &Arc<[Segment]> {
+        self.observer.walls()
     }
 
     /// Sends `cmd` as this robot's answer to `tick` (through the fault

@@ -79,7 +79,7 @@ fn observe(sc: &Scenario, ticks: u64) -> Seen {
     (0..ticks)
         .map(|k| {
             let (h, b) = snapshot(k);
-            let o = obs.observe(&h, &b, &spec, &[], None);
+            let o = obs.observe(&h, &b, &spec, None);
             o.others
                 .iter()
                 .map(|s| {

@@ -115,7 +115,7 @@ pub struct Sim {
     world: World,
     learners: Vec<usize>,
     builtins: Vec<Builtin>,
-    walls: Vec<Segment>,
+    walls: Arc<[Segment]>,
     contacts: Vec<Contact>,
     /// Per robot: ticks running within the goal tolerance, and reached.
     hold: Vec<(u32, bool)>,
@@ -146,7 +146,7 @@ impl Sim {
         let mut sim = Self {
             source,
             registry,
-            walls: Vec::new(),
+            walls: Arc::from([]),
             builtins: Vec::new(),
             contacts: Vec::new(),
             hold: Vec::new(),
@@ -181,13 +181,7 @@ impl Sim {
     /// Planners, observers and counters as at the start of an episode.
     fn rebuild_drivers(&mut self) -> Result<(), SimError> {
         let s = &self.scenario;
-        self.walls = mrsim_scenario::walls_and_arena(&s.walls, s.world.arena)
-            .iter()
-            .map(|w| Segment {
-                a: Vec2::new(w[0][0], w[0][1]),
-                b: Vec2::new(w[1][0], w[1][1]),
-            })
-            .collect();
+        self.walls = mrsim_agents::observe::walls_of(&s.walls, s.world.arena);
         self.builtins.clear();
         for (i, spec) in s.robots.iter().enumerate() {
             if self.learners.contains(&i) {
@@ -203,7 +197,13 @@ impl Sim {
             self.builtins.push(Builtin {
                 index: i,
                 planner,
-                observer: Observer::new(s, i),
+                observer: Observer::for_robot(
+                    &s.world,
+                    Some(spec),
+                    i,
+                    s.robots.len() + s.obstacles.len(),
+                    self.walls.clone(),
+                ),
                 path: (!spec.path.is_empty()).then(|| DesignatedPath {
                     points: spec.path.iter().map(|p| Vec2::new(p[0], p[1])).collect(),
                     boundary: spec.boundary.unwrap_or(f64::INFINITY),
@@ -248,13 +248,9 @@ impl Sim {
         };
         for b in &mut self.builtins {
             let spec = &self.scenario.robots[b.index];
-            let obs = b.observer.observe(
-                &header,
-                self.world.states(),
-                spec,
-                &self.walls,
-                b.path.as_ref(),
-            );
+            let obs = b
+                .observer
+                .observe(&header, self.world.states(), spec, b.path.as_ref());
             let cmd = match b.planner.plan(&obs) {
                 Command::Force(f) => Applied::Force([f.x, f.y]),
                 Command::Velocity(v) => Applied::Velocity([v.x, v.y]),
