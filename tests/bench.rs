@@ -28,7 +28,7 @@ fn build_baseline() {
 }
 
 #[test]
-fn a_tiny_bench_writes_one_row_per_combination_with_every_field_of_the_issue() {
+fn a_tiny_bench_writes_one_row_per_combination_with_every_documented_field() {
     build_baseline();
     let out = fresh_dir("bench");
     let o = mrsim()

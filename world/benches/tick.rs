@@ -7,8 +7,8 @@
 //! every robot under a force command. `world_tick`: the step plus the per-robot
 //! minimum clearance (the grid, bounded by the smallest clearance recorded
 //! so far, as the world does) and a snapshot copy — the world process's
-//! CPU per tick before the commands. (Since the fifth round the clearance
-//! is computed on the recording thread, beside the tick loop.)
+//! CPU per tick before the commands. (In a run the clearance is computed
+//! on the recording thread, beside the tick loop.)
 //!
 //! `world_loop`: the world's whole tick as a run has it — publish, collect
 //! and check every robot's command, apply, step, goal test, record — timed

@@ -1,5 +1,5 @@
 //! The run's metrics: the schema of metrics.json (owned by
-//! [`mrsim_runfolder`]), re-exported here under its old paths with the
+//! [`mrsim_runfolder`]), re-exported here (the world's callers name it here) with the
 //! duration histogram, and what the tick loop accumulates per robot on
 //! its way to it.
 

@@ -5,7 +5,7 @@
 //! (published -> awake) and the planner's compute time. The world keeps a
 //! histogram of each per robot and for the whole run. Recorded on the tick
 //! loop, that would be six histogram records per robot and tick, each in
-//! memory of its own (BENCHMARKS.md, "Fifth round", has the profile).
+//! memory of its own (BENCHMARKS.md, "Realtime over iceoryx2", has the numbers).
 //!
 //! The loop appends each command's timings to one flat buffer and
 //! hands the buffer over in batches (of [`BATCH`] samples, or whatever is

@@ -6,7 +6,7 @@
 //! states, in order, to write trajectory.csv ([`crate::record`]); it feeds
 //! them to a [`Tracker`] too, and hands the tracker back when the run
 //! ends, so the tick loop neither computes them nor waits for them before
-//! it publishes the next tick (BENCHMARKS.md, "Fifth round", has the
+//! it publishes the next tick (BENCHMARKS.md, "In-process", has the
 //! profile).
 //!
 //! What the loop must know at once stays there: goals reached (they flag

@@ -119,7 +119,7 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-/// `designated-path` as the issue asks: a designated path, 16 sensed bodies,
+/// `designated-path` on the paper's kind of scene: a designated path, 16 sensed bodies,
 /// 6 speeds (the current one and 0.1..0.5 m/s), a robot in the paper's
 /// speed range among them.
 fn bench_designated_path(c: &mut Criterion) {

@@ -1,6 +1,6 @@
 //! Navigation among moving obstacles: Chung, Jin, Park, Lee & Lee, "Real
 //! Time Navigation Strategy of a Mobile Robot Using Artificial Potential
-//! Field" (shared/papers/004_a47b1b3d7b14a082.txt), Strategies I, II and III,
+//! Field", Strategies I, II and III,
 //! eqs (3), (4) and (5), for the point mass of eq (1), m r'' + b r' = f.
 //!
 //! One method, three strategies that share their terms:
@@ -22,7 +22,7 @@
 //! and obstacles alike: every other robot is a moving obstacle. Distances are
 //! between centres (the paper's objects are point masses, section 2).
 //!
-//! Readings of the OCR'd text (see shared/papers/README.md):
+//! Readings of the paper's text where it is garbled or misprinted:
 //! - Damping: eqs (3)-(5) print `- f_g alpha g(r_i)` and eq (2) requires
 //!   `<r', g(r')> < 0`; both are typos for a damping term in the velocity,
 //!   so g(v) = v and the term is `- f_g alpha v` (note the factor f_g,

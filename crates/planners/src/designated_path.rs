@@ -1,6 +1,6 @@
 //! Designated-path following with variable-velocity moving-obstacle
 //! avoidance: Yamada, Sa & Ohya, "Moving Obstacle Avoidance for Mobile Robot
-//! Moving on Designated Path" (shared/papers/001_a541852529fdd15c.txt),
+//! Moving on Designated Path",
 //! section 2 (global path following), section 3 (local path planning after
 //! Tsubouchi et al. [9]) and eq (1).
 //!

@@ -50,8 +50,8 @@
 //!
 //! Parameters and defaults: `w_heading` = 2, `w_clearance` = 0.2, `w_speed`
 //! = 0.2 (Fox et al.'s alpha, beta, gamma in their RHINO experiments, as the
-//! paper reports them; the paper is not among shared/papers, so these are
-//! quoted from the published article); `samples` = 11 per axis and
+//! paper reports them, quoted from the published article, IEEE Robotics &
+//! Automation Magazine 4(1), 1997); `samples` = 11 per axis and
 //! `horizon` = 3 s are our choices (the paper discretises its window
 //! without fixing a resolution).
 //!

@@ -3,7 +3,7 @@
 //!
 //! f = f_c e / ||e|| - alpha g(r'),  e = r_g - r,  and f = 0 when e = 0.
 //!
-//! Reading of the garbled text (see shared/papers/README.md): the paper
+//! Reading of the garbled text: the paper
 //! prints <r', g(r')> < 0, which would make -alpha g accelerate the robot;
 //! the prose ("the oscillatory behaviour depends on alpha") and Fig. 1 need
 //! a damping term, so we take g(v) = v, for which <v, g(v)> > 0.

@@ -1,6 +1,6 @@
 //! Hydrodynamic potential: Sugiyama, Yamada & Yoshikawa, "Path Planning of a
 //! Mobile Robot for Avoiding Moving Obstacles with Improved Velocity Control
-//! by Using the Hydrodynamic Potential" (shared/papers/003).
+//! by Using the Hydrodynamic Potential".
 //!
 //! The command is the guiding flow velocity `v = conj(dF/dz)` of a complex
 //! potential `F` in `z = x + i y` (section II):
@@ -78,8 +78,8 @@
 //! **Avoidance radius (section II).** `a_j = r_j + r_robot + u_j T`: the
 //! obstacle's radius grown by the robot's (configuration space) and by the
 //! distance the obstacle moves in the robot's time constant `T` (`delay`).
-//! The paper says the *diameter* grows by that distance; the issue asks for
-//! the radius, which is the safer of the two and what we do.
+//! The paper says the *diameter* grows by that distance; we grow the
+//! radius, the safer of the two.
 //!
 //! **Several obstacles and walls.** The paper defers both to its ref. 5,
 //! which we do not have; it says the fields are superposed with weights,
@@ -862,7 +862,7 @@ mod tests {
     }
 
     #[test]
-    fn parameters_have_the_issue_names_and_refuse_bad_values() {
+    fn parameters_have_the_documented_names_and_refuse_bad_values() {
         let mut params = Params::new();
         for (k, v) in [
             ("strength", ParamValue::Number(0.7)),

@@ -1,6 +1,7 @@
 //! The classic potential field: O. Khatib, "Real-time obstacle avoidance
 //! for manipulators and mobile robots", IJRR 5(1), 1986, as Ko & Choi
-//! (shared/papers/000_9e9b23d2ef5c4241.txt) use it in their case 7: the
+//! ("A New Approach to Moving Obstacle Avoidance Problem of a Mobile Robot")
+//! use it in their case 7: the
 //! `vdf` planner with alpha = beta -> infinity, i.e. with the outward speed
 //! ignored and the virtual distance equal to the real gap d (eq 1):
 //!

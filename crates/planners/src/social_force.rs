@@ -22,8 +22,8 @@
 //! semi-minor axis of an ellipse drawn from the other's step; the force is
 //! the gradient, of magnitude (V0 / sigma) exp(-b / sigma). With circular
 //! bodies this is our a exp(-gap / b) with a = V0 / sigma = 7 m/s^2 and
-//! b = sigma = 0.3 m, used for walls too (one `a`, `b` pair, as the issue
-//! asks for these four parameters). Defaults: `tau` = 0.5 s, `a` = 7, `b` =
+//! b = sigma = 0.3 m, used for walls too (one `a`, `b` pair: four parameters in
+//! all). Defaults: `tau` = 0.5 s, `a` = 7, `b` =
 //! 0.3 (H&M section III); `lambda` = 0.5, the continuous form of H&M's
 //! c = 0.5 behind the pedestrian; `pref_speed` (v0) = 1.34 m/s, H&M's mean
 //! desired speed.

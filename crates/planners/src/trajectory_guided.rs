@@ -47,7 +47,7 @@
 //! directions are generated and only the `candidates` of highest priority
 //! are kept (the ones that back away from the goal fall off).
 //!
-//! Reading chosen against the "inherited first": tried first, an
+//! Reading chosen against "inherited first": tried first, an
 //! inherited trajectory is always collision-free in an empty scene, so a
 //! robot at rest (inherited velocity zero) would never start and a robot
 //! that made a detour would never turn back to its goal. The goal candidate

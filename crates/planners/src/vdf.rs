@@ -1,6 +1,6 @@
 //! Virtual distance function (VDF) potential field: Ko & Choi, "A New
 //! Approach to Moving Obstacle Avoidance Problem of a Mobile Robot"
-//! (shared/papers/000_9e9b23d2ef5c4241.txt), eqs (1)-(22).
+//! eqs (1)-(22).
 //!
 //! Per sensed body o (robots and obstacles alike):
 //!

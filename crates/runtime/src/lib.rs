@@ -16,7 +16,7 @@
 //! - [`bench`] and [`sweep`]: experiments made of many runs.
 //!
 //! It is shaped so because more than the command line starts runs (tests
-//! today, the planned Python bindings): what a run does lives here once,
+//! and the Python bindings): what a run does lives here once,
 //! and each caller only turns its own input into the request types and
 //! presents the outcome.
 //! Hence the one rule of this crate: it prints nothing. Whatever a caller
