@@ -167,6 +167,12 @@ pub struct RunArgs {
     /// Do not draw plot.svg/png and replay.html.
     #[arg(long, hide = true)]
     pub no_report: bool,
+    /// Show the run in a browser while it ticks: serve the live page on
+    /// ADDR (default 127.0.0.1 on a free port; the URL is printed). Another
+    /// address than loopback exposes the page, which has no
+    /// authentication, to the network.
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:0")]
+    pub live: Option<String>,
 }
 
 /// `mrsim world` options.
@@ -330,10 +336,44 @@ pub enum Command {
         #[command(flatten)]
         zenoh: ZenohArgs,
     },
+    /// Watch a running world in a browser: the live page, served on
+    /// loopback (read-only; never slows the world or counts as an agent).
+    View {
+        /// The run id of the world.
+        #[arg(long, default_value = "default")]
+        run: String,
+        /// Seconds to wait for the world.
+        #[arg(long, default_value_t = 10.0)]
+        timeout: f64,
+        /// shm (the world on this machine) or zenoh (the world at --connect).
+        #[arg(long, value_enum, default_value = "shm")]
+        transport: LinkArg,
+        /// With --transport zenoh: the world's address (default
+        /// tcp/127.0.0.1:7447).
+        #[arg(long, value_name = "ENDPOINT")]
+        connect: Option<String>,
+        /// With --transport zenoh: the config file.
+        #[command(flatten)]
+        zenoh: ZenohArgs,
+        /// Where the page is served (default 127.0.0.1 on a free port).
+        /// Another address than loopback exposes the page, which has no
+        /// authentication, to the network.
+        #[arg(long, value_name = "ADDR", default_value = "127.0.0.1:0")]
+        live: String,
+    },
     /// Regenerate plot.svg, plot.png and replay.html of a run folder.
     Report {
         /// The run folder.
         dir: PathBuf,
+    },
+    /// Write a run folder in another format: `--mcap` writes run.mcap
+    /// (Foxglove's schemas, simulated time) into the folder.
+    Export {
+        /// The run folder.
+        dir: PathBuf,
+        /// Write run.mcap, for Foxglove or Lichtblick.
+        #[arg(long)]
+        mcap: bool,
     },
     /// List the planners.
     Planners,

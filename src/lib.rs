@@ -118,6 +118,7 @@ pub mod bench;
 pub mod check;
 pub mod cli;
 pub mod exit;
+pub mod export;
 pub mod outcome;
 pub mod planners;
 pub mod progress;
@@ -126,6 +127,7 @@ pub mod run;
 pub mod sweep;
 pub mod table;
 pub mod top;
+pub mod view;
 pub mod watch;
 pub mod world;
 

@@ -37,16 +37,22 @@ pub fn main(dir: &Path) -> Result<i32> {
             );
             Ok(0)
         }
-        Err(
-            e @ (RenderError::NotADirectory { .. }
-            | RenderError::Missing { .. }
-            | RenderError::Parse { .. }
-            | RenderError::Parquet(_)
-            | RenderError::Json { .. }),
-        ) => Err(crate::exit::invalid(format!(
-            "cannot report on {}: {e}",
-            dir.display()
-        ))),
-        Err(e) => Err(anyhow::anyhow!("cannot report on {}: {e}", dir.display())),
+        Err(e) => Err(refusal("report on", dir, e)),
+    }
+}
+
+/// Why `what` could not be done with the run folder `dir`: a folder that
+/// is not a run's is refused as bad input (exit 2), anything else is a
+/// failure (exit 1).
+pub(crate) fn refusal(what: &str, dir: &Path, e: RenderError) -> anyhow::Error {
+    match e {
+        RenderError::NotADirectory { .. }
+        | RenderError::Missing { .. }
+        | RenderError::Parse { .. }
+        | RenderError::Parquet(_)
+        | RenderError::Json { .. } => {
+            crate::exit::invalid(format!("cannot {what} {}: {e}", dir.display()))
+        }
+        e => anyhow::anyhow!("cannot {what} {}: {e}", dir.display()),
     }
 }

@@ -17,6 +17,13 @@ pub fn main(args: &RunArgs) -> Result<i32> {
         source.set.push(format!("world.robots_per_agent={k}"));
     }
     let validated = Validated::new(source).map_err(fail)?;
+    // The live page starts before the run, so its address is printed
+    // before anything else happens.
+    let feed = args.live.as_ref().map(|_| mrsim_live::Feed::new());
+    let server = match (&args.live, &feed) {
+        (Some(addr), Some(feed)) => Some(crate::view::serve(addr, feed.clone())?),
+        _ => None,
+    };
     let max_ticks = validated.scenario().max_ticks();
     let prepared = mrsim_runtime::launch::prepare(
         validated,
@@ -50,10 +57,10 @@ pub fn main(args: &RunArgs) -> Result<i32> {
     let outcome = prepared
         .start(&mut |event| match event {
             Event::Waiting => watch
-                .get_or_insert_with(|| RunWatch::new(&ns, max_ticks, zenoh.clone()))
+                .get_or_insert_with(|| RunWatch::new(&ns, max_ticks, zenoh.clone(), feed.clone()))
                 .update(),
             Event::WaitingInproc(obs) => watch
-                .get_or_insert_with(|| RunWatch::new(&ns, max_ticks, zenoh.clone()))
+                .get_or_insert_with(|| RunWatch::new(&ns, max_ticks, zenoh.clone(), feed.clone()))
                 .update_from(obs.0),
             Event::WorldEnded => {
                 if let Some(w) = watch.take() {
@@ -70,5 +77,19 @@ pub fn main(args: &RunArgs) -> Result<i32> {
             ),
         })
         .map_err(fail)?;
-    Ok(crate::outcome::print(&outcome, args.quiet))
+    let status = crate::outcome::print(&outcome, args.quiet);
+    if let (Some(server), Some(feed)) = (server, feed) {
+        // The world is gone: if the pump did not see the end, say so, and
+        // serve a moment longer so that every open page shows it.
+        if !feed.ended() {
+            feed.end(if outcome.interrupted() {
+                "the run was interrupted"
+            } else {
+                "finished"
+            });
+        }
+        std::thread::sleep(crate::view::LINGER);
+        drop(server);
+    }
+    Ok(status)
 }

@@ -1,7 +1,7 @@
 //! The launcher's view of its own run: `mrsim run` follows the world's live
 //! statistics as a read-only observer (the same channel `mrsim top` reads:
 //! iceoryx2, or Zenoh for a Zenoh run) and shows them as a [`Progress`] of
-//! ticks.
+//! ticks, and (with `--live`) feeds the live page from the same observer.
 
 use crate::progress::{Progress, Style};
 use mrsim_proto::{RobotStats, StatsHeader, agent_state, run_phase};
@@ -22,6 +22,8 @@ pub struct RunWatch {
     last: Option<Instant>,
     stats: StatsHeader,
     robots: Vec<RobotStats>,
+    /// `--live`: the page's pump, which reads the observer for both.
+    live: Option<mrsim_live::Pump>,
 }
 
 /// How long a Zenoh watch keeps trying to reach its world (a run's world
@@ -29,21 +31,29 @@ pub struct RunWatch {
 const CONNECT_LIMIT: Duration = Duration::from_secs(120);
 
 impl RunWatch {
-    /// How often the statistics are read (the world publishes 5 per second).
-    pub const INTERVAL: Duration = Duration::from_millis(100);
+    /// How often the statistics (and, for the live page, the snapshot)
+    /// are read: the world publishes statistics 5 times a second.
+    pub const INTERVAL: Duration = Duration::from_millis(50);
 
     /// A watch over run `ns` of `max_ticks` ticks, styled by
     /// [`Style::detect`], over iceoryx2 or (with `zenoh`) Zenoh; nothing is
     /// attached yet.
-    pub fn new(ns: &Namespace, max_ticks: u64, zenoh: Option<ZenohOptions>) -> Self {
+    pub fn new(
+        ns: &Namespace,
+        max_ticks: u64,
+        zenoh: Option<ZenohOptions>,
+        live: Option<mrsim_live::Feed>,
+    ) -> Self {
         let progress = Progress::new(max_ticks, "run");
+        // The live page draws the bodies: it needs the snapshots too.
+        let snapshots = live.is_some();
         let zenoh = zenoh
-            .filter(|_| progress.style() != Style::Off)
+            .filter(|_| progress.style() != Style::Off || live.is_some())
             .map(|opts| {
                 let (tx, rx) = mpsc::channel();
                 let ns = ns.clone();
                 std::thread::spawn(move || {
-                    if let Ok(o) = ZenohObserver::connect(&ns, &opts, false, CONNECT_LIMIT) {
+                    if let Ok(o) = ZenohObserver::connect(&ns, &opts, snapshots, CONNECT_LIMIT) {
                         let _ = tx.send(o);
                     }
                 });
@@ -57,6 +67,36 @@ impl RunWatch {
             last: None,
             stats: StatsHeader::default(),
             robots: Vec::new(),
+            live: live.map(mrsim_live::Pump::new),
+        }
+    }
+
+    /// Off: neither a progress to show nor a page to feed.
+    fn idle(&self) -> bool {
+        self.progress.style() == Style::Off && self.live.is_none()
+    }
+
+    /// Reads the newest statistics from `obs` (through the live page's
+    /// pump, when there is one, which takes the snapshot too); true if new
+    /// ones arrived.
+    fn read(
+        live: &mut Option<mrsim_live::Pump>,
+        obs: &mut dyn ObserverTransport,
+        stats: &mut StatsHeader,
+        robots: &mut Vec<RobotStats>,
+    ) -> bool {
+        match live {
+            Some(pump) => {
+                let new = matches!(pump.pump(obs), Ok(true));
+                if new {
+                    let (s, r) = pump.stats();
+                    *stats = *s;
+                    robots.clear();
+                    robots.extend_from_slice(r);
+                }
+                new
+            }
+            None => matches!(obs.latest_stats(stats, robots), Ok(true)),
         }
     }
 
@@ -64,7 +104,7 @@ impl RunWatch {
     /// moves the progress; attaches to the world once it is there. Never
     /// fails: progress is a courtesy.
     pub fn update(&mut self) {
-        if self.progress.style() == Style::Off {
+        if self.idle() {
             return;
         }
         let now = Instant::now();
@@ -80,7 +120,7 @@ impl RunWatch {
                 Some(rx) => rx.try_recv().ok().map(|o| Box::new(o) as _),
                 None => {
                     let node = format!("mrsim-run-{}", std::process::id());
-                    ShmObserver::try_connect(&self.ns, &node, false)
+                    ShmObserver::try_connect(&self.ns, &node, self.live.is_some())
                         .ok()
                         .map(|o| Box::new(o) as _)
                 }
@@ -89,9 +129,11 @@ impl RunWatch {
         let Some(obs) = self.obs.as_mut() else {
             return;
         };
-        if matches!(
-            obs.latest_stats(&mut self.stats, &mut self.robots),
-            Ok(true)
+        if Self::read(
+            &mut self.live,
+            obs.as_mut(),
+            &mut self.stats,
+            &mut self.robots,
         ) {
             self.show();
         }
@@ -100,13 +142,19 @@ impl RunWatch {
     /// [`Self::update`] from `obs` (an in-process run's observer) instead
     /// of the world's channels.
     pub fn update_from(&mut self, obs: &mut dyn ObserverTransport) {
-        if self.progress.style() == Style::Off {
+        if self.idle() {
             return;
         }
-        if matches!(
-            obs.latest_stats(&mut self.stats, &mut self.robots),
-            Ok(true)
-        ) {
+        let now = Instant::now();
+        if self.live.is_some()
+            && self
+                .last
+                .is_some_and(|t| now.saturating_duration_since(t) < Self::INTERVAL)
+        {
+            return;
+        }
+        self.last = Some(now);
+        if Self::read(&mut self.live, obs, &mut self.stats, &mut self.robots) {
             self.show();
         }
     }

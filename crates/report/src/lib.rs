@@ -5,11 +5,13 @@
 //! `metrics.json` and the optional `diagnostics.csv`; [`write_plots`] draws
 //! `plot.svg` and `plot.png` (map with trajectories, speeds, diagnostics);
 //! [`write_replay`] writes `replay.html`, one self-contained page that
-//! animates the run. [`render_all`] does all three; `mrsim run` calls it at
+//! animates the run; [`export_mcap`] writes `run.mcap` for Foxglove. [`render_all`]
+//! draws the first three; `mrsim run` calls it at
 //! the end of a run and `mrsim report DIR` on a folder.
 #![warn(missing_docs)]
 
 pub mod bench_plot;
+mod foxglove;
 mod palette;
 mod parquet;
 mod plot;
@@ -17,6 +19,7 @@ mod replay;
 mod run;
 mod sensing;
 
+pub use foxglove::{MCAP_FILE, McapWritten, export_mcap, write_mcap};
 pub use palette::{COLLISION, PALETTE, hex, robot_color};
 pub use plot::{MAX_PLOT_POINTS, PLOT_WIDTH, plot_every, plot_size, write_plots};
 pub use replay::{
@@ -85,6 +88,14 @@ pub enum RenderError {
         /// The file being drawn.
         path: PathBuf,
         /// plotters' message.
+        reason: String,
+    },
+    /// The MCAP writer failed.
+    #[error("{path}: writing MCAP failed: {reason}")]
+    Mcap {
+        /// The file being written.
+        path: PathBuf,
+        /// The mcap crate's message.
         reason: String,
     },
     /// The PNG encoder failed.

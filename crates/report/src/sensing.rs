@@ -1,64 +1,65 @@
-//! What the replay draws of unicycles and laser scanners, read from the
-//! run folder beside the rest: the `theta` column of trajectory.csv (only
-//! present when the scenario has a unicycle robot) and scan.csv (only when
-//! a robot records its scans). Both are optional; a file or column that is
-//! missing or unreadable just leaves the page without it.
+//! What the replay page and run.mcap show of unicycles and laser scanners,
+//! read from the run folder beside the rest: the `theta` column of
+//! trajectory.csv (only present when the scenario has a unicycle robot) and
+//! scan.csv (only when a robot records its scans). Both are optional; a
+//! file or column that is missing or unreadable just leaves the page (or
+//! the MCAP file) without it.
 
 use serde_json::{Value, json};
 use std::collections::HashMap;
 use std::path::Path;
 
-/// Adds `theta` (one heading per frame, or null) to each robot of `data`
-/// named in `unicycles`
-/// and `scans` (per robot name: angleMin, angleIncrement, rangeMax and one
-/// list of ranges per frame, null where no scan or no return) to `data`.
-pub(crate) fn add(data: &mut Value, dir: &Path, ticks: &[u64], unicycles: &[&str]) {
-    let frame_of: HashMap<u64, usize> = ticks.iter().enumerate().map(|(i, &t)| (t, i)).collect();
-    if let Ok(text) = std::fs::read_to_string(dir.join(mrsim_runfolder::TRAJECTORY_FILE)) {
-        let mut lines = text.lines();
-        let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
-        if let Some(col) = header.iter().position(|h| *h == "theta") {
-            let mut theta: HashMap<String, Vec<Value>> = HashMap::new();
-            for l in lines {
-                let f: Vec<&str> = l.split(',').collect();
-                let (Some(t), Some(name), Some(th)) = (
-                    f.first().and_then(|t| t.parse::<u64>().ok()),
-                    f.get(2),
-                    f.get(col).and_then(|v| v.parse::<f64>().ok()),
-                ) else {
-                    continue;
-                };
-                let Some(&frame) = frame_of.get(&t) else {
-                    continue;
-                };
-                let row = theta
-                    .entry(name.to_string())
-                    .or_insert_with(|| vec![Value::Null; ticks.len()]);
-                row[frame] = json!((th * 1000.0).round() / 1000.0);
-            }
-            if let Some(robots) = data["robots"].as_array_mut() {
-                for r in robots {
-                    let name = r["name"].as_str().unwrap_or("").to_string();
-                    if !unicycles.contains(&name.as_str()) {
-                        continue;
-                    }
-                    if let Some(t) = theta.remove(&name) {
-                        r["theta"] = Value::Array(t);
-                    }
-                }
-            }
-        }
-    }
-    let Ok(text) = std::fs::read_to_string(dir.join("scan.csv")) else {
-        return;
+/// One row of scan.csv: a robot's scan at a tick, in the robot's frame
+/// (beam `k` points at `angle_min + k * angle_increment` from its heading).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct ScanRow {
+    pub tick: u64,
+    pub robot: String,
+    pub angle_min: f64,
+    pub angle_increment: f64,
+    pub range_max: f64,
+    /// One range per beam, `None` where the beam has no return.
+    pub ranges: Vec<Option<f64>>,
+}
+
+/// Headings by robot name, as (tick, theta) in file order, from the `theta`
+/// column of trajectory.csv; empty when the file has no such column.
+pub(crate) fn headings(dir: &Path) -> HashMap<String, Vec<(u64, f64)>> {
+    let mut out: HashMap<String, Vec<(u64, f64)>> = HashMap::new();
+    let Ok(text) = std::fs::read_to_string(dir.join(mrsim_runfolder::TRAJECTORY_FILE)) else {
+        return out;
     };
-    let mut scans: serde_json::Map<String, Value> = serde_json::Map::new();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
+    let Some(col) = header.iter().position(|h| *h == "theta") else {
+        return out;
+    };
+    for l in lines {
+        let f: Vec<&str> = l.split(',').collect();
+        let (Some(t), Some(name), Some(th)) = (
+            f.first().and_then(|t| t.parse::<u64>().ok()),
+            f.get(2),
+            f.get(col).and_then(|v| v.parse::<f64>().ok()),
+        ) else {
+            continue;
+        };
+        out.entry(name.to_string()).or_default().push((t, th));
+    }
+    out
+}
+
+/// Every readable row of scan.csv, in file order (empty without the file).
+pub(crate) fn scans(dir: &Path) -> Vec<ScanRow> {
+    let Ok(text) = std::fs::read_to_string(dir.join("scan.csv")) else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
     for l in text.lines().skip(1) {
         let f: Vec<&str> = l.split(',').collect();
         if f.len() < 5 {
             continue;
         }
-        let (Ok(t), Ok(a0), Ok(inc), Ok(max)) = (
+        let (Ok(tick), Ok(angle_min), Ok(angle_increment), Ok(range_max)) = (
             f[0].parse::<u64>(),
             f[2].parse::<f64>(),
             f[3].parse::<f64>(),
@@ -66,24 +67,71 @@ pub(crate) fn add(data: &mut Value, dir: &Path, ticks: &[u64], unicycles: &[&str
         ) else {
             continue;
         };
-        let Some(&frame) = frame_of.get(&t) else {
+        let ranges = f[5..]
+            .iter()
+            .filter(|v| !v.is_empty())
+            .map(|v| v.parse::<f64>().ok().filter(|r| r.is_finite()))
+            .collect();
+        out.push(ScanRow {
+            tick,
+            robot: f[1].to_string(),
+            angle_min,
+            angle_increment,
+            range_max,
+            ranges,
+        });
+    }
+    out
+}
+
+/// Adds `theta` (one heading per frame, or null) to each robot of `data`
+/// named in `unicycles`
+/// and `scans` (per robot name: angleMin, angleIncrement, rangeMax and one
+/// list of ranges per frame, null where no scan or no return) to `data`.
+pub(crate) fn add(data: &mut Value, dir: &Path, ticks: &[u64], unicycles: &[&str]) {
+    let frame_of: HashMap<u64, usize> = ticks.iter().enumerate().map(|(i, &t)| (t, i)).collect();
+    let mut theta = headings(dir);
+    if !theta.is_empty()
+        && let Some(robots) = data["robots"].as_array_mut()
+    {
+        for r in robots {
+            let name = r["name"].as_str().unwrap_or("").to_string();
+            if !unicycles.contains(&name.as_str()) {
+                continue;
+            }
+            if let Some(rows) = theta.remove(&name) {
+                let mut frames = vec![Value::Null; ticks.len()];
+                for (t, th) in rows {
+                    if let Some(&frame) = frame_of.get(&t) {
+                        frames[frame] = json!((th * 1000.0).round() / 1000.0);
+                    }
+                }
+                r["theta"] = Value::Array(frames);
+            }
+        }
+    }
+    let rows = scans(dir);
+    if rows.is_empty() && !dir.join("scan.csv").exists() {
+        return;
+    }
+    let mut out: serde_json::Map<String, Value> = serde_json::Map::new();
+    for row in rows {
+        let Some(&frame) = frame_of.get(&row.tick) else {
             continue;
         };
-        let entry = scans.entry(f[1].to_string()).or_insert_with(|| {
+        let entry = out.entry(row.robot.clone()).or_insert_with(|| {
             json!({
-                "angleMin": a0, "angleIncrement": inc, "rangeMax": max,
+                "angleMin": row.angle_min, "angleIncrement": row.angle_increment,
+                "rangeMax": row.range_max,
                 "frames": vec![Value::Null; ticks.len()],
             })
         });
-        let ranges: Vec<Value> = f[5..]
+        let ranges: Vec<Value> = row
+            .ranges
             .iter()
-            .filter(|v| !v.is_empty())
-            .map(|v| match v.parse::<f64>() {
-                Ok(r) if r.is_finite() => json!((r * 1000.0).round() / 1000.0),
-                _ => Value::Null,
-            })
+            .map(|r| r.map_or(Value::Null, |r| json!((r * 1000.0).round() / 1000.0)))
             .collect();
         entry["frames"][frame] = Value::Array(ranges);
     }
-    data["scans"] = Value::Object(scans);
+    data["scans"] = Value::Object(out);
 }

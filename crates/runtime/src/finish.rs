@@ -26,7 +26,8 @@ pub struct Outcome {
     pub agent_failures: Vec<AgentFailure>,
     /// metrics.json (absent when the world failed).
     pub metrics: Option<RunMetrics>,
-    /// Drawing plot.svg/png and replay.html failed (the run itself did not).
+    /// Drawing plot.svg/png and replay.html, or writing run.mcap (when
+    /// `[output] mcap = true`), failed (the run itself did not).
     pub render_error: Option<RenderError>,
 }
 
@@ -104,6 +105,41 @@ pub struct Ending<'a> {
     pub render: bool,
 }
 
+/// The pictures (`render`) and run.mcap (`mcap`) of the run folder `dir`,
+/// from one reading of it.
+fn render(dir: &Path, render: bool, mcap: bool) -> Result<(), RenderError> {
+    let run = mrsim_report::RunData::load(dir)?;
+    if render {
+        mrsim_report::write_plots(&run, dir)?;
+        mrsim_report::write_replay(&run, dir)?;
+    }
+    if mcap {
+        mrsim_report::write_mcap(&run, dir)?;
+    }
+    Ok(())
+}
+
+/// Does the run's scenario.json ask for run.mcap (`[output] mcap = true`)?
+/// (Read here rather than handed down: every path to [`finish`] has the
+/// folder, and the flag is all that is wanted of the file.)
+fn wants_mcap(dir: &Path) -> bool {
+    #[derive(serde::Deserialize)]
+    struct Flags {
+        #[serde(default)]
+        mcap: bool,
+    }
+    #[derive(serde::Deserialize)]
+    struct Folder {
+        #[serde(default)]
+        output: Option<Flags>,
+    }
+    std::fs::read_to_string(dir.join(mrsim_runfolder::SCENARIO_FILE))
+        .ok()
+        .and_then(|text| serde_json::from_str::<Folder>(&text).ok())
+        .and_then(|f| f.output)
+        .is_some_and(|o| o.mcap)
+}
+
 /// Finishes a run whose world and agents have all ended.
 pub fn finish(end: Ending<'_>) -> Result<Outcome, FinishError> {
     let dir = end.dir.to_path_buf();
@@ -134,8 +170,9 @@ pub fn finish(end: Ending<'_>) -> Result<Outcome, FinishError> {
             FileError::Json { source, .. } => FinishError::ParseMetrics(source),
         })?,
     );
-    if end.render {
-        outcome.render_error = mrsim_report::render_all(&outcome.dir).err();
+    let mcap = wants_mcap(&outcome.dir);
+    if end.render || mcap {
+        outcome.render_error = render(&outcome.dir, end.render, mcap).err();
     }
     Ok(outcome)
 }

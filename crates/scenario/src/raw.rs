@@ -54,6 +54,7 @@ pub(crate) struct RawDoc {
 pub(crate) struct RawOutput {
     pub trajectory: Option<S<TrajectoryFormat>>,
     pub every: Option<S<i64>>,
+    pub mcap: Option<S<bool>>,
 }
 
 /// `[map]`.

@@ -400,6 +400,10 @@ pub struct OutputConfig {
     /// Record every `every`-th tick (ticks 0, K, 2K, ... and the last);
     /// default 1, every tick.
     pub every: u32,
+    /// Also write `run.mcap` (Foxglove's schemas, simulated time) at the
+    /// end of the run (default false).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub mcap: bool,
 }
 
 impl Default for OutputConfig {
@@ -407,6 +411,7 @@ impl Default for OutputConfig {
         Self {
             trajectory: TrajectoryFormat::Csv,
             every: 1,
+            mcap: false,
         }
     }
 }

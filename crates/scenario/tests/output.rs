@@ -88,8 +88,34 @@ fn every_kth_tick_is_recorded() {
     let o = OutputConfig {
         trajectory: TrajectoryFormat::Csv,
         every: 3,
+        ..OutputConfig::default()
     };
     let recorded: Vec<u64> = (0..10).filter(|&t| o.records(t)).collect();
     assert_eq!(recorded, [0, 3, 6, 9]);
     assert!((0..10).all(|t| OutputConfig::default().records(t)));
+}
+
+#[test]
+fn mcap_is_off_unless_asked_for_and_asked_for_in_the_file_or_with_set() {
+    let l = parse_with_overrides(BASE, "t.toml", &[]).expect("valid");
+    assert!(!l.scenario.output.mcap);
+    let with = format!("{BASE}\n[output]\nmcap = true\n");
+    assert!(
+        parse_with_overrides(&with, "t.toml", &[])
+            .expect("valid")
+            .scenario
+            .output
+            .mcap
+    );
+    let pairs = [("output.mcap".to_string(), "true".to_string())];
+    assert!(
+        parse_with_overrides(BASE, "t.toml", &pairs)
+            .expect("valid")
+            .scenario
+            .output
+            .mcap
+    );
+    let bad = format!("{BASE}\n[output]\nmcap = \"yes\"\n");
+    let err = parse_with_overrides(&bad, "t.toml", &[]).expect_err("a string is no bool");
+    assert!(err.to_string().contains("t.toml:"), "{err}");
 }

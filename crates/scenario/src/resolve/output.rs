@@ -1,4 +1,5 @@
-//! The `[output]` table: the trajectory's format and how often it records.
+//! The `[output]` table: the trajectory's format, how often it records, and
+//! whether the run also writes run.mcap.
 
 use crate::error::Fail;
 use crate::raw::{RawOutput, S};
@@ -29,5 +30,6 @@ pub(super) fn resolve_output(o: Option<&S<RawOutput>>) -> Result<OutputConfig, F
             .as_ref()
             .map_or(TrajectoryFormat::Csv, |t| *t.get_ref()),
         every,
+        mcap: raw.mcap.as_ref().is_some_and(|m| *m.get_ref()),
     })
 }

@@ -98,6 +98,7 @@ pub fn channels(agents: usize, stop: Arc<AtomicBool>) -> (InprocWorld, Vec<Inpro
             helper: None,
             to_help: None,
             stats: Default::default(),
+            latest: Default::default(),
         },
         sides,
     )

@@ -11,14 +11,20 @@ use std::sync::{Arc, Mutex};
 /// published (an observer copies them only when that count moved).
 pub(super) type SharedStats = Arc<Mutex<(u64, StatsHeader, Vec<RobotStats>)>>;
 
-/// Reads the setup and the live statistics of an in-process run. It gets
-/// no snapshots ([`ObserverTransport::latest_snapshot`] always says none
-/// arrived): the launcher's progress needs only the statistics, and a copy
-/// of every snapshot for an observer would cost the tick loop.
+/// The newest snapshot the world published: the very bodies its workers
+/// share, so the world keeps it for observers without a copy.
+pub(super) type SharedSnapshot = Arc<Mutex<Option<(SnapshotHeader, Arc<[BodyState]>)>>>;
+
+/// Reads the setup, the live statistics and the newest snapshot of an
+/// in-process run. The world keeps a reference to each snapshot it
+/// publishes (no copy on the tick loop); an observer copies the bodies
+/// only when it asks and the tick has moved.
 pub struct InprocObserver {
     pub(super) setup: Arc<Mutex<Option<Vec<u8>>>>,
     pub(super) stats: SharedStats,
     pub(super) seen: u64,
+    pub(super) snapshot: SharedSnapshot,
+    pub(super) seen_tick: Option<u64>,
     pub(super) alive: Arc<AtomicBool>,
 }
 
@@ -29,10 +35,23 @@ impl ObserverTransport for InprocObserver {
 
     fn latest_snapshot(
         &mut self,
-        _header: &mut SnapshotHeader,
-        _bodies: &mut Vec<BodyState>,
+        header: &mut SnapshotHeader,
+        bodies: &mut Vec<BodyState>,
     ) -> Result<bool, TransportError> {
-        Ok(false)
+        let newest = match self.snapshot.lock() {
+            Ok(s) => s.clone(),
+            Err(_) => return Ok(false),
+        };
+        match newest {
+            Some((h, b)) if self.seen_tick != Some(h.tick) => {
+                self.seen_tick = Some(h.tick);
+                *header = h;
+                bodies.clear();
+                bodies.extend_from_slice(&b);
+                Ok(true)
+            }
+            _ => Ok(false),
+        }
     }
 
     fn latest_stats(

@@ -32,6 +32,9 @@ pub struct InprocWorld {
     pub(super) to_help: Option<(SnapshotHeader, Arc<[BodyState]>)>,
     /// The newest live statistics, for [`InprocObserver`]s.
     pub(super) stats: super::observer::SharedStats,
+    /// The newest snapshot, for [`InprocObserver`]s (the live page): the
+    /// one the workers already share, so keeping it is a reference count.
+    pub(super) latest: super::observer::SharedSnapshot,
 }
 
 /// Work the world's thread takes on while it waits for a snapshot's
@@ -61,13 +64,15 @@ impl InprocWorld {
         self.helper = Some(helper);
     }
 
-    /// A read-only observer of this run's setup and live statistics (the
-    /// launcher's progress).
+    /// A read-only observer of this run's setup, live statistics and newest
+    /// snapshot (the launcher's progress, the live page).
     pub fn observer(&self) -> InprocObserver {
         InprocObserver {
             setup: self.setup.clone(),
             stats: self.stats.clone(),
             seen: 0,
+            snapshot: self.latest.clone(),
+            seen_tick: None,
             alive: self.alive.clone(),
         }
     }
@@ -88,6 +93,9 @@ impl WorldTransport for InprocWorld {
     ) -> Result<(), TransportError> {
         let h = *header;
         let shared: Arc<[BodyState]> = Arc::from(bodies);
+        if let Ok(mut latest) = self.latest.lock() {
+            *latest = Some((h, shared.clone()));
+        }
         if self.helper.is_some() {
             self.to_help = Some((h, shared.clone()));
         }

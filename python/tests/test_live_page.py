@@ -1,0 +1,143 @@
+"""The live page in a real browser (Debian's Chromium, driven by Playwright):
+it shows a run while it ticks, over shared memory, in-process and over
+Zenoh, and says when the run has finished; `mrsim view` shows a run started
+elsewhere."""
+
+import json
+import os
+import re
+import shutil
+import subprocess
+import time
+import urllib.request
+
+import pytest
+from playwright.sync_api import sync_playwright
+
+from conftest import built_mrsim as mrsim_binary
+
+CHROMIUM = os.environ.get("MRSIM_CHROMIUM") or shutil.which("chromium") or "/usr/bin/chromium"
+BROWSER_ARGS = [
+    "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+    "--disable-background-networking", "--disable-component-update", "--disable-sync",
+]  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def browser():
+    if not os.path.exists(CHROMIUM):
+        pytest.fail(f"{CHROMIUM} not found: install Debian's chromium (or set MRSIM_CHROMIUM)")
+    with sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=BROWSER_ARGS)
+        yield b
+        b.close()
+
+
+def start(cmd, cwd):
+    """Starts `cmd` and returns it with the live page's URL it printed."""
+    proc = subprocess.Popen(cmd, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:
+        line = proc.stderr.readline()
+        if not line:
+            break
+        m = re.search(r"live page: (http://\S+)", line)
+        if m:
+            return proc, m.group(1)
+    proc.kill()
+    pytest.fail(f"no live page URL from {cmd}: {proc.communicate()}")
+
+
+def canvas(page):
+    return page.evaluate("document.getElementById('map').toDataURL()")
+
+
+def watch_to_the_end(browser, url, robots):
+    page = browser.new_page(viewport={"width": 1100, "height": 800})
+    page.goto(url)
+    page.wait_for_function("Number(document.body.dataset.tick || 0) > 0", timeout=60_000)
+    first_tick, first = int(page.evaluate("document.body.dataset.tick")), canvas(page)
+    page.screenshot()
+    time.sleep(1.0)
+    second_tick, second = int(page.evaluate("document.body.dataset.tick")), canvas(page)
+    page.screenshot()
+    # A second later the run has ticked on and the robots have moved.
+    assert second_tick > first_tick
+    assert second != first
+    title = page.text_content("#title")
+    assert "run" in title
+    # Every robot is there, and a click on one shows its details.
+    setup = json.loads(urllib.request.urlopen(url + "setup").read())
+    assert [r["name"] for r in setup["robots"]] == robots
+    page.wait_for_function("document.body.dataset.ended !== undefined", timeout=90_000)
+    status = page.text_content("#status")
+    page.close()
+    return status
+
+
+def test_the_live_page_shows_a_realtime_run_over_shared_memory_until_it_finishes(
+    repo, tmp_path, browser
+):
+    cmd = [
+        mrsim_binary(repo), "run", "scenarios/crossing.toml", "--set", "planner=orca",
+        "--set", "defaults.params.perturb=0.001", "--set", "world.mode=realtime",
+        "--set", "world.duration=6", "--live", "--quiet", "--out", str(tmp_path / "run"),
+    ]  # fmt: skip
+    proc, url = start(cmd, repo)
+    assert url.startswith("http://127.0.0.1:")
+    try:
+        status = watch_to_the_end(browser, url, [f"a{i}" for i in range(4)] + [f"b{i}" for i in range(4)])
+        assert status == "the run has finished"
+        assert proc.wait(timeout=60) == 0
+    finally:
+        proc.kill()
+
+
+@pytest.mark.parametrize("transport", ["inproc", "zenoh"])
+def test_the_live_page_shows_an_in_process_and_a_zenoh_run(repo, tmp_path, browser, transport):
+    cmd = [
+        mrsim_binary(repo), "run", "scenarios/crossing.toml", "--set", "world.mode=realtime",
+        "--set", "world.duration=5", "--transport", transport, "--live", "127.0.0.1:0",
+        "--quiet", "--out", str(tmp_path / "run"),
+    ]  # fmt: skip
+    proc, url = start(cmd, repo)
+    try:
+        status = watch_to_the_end(browser, url, [f"a{i}" for i in range(4)] + [f"b{i}" for i in range(4)])
+        assert status == "the run has finished"
+        assert proc.wait(timeout=60) == 0
+    finally:
+        proc.kill()
+
+
+def test_mrsim_view_shows_a_run_started_elsewhere_and_two_pages_at_once(repo, tmp_path, browser):
+    run_id = f"view{os.getpid()}"
+    run = subprocess.Popen(
+        [
+            mrsim_binary(repo), "run", "scenarios/crossing.toml", "--set", "world.mode=realtime",
+            "--set", "world.duration=6", "--run", run_id, "--quiet", "--out", str(tmp_path / "run"),
+        ],  # fmt: skip
+        cwd=repo, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )
+    try:
+        view, url = start([mrsim_binary(repo), "view", "--run", run_id, "--timeout", "30"], repo)
+        other = browser.new_page()
+        other.goto(url)
+        status = watch_to_the_end(browser, url, [f"a{i}" for i in range(4)] + [f"b{i}" for i in range(4)])
+        assert status == "the run has finished"
+        other.wait_for_function("document.body.dataset.ended !== undefined", timeout=30_000)
+        assert other.text_content("#status") == "the run has finished"
+        assert view.wait(timeout=60) == 0
+        assert run.wait(timeout=60) == 0
+    finally:
+        run.kill()
+        if "view" in locals():
+            view.kill()
+
+
+def test_live_refuses_an_address_it_cannot_parse(repo):
+    done = subprocess.run(
+        [mrsim_binary(repo), "run", "scenarios/crossing.toml", "--live", "nowhere", "--quiet"],
+        cwd=repo, capture_output=True, text=True,
+    )  # fmt: skip
+    assert done.returncode == 2
+    assert "--live nowhere" in done.stderr

@@ -1,0 +1,175 @@
+"""run.mcap against readers nobody on this project wrote: the `mcap` package
+reads every record with its CRCs checked and counts what the summary says,
+every message is checked against Foxglove's own JSON schemas (the
+`@foxglove/schemas` npm package), and the robots' positions are those of
+trajectory.csv."""
+
+import base64
+import csv
+import json
+import os
+import pathlib
+import shutil
+import subprocess
+
+import jsonschema
+import pytest
+from mcap.reader import make_reader
+from mcap.records import Message
+from mcap.stream_reader import StreamReader
+
+from conftest import built_mrsim as mrsim_binary
+
+
+@pytest.fixture(scope="session")
+def foxglove_schemas(tmp_path_factory):
+    """Foxglove's published JSON schemas by name (`foxglove.SceneUpdate`, ...),
+    from the npm package, installed here unless FOXGLOVE_SCHEMAS names a JSON
+    file of them."""
+    given = os.environ.get("FOXGLOVE_SCHEMAS")
+    if given:
+        return json.loads(pathlib.Path(given).read_text())
+    npm, node = shutil.which("npm"), shutil.which("node")
+    if not npm or not node:
+        pytest.fail("npm and node are needed to install @foxglove/schemas (Debian: nodejs npm)")
+    where = tmp_path_factory.mktemp("foxglove")
+    subprocess.run(
+        [npm, "install", "--silent", "--prefix", str(where), "@foxglove/schemas"],
+        check=True, capture_output=True, text=True,
+    )  # fmt: skip
+    dump = (
+        "const s = require('@foxglove/schemas/jsonschema');"
+        "const out = {};"
+        "for (const [k, v] of Object.entries(s)) if (v && v.title) out[v.title] = v;"
+        "process.stdout.write(JSON.stringify(out));"
+    )
+    text = subprocess.run(
+        [node, "-e", dump], cwd=where, check=True, capture_output=True, text=True
+    ).stdout
+    schemas = json.loads(text)
+    assert "foxglove.SceneUpdate" in schemas and "foxglove.Grid" in schemas
+    return schemas
+
+
+def run_scene(repo, out, scenario, *sets):
+    cmd = [
+        mrsim_binary(repo), "run", str(repo / "scenarios" / scenario), "--quiet", "--no-report",
+        "--transport", "inproc", "--out", str(out), "--set", "output.mcap=true", *sets,
+    ]  # fmt: skip
+    done = subprocess.run(cmd, capture_output=True, text=True, cwd=repo)
+    assert done.returncode == 0, done.stderr
+    return out
+
+
+def read_all(path):
+    """Every record through the streaming reader (CRCs of chunks, the data
+    section and the summary checked), and the messages decoded."""
+    with open(path, "rb") as f:
+        records = list(StreamReader(f, validate_crcs=True).records)
+    with open(path, "rb") as f:
+        reader = make_reader(f, validate_crcs=True)
+        summary = reader.get_summary()
+        messages = [
+            (schema, channel, message, json.loads(message.data))
+            for schema, channel, message in reader.iter_messages(log_time_order=False)
+        ]
+    return records, summary, messages
+
+
+def trajectory(out):
+    with open(out / "trajectory.csv") as f:
+        return list(csv.DictReader(f))
+
+
+def check_file(out, schemas):
+    records, summary, messages = read_all(out / "run.mcap")
+    # The summary's counts are what the file holds.
+    in_records = [r for r in records if isinstance(r, Message)]
+    assert summary.statistics.message_count == len(messages) == len(in_records) > 0
+    per_channel = {}
+    for _, channel, _, _ in messages:
+        per_channel[channel.id] = per_channel.get(channel.id, 0) + 1
+    assert summary.statistics.channel_message_counts == per_channel
+    assert summary.statistics.channel_count == len(summary.channels)
+    assert summary.statistics.schema_count == len(summary.schemas)
+    # Every message is valid under its schema: Foxglove's for its
+    # well-known types, the file's own for mrsim's stats.
+    for schema, channel, _, msg in messages:
+        assert channel.message_encoding == "json"
+        assert schema.encoding == "jsonschema"
+        known = schemas.get(schema.name) or json.loads(schema.data)
+        jsonschema.validate(msg, known)
+    return summary, messages
+
+
+def test_the_lidar_demo_writes_an_mcap_that_foxglove_can_read(repo, tmp_path, foxglove_schemas):
+    out = run_scene(repo, tmp_path / "lidar", "lidar-demo.toml", "--set", "world.duration=4")
+    summary, messages = check_file(out, foxglove_schemas)
+    topics = {c.topic for c in summary.channels.values()}
+    assert {"/scene", "/tf", "/stats", "/scout/scan"} <= topics
+    assert "/walker/scan" not in topics  # walker's scans are not recorded
+    # Each scan in the file is a row of scan.csv, beam for beam.
+    with open(out / "scan.csv") as f:
+        rows = [line.rstrip("\n").split(",") for line in f.readlines()[1:]]
+    scans = [m for _, c, _, m in messages if c.topic == "/scout/scan"]
+    assert len(scans) == len(rows) > 0
+    for scan, row in zip(scans, rows):
+        beams = [c for c in row[5:] if c != ""]
+        assert len(scan["ranges"]) == len(beams)
+        for r, cell in zip(scan["ranges"], beams):
+            value = float(cell)
+            assert r == pytest.approx(value if value != float("inf") else 0.0, abs=1e-9)
+        assert scan["start_angle"] == pytest.approx(float(row[2]))
+    # The robots' frames are where trajectory.csv has them, tick by tick,
+    # and log times are simulated time.
+    rows = {(r["tick"], r["body"]): r for r in trajectory(out)}
+    dt = 0.1
+    tfs = [(m, msg) for _, c, m, msg in messages if c.topic == "/tf"]
+    assert len(tfs) == len({r["tick"] for r in rows.values()})
+    for message, msg in tfs:
+        tick = round(message.log_time / 1e9 / dt)
+        for t in msg["transforms"]:
+            row = rows[(str(tick), t["child_frame_id"])]
+            assert t["translation"]["x"] == pytest.approx(float(row["x"]), abs=1e-9)
+            assert t["translation"]["y"] == pytest.approx(float(row["y"]), abs=1e-9)
+    # The scene draws each robot with its name once a tick.
+    scenes = [msg for _, c, _, msg in messages if c.topic == "/scene"]
+    ids = {e["id"] for e in scenes[-1]["entities"]}
+    assert {"scout", "walker"} <= ids
+    assert any(e["id"] == "walls" and e["lines"][0]["points"] for e in scenes[0]["entities"])
+
+
+def test_a_map_scene_exports_its_grid_and_export_rewrites_the_same_file(
+    repo, tmp_path, foxglove_schemas
+):
+    out = run_scene(repo, tmp_path / "office", "maps/office.toml", "--set", "world.duration=2")
+    summary, messages = check_file(out, foxglove_schemas)
+    grids = [msg for _, c, _, msg in messages if c.topic == "/map"]
+    assert len(grids) == 1
+    scenario = json.loads((out / "scenario.json").read_text())
+    width, height = scenario["map"]["size"]
+    assert grids[0]["column_count"] == width
+    assert grids[0]["cell_size"]["x"] == pytest.approx(scenario["map"]["resolution"])
+    cells = base64.b64decode(grids[0]["data"])
+    assert len(cells) == width * height
+    assert set(cells) <= {0, 100, 255}  # free, occupied, unknown (-1 as INT8)
+    assert 100 in set(cells)
+    # `mrsim export` writes the same bytes from the folder.
+    first = (out / "run.mcap").read_bytes()
+    (out / "run.mcap").unlink()
+    done = subprocess.run(
+        [mrsim_binary(repo), "export", str(out), "--mcap"], capture_output=True, text=True, cwd=repo
+    )
+    assert done.returncode == 0, done.stderr
+    assert (out / "run.mcap").read_bytes() == first
+
+
+def test_export_refuses_a_folder_that_is_not_a_run(repo, tmp_path):
+    done = subprocess.run(
+        [mrsim_binary(repo), "export", str(tmp_path), "--mcap"], capture_output=True, text=True
+    )
+    assert done.returncode == 2
+    assert "scenario.json" in done.stderr
+    done = subprocess.run([mrsim_binary(repo), "export", str(tmp_path)], capture_output=True, text=True)
+    assert done.returncode == 2
+    assert "--mcap" in done.stderr
