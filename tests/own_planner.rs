@@ -225,6 +225,17 @@ fn a_registered_copy_of_homing_reproduces_homings_run_byte_for_byte() {
     }
 }
 
+/// Asserts that the run of `dir` was stopped (interrupted) after a number
+/// of ticks in `ticks`, with its metrics.json written.
+fn assert_stopped_with_outputs(dir: &Path, ticks: std::ops::RangeInclusive<u64>) {
+    let m: mrsim::RunMetrics = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("metrics.json")).expect("metrics.json"),
+    )
+    .expect("metrics");
+    assert!(m.interrupted);
+    assert!(ticks.contains(&m.ticks), "{}", m.ticks);
+}
+
 /// Homing, until the robot with index `robot` fails at tick `at`: a
 /// panic, or a NaN command. The others never fail.
 struct FailsAt {
@@ -277,12 +288,7 @@ fn a_planner_that_panics_or_returns_nan_stops_a_lockstep_run_naming_the_robot_an
             "{text}"
         );
         // The outputs so far are written, and end near the failing tick.
-        let m: mrsim::RunMetrics = serde_json::from_str(
-            &std::fs::read_to_string(dir.join("metrics.json")).expect("metrics.json"),
-        )
-        .expect("metrics");
-        assert!(m.interrupted);
-        assert!((7..=9).contains(&m.ticks), "{}", m.ticks);
+        assert_stopped_with_outputs(dir, 7..=9);
         assert!(!trajectory(dir).is_empty());
         let _ = std::fs::remove_dir_all(&out);
     }
@@ -344,12 +350,7 @@ fn a_planner_that_never_returns_stops_a_lockstep_run_after_the_plan_timeout_nami
         "{text}"
     );
     // The outputs so far are written, up to the tick it hung at.
-    let m: mrsim::RunMetrics = serde_json::from_str(
-        &std::fs::read_to_string(dir.join("metrics.json")).expect("metrics.json"),
-    )
-    .expect("metrics");
-    assert!(m.interrupted);
-    assert!((4..=5).contains(&m.ticks), "{}", m.ticks);
+    assert_stopped_with_outputs(dir, 4..=5);
     assert!(trajectory(dir).iter().any(|r| r.tick == 3));
     let _ = std::fs::remove_dir_all(&out);
 }
