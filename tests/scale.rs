@@ -400,10 +400,10 @@ fn a_million_robot_scene_is_checked_and_a_run_past_the_memory_available_is_refus
     assert_eq!(o.status.code(), Some(2), "{stderr}");
     for words in [
         "million.toml: this run needs about",
-        "1000000 robots x 53 KB, 1000000 of them with an unlimited sensing range",
+        "1000000 robots x 53 KB, 1000000 of them sensing the whole scene",
         "MemAvailable",
         "To make it fit: run fewer robots",
-        "finite `sensing_range`",
+        "`sensing_range` shorter than the scene",
     ] {
         assert!(stderr.contains(words), "`{words}` in: {stderr}");
     }

@@ -7,9 +7,11 @@
 //!
 //! - every run: `BASE`, and `PER_ROBOT` for each robot (its body, driver,
 //!   planner, share of the snapshot and the recording);
-//! - a robot with an unlimited sensing range senses every other body each
-//!   tick and keeps room for them: `SENSED` bytes per other body, so such
-//!   robots cost the square of their number (10,000 of them: 6.4 GB);
+//! - a robot whose sensing range reaches across the whole scene (the
+//!   default range does) senses every other body each tick and keeps room
+//!   for them: `SENSED` bytes per other body, so such robots cost the
+//!   square of their number (10,000 of them: 6.4 GB); shorter ranges in a
+//!   crowd are not counted;
 //! - with one process per agent (shm, Zenoh), `PER_AGENT_PROCESS` for each
 //!   (an agent drives `robots_per_agent` robots).
 //!
@@ -39,7 +41,7 @@ pub struct Estimate {
     pub bytes: u64,
     /// Robots.
     pub robots: u64,
-    /// Robots with an unlimited sensing range.
+    /// Robots whose sensing range reaches across the scene.
     pub seeing_all: u64,
     /// Agent processes (0 in-process).
     pub processes: u64,
@@ -49,10 +51,11 @@ pub struct Estimate {
 pub fn estimate(scenario: &Scenario, transport: Transport) -> Estimate {
     let robots = scenario.robots.len() as u64;
     let bodies = robots + scenario.obstacles.len() as u64;
+    let reach = extent(scenario);
     let seeing_all = scenario
         .robots
         .iter()
-        .filter(|r| !r.sensing_range.is_finite())
+        .filter(|r| r.sensing_range >= reach)
         .count() as u64;
     let processes = match transport {
         Transport::Inproc => 0,
@@ -76,6 +79,30 @@ pub fn estimate(scenario: &Scenario, transport: Transport) -> Estimate {
     }
 }
 
+/// The diagonal of the box around the arena, every start and goal: a
+/// sensing range at least this long senses every body of the scene (the
+/// default range, 1e9, does).
+fn extent(scenario: &Scenario) -> f64 {
+    let points = scenario
+        .robots
+        .iter()
+        .flat_map(|r| [r.start, r.goal])
+        .chain(scenario.obstacles.iter().map(|o| o.start))
+        .chain(scenario.world.arena.iter().flat_map(|a| [a.min, a.max]));
+    let mut lo = [f64::INFINITY; 2];
+    let mut hi = [f64::NEG_INFINITY; 2];
+    for p in points {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    if lo[0] > hi[0] {
+        return 0.0;
+    }
+    (hi[0] - lo[0]).hypot(hi[1] - lo[1])
+}
+
 /// Refuses a run whose estimate exceeds `available` bytes (`None`: not
 /// known, nothing refused), saying both and how to make it fit.
 pub fn check(
@@ -94,7 +121,7 @@ pub fn check(
     let mut how = format!("{} robots x {} KB", e.robots, PER_ROBOT >> 10);
     if e.seeing_all > 0 {
         how.push_str(&format!(
-            ", {} of them with an unlimited sensing range x {} B for each other body",
+            ", {} of them sensing the whole scene x {} B for each other body",
             e.seeing_all, SENSED
         ));
     }
@@ -108,7 +135,7 @@ pub fn check(
     how.push_str(&format!(", plus {} MB", BASE >> 20));
     let mut advice = vec!["run fewer robots ([generate] count)".to_string()];
     if e.seeing_all > 0 {
-        advice.push("give the robots a finite `sensing_range`".into());
+        advice.push("give the robots a `sensing_range` shorter than the scene".into());
     }
     if e.processes > 0 {
         advice.push("drive more robots per agent process ([world] robots_per_agent)".into());
@@ -194,9 +221,12 @@ mod tests {
             .expect_err("refused")
             .0;
         assert!(
-            err.contains("1000 of them with an unlimited sensing range"),
+            err.contains("1000 of them sensing the whole scene"),
             "{err}"
         );
-        assert!(err.contains("finite `sensing_range`"), "{err}");
+        assert!(
+            err.contains("`sensing_range` shorter than the scene"),
+            "{err}"
+        );
     }
 }
