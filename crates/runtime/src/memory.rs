@@ -91,11 +91,9 @@ fn extent(scenario: &Scenario) -> f64 {
         .chain(scenario.world.arena.iter().flat_map(|a| [a.min, a.max]));
     let mut lo = [f64::INFINITY; 2];
     let mut hi = [f64::NEG_INFINITY; 2];
-    for p in points {
-        for k in 0..2 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
+    for [x, y] in points {
+        lo = [lo[0].min(x), lo[1].min(y)];
+        hi = [hi[0].max(x), hi[1].max(y)];
     }
     if lo[0] > hi[0] {
         return 0.0;
