@@ -710,12 +710,17 @@ fn in_lockstep_agents_behind_a_cut_link_are_lost_the_run_goes_on_and_they_rejoin
         return;
     };
     let _heavy = heavy();
-    // Lockstep waits for the agents behind the cut until stall_timeout
-    // (2 s), then goes on without them. The agents beside the world take
-    // 50 ms a tick so that the run does not spin; it is long enough to
-    // outlast the cut and the rejoin, and ended by SIGINT after them.
-    let scenario =
-        realtime_row(4, 700.0, 600.0).replace("mode = \"realtime\"", "mode = \"lockstep\"");
+    // Lockstep waits for the agents behind the cut until their lease runs
+    // out (3 s), then goes on without them. stall_timeout is long (20 s):
+    // on a loaded machine the agents beside the world, starved while the
+    // cut-off ones start again, may take seconds for a tick, and are not
+    // the ones lost. They take 50 ms a tick so that the run does not spin;
+    // it is long enough to outlast the cut and the rejoin, and ended by
+    // SIGINT after them.
+    let scenario = realtime_row(4, 700.0, 600.0)
+        .replace("mode = \"realtime\"", "mode = \"lockstep\"")
+        .replace("stall_timeout = 2.0", "stall_timeout = 20.0");
+    assert!(scenario.contains("stall_timeout = 20.0"));
     assert!(scenario.contains("lockstep"));
     cut_link_mid_run(
         &net,
