@@ -141,7 +141,6 @@ pub fn run(req: &AgentRequest) -> AgentEnd {
     let mut metered = Metered::new(link.as_mut(), Scope::Process);
     let mut result = mrsim_agents::run_group(&mut metered, &opts);
     let mut usage = metered.usage();
-    drop(metered);
     // Over Zenoh a lost world may be a cut link: reach it again within the
     // window and rejoin (each robot with a new token, as a restarted agent).
     let window = if req.zenoh.is_some() {
