@@ -24,6 +24,8 @@ pub fn main(args: &AgentArgs) -> Result<i32> {
         },
         usage_out: args.usage_out.clone(),
         zenoh: (args.transport == LinkArg::Zenoh).then(|| args.zenoh.options(args.connect.clone())),
+        reconnect: Duration::try_from_secs_f64(args.reconnect)
+            .map_err(|e| crate::exit::invalid(format!("--reconnect {}: {e}", args.reconnect)))?,
     });
     if let (Some(e), Some(path)) = (&end.usage_error, &args.usage_out) {
         eprintln!("warning: agent {who}: cannot write {}: {e}", path.display());

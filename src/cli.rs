@@ -240,6 +240,11 @@ pub struct AgentArgs {
     /// tcp/127.0.0.1:7447).
     #[arg(long, value_name = "ENDPOINT")]
     pub connect: Option<String>,
+    /// With --transport zenoh: seconds to keep trying to reach the world
+    /// again after losing it (a cut link), rejoining with a new token; 0:
+    /// end at once.
+    #[arg(long, default_value_t = 30.0, value_name = "SECS")]
+    pub reconnect: f64,
     /// With --transport zenoh: the config file.
     #[command(flatten)]
     pub zenoh: ZenohArgs,

@@ -69,6 +69,7 @@
 //!     registry: Arc::new(registry),
 //!     out: Some(dir.join("run")),
 //!     render: false,
+//!     plan_timeout: None,
 //! })?;
 //! let r0 = &run.metrics.robots["r0"];
 //! assert!(r0.reached_goal);

@@ -35,6 +35,7 @@ pub fn main(args: &RunArgs) -> Result<i32> {
             render: !args.no_report,
             restart_agents: args.restart_agents,
             zenoh: args.zenoh.options(args.listen.clone()),
+            plan_timeout: None,
         },
     )
     .map_err(fail)?;

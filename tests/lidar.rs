@@ -57,6 +57,7 @@ fn the_recorded_scans_are_the_scans_the_planner_got() {
         registry: Arc::new(registry),
         out: Some(out.clone()),
         render: false,
+        plan_timeout: None,
     })
     .expect("the run");
     let text = std::fs::read_to_string(result.dir.join("scan.csv")).expect("scan.csv");
@@ -78,4 +79,71 @@ fn the_recorded_scans_are_the_scans_the_planner_got() {
     // 8 s at dt 0.1: every tick the planner was asked about.
     assert!(compared >= 79, "{compared} ticks compared");
     let _ = std::fs::remove_dir_all(&out);
+}
+
+/// scan.csv's tick-0 ranges of the lidar demo (scout's 360 beams) with the
+/// scanner's noise `noise` and the world's seed `seed`.
+fn first_scan(noise: f64, seed: u64, tag: &str) -> Vec<f64> {
+    let out = fresh_dir(tag);
+    let o = run(
+        &root().join("scenarios/lidar-demo.toml"),
+        &out,
+        &run_id(tag),
+        &[
+            "--transport",
+            "inproc",
+            "--quiet",
+            "--no-report",
+            "--set",
+            "world.duration=0.2",
+            "--set",
+            &format!("world.seed={seed}"),
+            "--set",
+            &format!(
+                "robot.scout.sensor={{ kind = \"lidar\", beams = 360, fov_deg = 360, range = 8.0, noise = {noise}, record = true }}"
+            ),
+        ],
+    );
+    assert_ok(&o);
+    let text = std::fs::read_to_string(out.join("scan.csv")).expect("scan.csv");
+    let row = text.lines().nth(1).expect("a first row");
+    let ranges: Vec<f64> = row
+        .split(',')
+        .skip(5)
+        .map(|c| {
+            if c == "inf" {
+                f64::INFINITY
+            } else {
+                c.parse().expect("a range")
+            }
+        })
+        .collect();
+    assert_eq!(ranges.len(), 360, "{row}");
+    let _ = std::fs::remove_dir_all(&out);
+    ranges
+}
+
+#[test]
+fn lidar_noise_has_the_configured_sigma_and_repeats_with_the_seed_only() {
+    let exact = first_scan(0.0, 3, "noise0");
+    let noisy = first_scan(0.05, 3, "noise5");
+    // The beams that hit something well inside the range (no clamping).
+    let errors: Vec<f64> = exact
+        .iter()
+        .zip(&noisy)
+        .filter(|(e, _)| e.is_finite() && **e > 0.5 && **e < 7.5)
+        .map(|(e, n)| n - e)
+        .collect();
+    assert!(errors.len() > 200, "{} beams compared", errors.len());
+    let n = errors.len() as f64;
+    let mean = errors.iter().sum::<f64>() / n;
+    let sigma = (errors.iter().map(|e| (e - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+    // With 200+ samples the estimate is within about 5 % of 0.05 (1 sigma);
+    // 20 % is four of those.
+    assert!((sigma - 0.05).abs() < 0.01, "sigma {sigma}");
+    assert!(mean.abs() < 0.01, "mean {mean}");
+    // Seeded: the same seed gives the same noise, another seed other noise.
+    assert_eq!(noisy, first_scan(0.05, 3, "noise5-again"));
+    let other = first_scan(0.05, 4, "noise5-seed4");
+    assert_ne!(noisy, other);
 }

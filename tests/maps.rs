@@ -222,3 +222,88 @@ fn a_robot_whose_goal_is_inside_a_map_wall_is_refused() {
         ],
     );
 }
+
+#[test]
+fn a_map_whose_origin_is_nan_is_refused() {
+    let yaml = YAML.replace("origin: [0.0, 0.0, 0.0]", "origin: [.nan, 0.0, 0.0]");
+    refused(
+        "origin-nan",
+        &yaml,
+        Some(&room_pgm()),
+        ROBOT,
+        &["m.yaml", "origin must be finite numbers, got [NaN, 0, 0]"],
+    );
+}
+
+#[test]
+fn a_map_whose_thresholds_leave_zero_to_one_is_refused() {
+    for (tag, from, to) in [
+        (
+            "occ-above-1",
+            "occupied_thresh: 0.65",
+            "occupied_thresh: 1.5",
+        ),
+        ("free-below-0", "free_thresh: 0.196", "free_thresh: -0.1"),
+        ("free-above-occ", "free_thresh: 0.196", "free_thresh: 0.9"),
+    ] {
+        refused(
+            tag,
+            &YAML.replace(from, to),
+            Some(&room_pgm()),
+            ROBOT,
+            &[
+                "m.yaml",
+                "thresholds must satisfy 0 <= free_thresh <= occupied_thresh <= 1",
+            ],
+        );
+    }
+}
+
+#[test]
+fn a_map_whose_image_is_an_empty_file_is_refused() {
+    refused(
+        "empty-image",
+        YAML,
+        Some(b""),
+        ROBOT,
+        &["m.pgm", "the image file is empty"],
+    );
+}
+
+#[test]
+fn a_map_with_a_pixel_above_its_maxval_is_refused() {
+    // maxval 100, and one pixel 200.
+    let (w, h) = (40, 20);
+    let mut img = format!("P5\n{w} {h}\n100\n").into_bytes();
+    img.extend(std::iter::repeat_n(90u8, w * h));
+    let last = img.len() - 5;
+    img[last] = 200;
+    refused(
+        "above-maxval",
+        YAML,
+        Some(&img),
+        ROBOT,
+        &[
+            "m.pgm",
+            "the PGM has a pixel value 200 above its maxval 100",
+        ],
+    );
+}
+
+#[test]
+fn an_obstacle_starting_inside_a_map_wall_is_refused() {
+    let scene = format!(
+        "{ROBOT}\n[[obstacle]]\nname = \"pillar\"\nstart = [0.05, 1.5]\nradius = 0.2\nmotion = {{ model = \"static\" }}\n"
+    );
+    refused(
+        "obstacle-wall",
+        YAML,
+        Some(&room_pgm()),
+        &scene,
+        &[
+            "obstacle `pillar`",
+            "start [0.05, 1.5] is inside a wall of map",
+            "m.yaml",
+        ],
+    );
+}

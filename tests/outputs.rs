@@ -92,6 +92,31 @@ fn parquet_holds_the_same_rows_as_the_csv_of_the_same_run() {
         assert_eq!(&written, line);
     }
     assert_eq!(motion(&csv), motion(&pq));
+    // DOUBLE exact: each robot's path length summed from the file's
+    // positions, the way the world sums it from its states every tick, is
+    // metrics.json's to the last bit (positions rounded to six decimals, as
+    // in the CSV, would be off by about 1e-6).
+    let m = metrics(&pq);
+    let mut last: std::collections::BTreeMap<String, (f64, f64)> = Default::default();
+    let mut length: std::collections::BTreeMap<String, f64> = Default::default();
+    for row in table.rows().filter(|r| r.kind == "robot") {
+        if let Some((x0, y0)) = last.insert(row.body.to_string(), (row.x, row.y)) {
+            let (dx, dy) = (row.x - x0, row.y - y0);
+            *length.entry(row.body.to_string()).or_default() += (dx * dx + dy * dy).sqrt();
+        }
+    }
+    assert_eq!(length.len(), 8, "{length:?}");
+    for (robot, l) in &length {
+        let recorded = m["robots"][robot]["path_length"]
+            .as_f64()
+            .expect("path_length");
+        assert!(*l > 0.5, "{robot} moved: {l}");
+        assert_eq!(
+            l.to_bits(),
+            recorded.to_bits(),
+            "{robot}: {l} vs {recorded}"
+        );
+    }
     // The report reads it: plots and a replay page with the same ticks.
     let out = mrsim().arg("report").arg(&pq).output().expect("report");
     assert_ok(&out);
@@ -176,4 +201,33 @@ fn a_unicycle_run_in_parquet_keeps_every_heading_of_the_csv() {
     // Stream b starts facing +y: headings other than 0 are written.
     assert!(turned > 0, "no heading away from 0");
     assert_eq!(motion(&csv), motion(&pq));
+}
+
+#[test]
+fn the_report_refuses_a_parquet_trajectory_whose_footer_is_cut_or_wrong() {
+    let pq = crossing("out-pq-footer", &["output.trajectory=parquet"]);
+    let file = pq.join("trajectory.parquet");
+    let whole = std::fs::read(&file).expect("trajectory.parquet");
+    assert_eq!(
+        &whole[whole.len() - 4..],
+        b"PAR1",
+        "a Parquet file ends with its magic"
+    );
+    // Cut mid-footer, the magic gone; then the magic kept but the footer's
+    // length pointing past the start; then a file that is only the magic.
+    let mut bad_length = whole.clone();
+    let at = bad_length.len() - 8;
+    bad_length[at..at + 4].copy_from_slice(&u32::MAX.to_le_bytes());
+    for (what, bytes) in [
+        ("cut", whole[..whole.len() - 10].to_vec()),
+        ("bad footer length", bad_length),
+        ("magic only", b"PAR1".to_vec()),
+    ] {
+        std::fs::write(&file, &bytes).expect("write");
+        let o = mrsim().arg("report").arg(&pq).output().expect("report");
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{what}: {stderr}");
+        assert!(stderr.contains("trajectory.parquet"), "{what}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{what}: {stderr}");
+    }
 }

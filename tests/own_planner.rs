@@ -185,6 +185,7 @@ fn crossing(
         registry,
         out: Some(out.to_path_buf()),
         render: false,
+        plan_timeout: None,
     })
 }
 
@@ -224,15 +225,28 @@ fn a_registered_copy_of_homing_reproduces_homings_run_byte_for_byte() {
     }
 }
 
-/// Homing, until it fails at tick `at`: a panic, or a NaN command.
+/// Asserts that the run of `dir` was stopped (interrupted) after a number
+/// of ticks in `ticks`, with its metrics.json written.
+fn assert_stopped_with_outputs(dir: &Path, ticks: std::ops::RangeInclusive<u64>) {
+    let m: mrsim::RunMetrics = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("metrics.json")).expect("metrics.json"),
+    )
+    .expect("metrics");
+    assert!(m.interrupted);
+    assert!(ticks.contains(&m.ticks), "{}", m.ticks);
+}
+
+/// Homing, until the robot with index `robot` fails at tick `at`: a
+/// panic, or a NaN command. The others never fail.
 struct FailsAt {
     at: u64,
+    robot: u32,
     panics: bool,
 }
 
 impl Planner for FailsAt {
     fn plan(&mut self, obs: &Observation) -> Command {
-        if obs.tick == self.at {
+        if obs.tick == self.at && obs.me.id == self.robot {
             if self.panics {
                 panic!("planner bug at tick {}", obs.tick);
             }
@@ -246,8 +260,10 @@ impl Planner for FailsAt {
 fn a_planner_that_panics_or_returns_nan_stops_a_lockstep_run_naming_the_robot_and_the_tick() {
     for panics in [true, false] {
         let mut r = Registry::builtin();
-        r.register_simple("fails", "fails at tick 7", move || FailsAt {
+        // Robot 5 of the crossing is b1.
+        r.register_simple("fails", "b1 fails at tick 7", move || FailsAt {
             at: 7,
+            robot: 5,
             panics,
         })
         .expect("a new name");
@@ -257,7 +273,7 @@ fn a_planner_that_panics_or_returns_nan_stops_a_lockstep_run_naming_the_robot_an
             panic!("{err}");
         };
         assert_eq!(failure.tick, 7, "{err}");
-        assert!(failure.robot.starts_with('a') || failure.robot.starts_with('b'));
+        assert_eq!(failure.robot, "b1", "{err}");
         let text = err.to_string();
         assert!(
             text.contains(&format!("robot `{}` at tick 7", failure.robot)),
@@ -272,13 +288,69 @@ fn a_planner_that_panics_or_returns_nan_stops_a_lockstep_run_naming_the_robot_an
             "{text}"
         );
         // The outputs so far are written, and end near the failing tick.
-        let m: mrsim::RunMetrics = serde_json::from_str(
-            &std::fs::read_to_string(dir.join("metrics.json")).expect("metrics.json"),
-        )
-        .expect("metrics");
-        assert!(m.interrupted);
-        assert!((7..=9).contains(&m.ticks), "{}", m.ticks);
+        assert_stopped_with_outputs(dir, 7..=9);
         assert!(!trajectory(dir).is_empty());
         let _ = std::fs::remove_dir_all(&out);
     }
+}
+
+/// Homing, except that robot b1 (index 5) does not return from its plan at
+/// tick `at` until the test lets it go (as a planner caught in an endless
+/// loop; released at the end so its thread ends).
+struct HangsAt {
+    at: u64,
+    release: Arc<std::sync::atomic::AtomicBool>,
+}
+
+impl Planner for HangsAt {
+    fn plan(&mut self, obs: &Observation) -> Command {
+        if obs.tick == self.at && obs.me.id == 5 {
+            while !self.release.load(std::sync::atomic::Ordering::SeqCst) {
+                std::thread::sleep(std::time::Duration::from_millis(10));
+            }
+        }
+        Command::Velocity((obs.goal - obs.me.position).cap_magnitude(obs.me.max_speed))
+    }
+}
+
+#[test]
+fn a_planner_that_never_returns_stops_a_lockstep_run_after_the_plan_timeout_naming_robot_and_tick()
+{
+    let release = Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let mut r = Registry::builtin();
+    let held = release.clone();
+    r.register_simple("hangs", "b1 hangs at tick 4", move || HangsAt {
+        at: 4,
+        release: held.clone(),
+    })
+    .expect("a new name");
+    let out = fresh_dir("hangs");
+    let result = mrsim::run_in_process(&InProcess {
+        scenario: ScenarioSource {
+            path: Some(root().join("scenarios/crossing.toml")),
+            set: vec!["planner=hangs".to_string()],
+            ..Default::default()
+        },
+        registry: Arc::new(r),
+        out: Some(out.clone()),
+        render: false,
+        plan_timeout: Some(std::time::Duration::from_secs(1)),
+    });
+    release.store(true, std::sync::atomic::Ordering::SeqCst);
+    let err = result.expect_err("the run must stop");
+    let RunError::Planner { failure, dir } = &err else {
+        panic!("{err}");
+    };
+    assert_eq!((failure.robot.as_str(), failure.tick), ("b1", 4), "{err}");
+    let text = err.to_string();
+    assert!(
+        text.contains(
+            "robot `b1` at tick 4: the planner did not return within the limit of 1.000 s"
+        ),
+        "{text}"
+    );
+    // The outputs so far are written, up to the tick it hung at.
+    assert_stopped_with_outputs(dir, 4..=5);
+    assert!(trajectory(dir).iter().any(|r| r.tick == 3));
+    let _ = std::fs::remove_dir_all(&out);
 }

@@ -307,3 +307,106 @@ fn ctrl_c_stops_a_run_of_hundreds_of_robots_in_process_and_keeps_its_outputs() {
     // The error of a robot list names a few, not hundreds.
     assert!(err.lines().all(|l| l.len() < 400), "{err}");
 }
+
+#[test]
+fn robots_per_agent_in_the_scenario_groups_eight_robots_as_three_three_and_two_moving_as_alone() {
+    let dir = fresh_dir("uneven");
+    let text = std::fs::read_to_string(root().join("scenarios/crossing.toml")).expect("crossing");
+    let grouped = text.replacen("[world]\n", "[world]\nrobots_per_agent = 3\n", 1);
+    assert_ne!(grouped, text, "the key went in");
+    let file = dir.join("grouped.toml");
+    std::fs::write(&file, grouped).expect("write");
+    let lockstep = ["--mode", "lockstep", "--quiet", "--no-report"];
+    let (alone, together) = (dir.join("alone"), dir.join("together"));
+    let crossing = root().join("scenarios/crossing.toml");
+    assert_ok(&run(&crossing, &alone, &run_id("uneven1"), &lockstep));
+    assert_ok(&run(&file, &together, &run_id("uneven3"), &lockstep));
+    let read = |d: &Path| std::fs::read(d.join("trajectory.csv")).expect("trajectory");
+    assert!(read(&alone) == read(&together), "the trajectories differ");
+    // Three processes: a0 a1 a2 | a3 b0 b1 | b2 b3, in scenario order.
+    let m = metrics(&together);
+    let pid = |r: &str| m["robots"][r]["agent_pid"].as_u64().expect("pid");
+    let groups: Vec<Vec<&str>> = [
+        &["a0", "a1", "a2"][..],
+        &["a3", "b0", "b1"][..],
+        &["b2", "b3"][..],
+    ]
+    .iter()
+    .map(|g| g.to_vec())
+    .collect();
+    let mut pids = BTreeSet::new();
+    for g in &groups {
+        assert!(
+            g.iter().all(|r| pid(r) == pid(g[0])),
+            "{g:?} share a process: {m:#}"
+        );
+        pids.insert(pid(g[0]));
+    }
+    assert_eq!(pids.len(), 3, "{m:#}");
+}
+
+/// A random scene of a million robots, spread thin (2 km each way).
+const MILLION: &str = "name = \"million\"
+[world]
+dt = 0.1
+duration = 1.0
+mode = \"lockstep\"
+[generate]
+kind = \"random\"
+count = 1000000
+radius = 2000.0
+planner = \"homing\"
+";
+
+#[test]
+fn a_million_robot_scene_is_checked_and_a_run_past_the_memory_available_is_refused_with_the_estimate()
+ {
+    let dir = fresh_dir("million");
+    let file = dir.join("million.toml");
+    std::fs::write(&file, MILLION).expect("write");
+    let o = mrsim().arg("check").arg(&file).output().expect("check");
+    assert_ok(&o);
+    let said = String::from_utf8_lossy(&o.stdout);
+    assert!(said.contains("ok (1000000 robots"), "{said}");
+    // Refused only where it does not fit: on a machine with the memory the
+    // run would start, which this test does not do.
+    let need = mrsim_runtime::memory::BASE + 1_000_000 * mrsim_runtime::memory::PER_ROBOT;
+    let available = std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|t| {
+            let line = t
+                .lines()
+                .find(|l| l.starts_with("MemAvailable:"))?
+                .to_string();
+            line.split_whitespace().nth(1)?.parse::<u64>().ok()
+        })
+        .map(|kb| kb * 1024);
+    if available.is_none_or(|a| a >= need) {
+        skip(
+            "a_million_robot_scene_is_checked_and_a_run_past_the_memory_available_is_refused",
+            "MRSIM_REQUIRE_SMALL_MEMORY",
+            "this machine has the memory for a million robots in-process",
+        );
+        return;
+    }
+    let out = dir.join("out");
+    let o = run(
+        &file,
+        &out,
+        &run_id("million"),
+        &["--transport", "inproc", "--quiet"],
+    );
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    for words in [
+        "million.toml: this run needs about",
+        "1000000 robots x 53 KB, 1000000 of them sensing the whole scene",
+        "MemAvailable",
+        "To make it fit: run fewer robots",
+        "`sensing_range` shorter than the scene",
+    ] {
+        assert!(stderr.contains(words), "`{words}` in: {stderr}");
+    }
+    assert!(stderr.contains("GiB available"), "{stderr}");
+    assert!(!out.join("metrics.json").exists(), "nothing ran");
+}

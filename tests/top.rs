@@ -199,7 +199,11 @@ fn tmux(socket: &Path, args: &[&str]) -> std::process::Output {
 fn mrsim_top_in_tmux_shows_every_robot_and_ends_with_the_run() {
     if Command::new("tmux").arg("-V").output().is_err() {
         if std::env::var("MRSIM_SKIP_TMUX").as_deref() == Ok("1") {
-            eprintln!("tmux not installed; skipped (MRSIM_SKIP_TMUX)");
+            skip(
+                "mrsim_top_in_tmux_shows_every_robot_and_ends_with_the_run",
+                "MRSIM_REQUIRE_TMUX",
+                "tmux not installed (MRSIM_SKIP_TMUX=1)",
+            );
             return;
         }
         panic!("tmux is needed for this test (apt-get install tmux, or MRSIM_SKIP_TMUX=1)");

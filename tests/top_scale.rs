@@ -137,7 +137,11 @@ fn tmux(socket: &std::path::Path, args: &[&str]) -> std::process::Output {
 fn mrsim_top_in_tmux_pages_through_three_hundred_robots() {
     if Command::new("tmux").arg("-V").output().is_err() {
         if std::env::var("MRSIM_SKIP_TMUX").as_deref() == Ok("1") {
-            eprintln!("tmux not installed; skipped (MRSIM_SKIP_TMUX)");
+            skip(
+                "mrsim_top_in_tmux_pages_through_three_hundred_robots",
+                "MRSIM_REQUIRE_TMUX",
+                "tmux not installed (MRSIM_SKIP_TMUX=1)",
+            );
             return;
         }
         panic!("tmux is needed for this test (apt-get install tmux, or MRSIM_SKIP_TMUX=1)");

@@ -22,6 +22,10 @@ pub enum PlanFault {
     /// `plan` returned a command with a NaN or infinite component.
     #[error("the planner returned a non-finite command {0:?}")]
     NonFinite(Command),
+    /// `plan` had not returned after the run's limit (in-process runs with
+    /// a plan timeout: the run's watchdog stops the run without it).
+    #[error("the planner did not return within the limit of {:.3} s", .0.as_secs_f64())]
+    TimedOut(std::time::Duration),
 }
 
 /// A planner's failure: which robot, which tick, how.

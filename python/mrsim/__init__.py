@@ -50,7 +50,8 @@ def run(scenario=None, planners=None, out=None, set=(), render=False, plan_timeo
     longest one ``plan`` call may take, s.
 
     A planner that raises, returns something else than two finite numbers,
-    or takes longer than ``plan_timeout`` stops the run at that tick, with
+    or takes longer than ``plan_timeout`` (watched while it runs: one that
+    never returns too) stops the run at that tick, with
     the outputs so far written: :class:`PlannerError` names the robot and
     the tick (attributes ``robot``, ``tick``, ``dir``).
     """

@@ -1,6 +1,7 @@
 """What the Gymnasium and PettingZoo environments share."""
 
 import numpy as np
+from gymnasium import spaces
 
 from . import scenario_path
 from ._mrsim import Sim
@@ -24,6 +25,31 @@ def action_bounds(sim, action):
     if action not in ACTIONS:
         raise ValueError(f"action must be one of {ACTIONS}, got {action!r}")
     return sim.max_speed if action == "velocity" else sim.max_force
+
+
+def observation_space(sim, k):
+    """The observation vector's space: bounded where the scene bounds it.
+    With walls, every body and goal stays within their box (and the goals'
+    and starts'), so an offset is at most its diagonal; a neighbour's radius
+    is at most the largest body's; its presence flag is 0 or 1. Velocities
+    are not bounded (a contact may push a body past its top speed)."""
+    n = 4 + 6 * k
+    low = np.full(n, -np.inf, dtype=np.float32)
+    high = np.full(n, np.inf, dtype=np.float32)
+    walls = np.asarray(sim.walls())
+    offset = np.inf
+    if len(walls):
+        points = np.concatenate([walls[:, :2], walls[:, 2:], sim.goals(), sim.positions()])
+        offset = float(np.hypot(*(points.max(axis=0) - points.min(axis=0)))) * (1 + 1e-6)
+    radii = np.asarray(sim.radii())
+    largest = float(radii.max()) * (1 + 1e-6) if len(radii) else 0.0
+    low[0:2], high[0:2] = -offset, offset
+    for j in range(k):
+        at = 4 + 6 * j
+        low[at : at + 2], high[at : at + 2] = -offset, offset
+        low[at + 4], high[at + 4] = 0.0, largest
+        low[at + 5], high[at + 5] = 0.0, 1.0
+    return spaces.Box(low, high, dtype=np.float32)
 
 
 def horizon(sim):

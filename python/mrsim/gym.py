@@ -5,7 +5,8 @@ Observation (float32, ``4 + 6 k``): in the learner's frame (origin at its
 centre, axes parallel to the world's), ``[goal_dx, goal_dy, vx, vy]``, then
 for each of the ``k`` nearest other bodies (robots and obstacles within its
 sensing range, nearest first) ``[dx, dy, dvx, dvy, radius, 1]`` (position and
-velocity relative to the learner's), zeros for missing neighbours.
+velocity relative to the learner's), zeros for missing neighbours. Bounded
+where the scene bounds it (offsets by the walls' box, radii, the flag).
 Action: two numbers in [-1, 1] (clipped), scaled to a velocity (times the
 robot's max_speed) or a force (times mass x max_accel + damping x
 max_speed), as the constructor's ``action`` says; the world applies it
@@ -51,9 +52,7 @@ class NavEnv(gymnasium.Env):
         self._bound = float(_common.action_bounds(self._sim, action)[0])
         self._force = action == "force"
         self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
-        self.observation_space = spaces.Box(
-            -np.inf, np.inf, shape=(self._sim.obs_size,), dtype=np.float32
-        )
+        self.observation_space = _common.observation_space(self._sim, k)
         self.rewards = _common.Rewards(reward_progress, reward_collision, reward_arrival)
         self.render_mode = render_mode
         self._render_size = render_size

@@ -43,7 +43,7 @@ class ParallelNavEnv(ParallelEnv):
             a: spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32) for a in self.possible_agents
         }
         self._observation_spaces = {
-            a: spaces.Box(-np.inf, np.inf, shape=(self._sim.obs_size,), dtype=np.float32)
+            a: _common.observation_space(self._sim, k)
             for a in self.possible_agents
         }
         self.rewards_of = _common.Rewards(reward_progress, reward_collision, reward_arrival)

@@ -4,16 +4,17 @@
 //!
 //! `plan` may fail four ways: it raises, returns something that is not two
 //! numbers, returns NaN or infinity, or takes longer than the limit. The
-//! first, second and fourth panic with a message that says what happened (the
+//! first and second panic with a message that says what happened (the
 //! Python exception's text included); the third returns the non-finite
 //! command. Either way the agents crate's guard (`plan_checked`) turns it
 //! into a failure naming the robot and the tick, and an in-process lockstep
-//! run stops with the outputs so far written.
+//! run stops with the outputs so far written. The fourth is the run's
+//! watchdog's (`plan_timeout`), which stops the run while the call is still
+//! running, so a `plan` that never returns does not hang it.
 
 use mrsim_planners::{BodyKind, Command, Observation, Planner, Vec2};
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
-use std::time::{Duration, Instant};
 
 /// What a robot knows at one tick, as a Python planner sees it: its own
 /// state, its goal, the bodies it senses (sensing range, field of view and
@@ -238,24 +239,35 @@ pub fn quiet_planner_panics() {
 pub struct PyPlanner {
     object: Py<PyAny>,
     kind: Kind,
-    /// Longest a call may take; `None`: no limit.
-    limit: Option<Duration>,
 }
 
 impl PyPlanner {
-    /// Wraps `object` (its `command` attribute read now).
-    pub fn new(object: Bound<'_, PyAny>, limit: Option<Duration>) -> PyResult<Self> {
+    /// Wraps `object` (its `command` attribute read now); refuses one
+    /// without a callable `plan`.
+    pub fn new(object: Bound<'_, PyAny>) -> PyResult<Self> {
+        let callable = object
+            .getattr("plan")
+            .map(|p| p.is_callable())
+            .unwrap_or(false);
+        if !callable {
+            return Err(pyo3::exceptions::PyTypeError::new_err(format!(
+                "{} has no plan(observation) method",
+                object
+                    .get_type()
+                    .name()
+                    .map(|n| n.to_string())
+                    .unwrap_or_else(|_| "the planner".into())
+            )));
+        }
         Ok(Self {
             kind: Kind::of(&object)?,
             object: object.unbind(),
-            limit,
         })
     }
 }
 
 impl Planner for PyPlanner {
     fn plan(&mut self, obs: &Observation) -> Command {
-        let start = Instant::now();
         let answer = Python::attach(|py| -> Result<[f64; 2], String> {
             let o = PyObservation::new(py, obs)
                 .map_err(|e| format!("{FAILED}: {}", describe(py, &e)))?;
@@ -272,16 +284,6 @@ impl Planner for PyPlanner {
             // naming the robot and the tick.
             Err(msg) => std::panic::panic_any(msg),
         };
-        let took = start.elapsed();
-        if let Some(limit) = self.limit
-            && took > limit
-        {
-            std::panic::panic_any(format!(
-                "{FAILED} took {:.3} s, over the limit of {:.3} s",
-                took.as_secs_f64(),
-                limit.as_secs_f64()
-            ));
-        }
         let v = Vec2::new(v[0], v[1]);
         match self.kind {
             Kind::Force => Command::Force(v),

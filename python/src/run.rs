@@ -41,7 +41,7 @@ pub fn params_dict<'py>(py: Python<'py>, params: &Params) -> PyResult<Bound<'py,
 
 /// The built-in planners plus `planners` (name -> a factory called with
 /// the robot's params dict, returning an object with `plan(observation)`).
-fn registry(planners: Option<&Bound<'_, PyDict>>, limit: Option<Duration>) -> PyResult<Registry> {
+fn registry(planners: Option<&Bound<'_, PyDict>>) -> PyResult<Registry> {
     let mut registry = Registry::builtin();
     let Some(planners) = planners else {
         return Ok(registry);
@@ -70,11 +70,11 @@ fn registry(planners: Option<&Bound<'_, PyDict>>, limit: Option<Duration>) -> Py
                 Python::attach(|py| {
                     let made = params_dict(py, params)
                         .and_then(|d| factory.bind(py).call1((d,)))
-                        .and_then(|obj| PyPlanner::new(obj, limit));
+                        .and_then(PyPlanner::new);
                     match made {
                         Ok(p) => Ok(Box::new(p) as Box<dyn mrsim_planners::Planner>),
                         Err(e) => Err(BuildError::Other(format!(
-                            "the Python planner's constructor raised {}",
+                            "the Python planner could not be made: {}",
                             describe(py, &e)
                         ))),
                     }
@@ -112,9 +112,12 @@ pub fn run_inproc(
             mode: Some(Mode::Lockstep),
             set,
         },
-        registry: Arc::new(registry(planners.as_ref(), limit)?),
+        registry: Arc::new(registry(planners.as_ref())?),
         out,
         render,
+        // The run's watchdog: a call still running after the limit stops
+        // the run, whether or not it ever returns.
+        plan_timeout: limit,
     };
     // The GIL is released for the run: its worker threads take it to call
     // the Python planners.

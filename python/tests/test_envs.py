@@ -16,18 +16,23 @@ SIXTY_FOUR = [
 ]
 
 
+# The checkers report most findings as warnings: here each one fails the test.
+@pytest.mark.filterwarnings("error")
 def test_nav_env_passes_gymnasiums_checker():
     check_env(NavEnv(render_mode="rgb_array"), skip_render_check=False)
 
 
+@pytest.mark.filterwarnings("error")
 def test_nav_env_with_force_actions_passes_gymnasiums_checker():
     check_env(NavEnv(action="force"))
 
 
+@pytest.mark.filterwarnings("error")
 def test_parallel_nav_env_passes_pettingzoos_api_test():
     parallel_api_test(ParallelNavEnv(), num_cycles=200)
 
 
+@pytest.mark.filterwarnings("error")
 def test_parallel_nav_env_passes_pettingzoos_seed_test():
     parallel_seed_test(ParallelNavEnv)
 
@@ -127,3 +132,92 @@ def test_sixty_four_agents_all_leave_by_the_duration():
         env.step({a: env.action_space(a).sample() for a in env.agents})
         steps += 1
     assert steps <= 20
+
+
+def test_the_observation_space_is_bounded_by_the_arena_and_holds_every_observation():
+    env = NavEnv(k=4)
+    space = env.observation_space
+    # circle-16's arena is 24 m square: offsets within its diagonal.
+    assert np.isfinite(space.high[0]) and space.high[0] < 40
+    assert list(space.low[9::6]) == [0.0] * 4 and list(space.high[9::6]) == [1.0] * 4
+    obs, _ = env.reset(seed=3)
+    for _ in range(30):
+        assert space.contains(obs), obs
+        obs, *_ = env.step(env.action_space.sample())
+    # An observation with an offset past the arena is outside it.
+    bad = obs.copy()
+    bad[0] = 1e6
+    assert not space.contains(bad)
+
+
+ALONE = """name = "alone"
+[world]
+dt = 0.1
+duration = 20.0
+arena = { min = [-5.0, -5.0], max = [10.0, 5.0] }
+[[robot]]
+name = "me"
+start = [0.0, 0.0]
+goal = [3.0, 0.0]
+planner = "homing"
+max_speed = 1.0
+[[robot]]
+name = "far"
+start = [0.0, 4.0]
+goal = [0.5, 4.0]
+planner = "homing"
+"""
+
+
+def alone(tmp_path, **kw):
+    path = tmp_path / "alone.toml"
+    path.write_text(ALONE)
+    return NavEnv(scenario=path, learner="me", **kw)
+
+
+def test_reaching_the_goal_terminates_the_episode_and_pays_reward_arrival_once(tmp_path):
+    env = alone(tmp_path, reward_progress=0.0, reward_collision=0.0, reward_arrival=7.0)
+    obs, _ = env.reset(seed=0)
+    rewards = []
+    for _ in range(100):
+        toward = obs[:2] / max(np.hypot(*obs[:2]), 1e-9)
+        obs, r, term, trunc, info = env.step(toward.astype(np.float32))
+        rewards.append(r)
+        if term or trunc:
+            break
+    assert term and not trunc
+    assert info["reached"] and info["collisions"] == 0
+    assert rewards[-1] == 7.0 and all(r == 0.0 for r in rewards[:-1]), rewards
+    assert info["distance_to_goal"] < 0.5
+
+
+def test_actions_are_clipped_to_the_unit_box(tmp_path):
+    env = alone(tmp_path)
+    env.reset(seed=0)
+    big, *_ = env.step(np.array([50.0, -3.0], dtype=np.float32))
+    env.reset(seed=0)
+    unit, *_ = env.step(np.array([1.0, -1.0], dtype=np.float32))
+    assert np.array_equal(big, unit)
+    env.reset(seed=0)
+    half, *_ = env.step(np.array([0.5, -0.5], dtype=np.float32))
+    assert not np.array_equal(half, unit)
+
+
+def test_fewer_neighbours_than_k_leave_zeros_in_the_missing_slots(tmp_path):
+    env = alone(tmp_path, k=3)
+    obs, _ = env.reset(seed=0)
+    assert obs.shape == (4 + 6 * 3,)
+    first = obs[4:10]
+    # The one other robot: 4 m away, present.
+    assert np.isclose(np.hypot(first[0], first[1]), 4.0, atol=1e-4) and first[5] == 1.0
+    assert first[4] > 0.0
+    assert np.all(obs[10:] == 0.0), obs
+
+
+def test_the_parallel_env_pads_missing_neighbours_with_zeros():
+    env = ParallelNavEnv(set=["generate.count=2"], k=3)
+    obs, _ = env.reset(seed=0)
+    for a, o in obs.items():
+        assert o[9] == 1.0, (a, o)
+        assert np.all(o[10:] == 0.0), (a, o)
+        assert env.observation_space(a).contains(o)

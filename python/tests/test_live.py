@@ -91,11 +91,57 @@ def test_a_late_reply_in_realtime_is_a_miss_and_the_run_goes_on(repo, tmp_path):
     assert metrics["ticks"] >= 19
 
 
-def test_a_bad_reply_is_refused_in_python_and_joining_no_run_times_out(repo):
+def test_in_realtime_an_agent_that_never_answers_again_misses_every_tick_and_the_run_goes_on(
+    repo, tmp_path
+):
+    proc = start_run(repo, tmp_path, run_id("hang"), "--mode", "realtime", "--set", "world.duration=2.0")
+    try:
+        with mrsim.Agent(run_id("hang"), "a0", timeout=60) as agent:
+            for obs in agent:
+                if obs.tick == 3:
+                    # As a planner stuck from here on: no answer until the
+                    # run has ended.
+                    finish(proc)
+                    break
+                agent.reply(toward(obs))
+    finally:
+        proc.kill()
+    metrics = json.loads((tmp_path / "run" / "metrics.json").read_text())
+    assert metrics["ticks"] >= 19 and not metrics["interrupted"]
+    # Every tick from the one left unanswered on is a miss.
+    assert metrics["robots"]["a0"]["deadline_misses"] >= metrics["ticks"] - 4
+    assert metrics["robots"]["b0"]["deadline_misses"] < metrics["ticks"] - 4
+
+
+def test_joining_no_run_times_out_and_an_unknown_command_kind_is_refused(repo):
     with pytest.raises(RuntimeError):
         mrsim.Agent(run_id("none"), "a0", timeout=0.5)
     with pytest.raises(ValueError, match="velocity"):
         mrsim.Agent(run_id("none"), "a0", command="torque")
+
+
+def test_a_bad_reply_is_refused_in_python_and_never_reaches_the_world(repo, tmp_path):
+    proc = start_run(repo, tmp_path, run_id("bad"))
+    refused = []
+    try:
+        with mrsim.Agent(run_id("bad"), "a0", timeout=60) as agent:
+            for obs in agent:
+                if obs.tick == 2:
+                    for bad in [(np.nan, 0.0), (0.0, np.inf), (1.0, 2.0, 3.0), "go"]:
+                        with pytest.raises(ValueError) as e:
+                            agent.reply(bad)
+                        refused.append(str(e.value))
+                # The tick is still open: the good answer is taken.
+                agent.reply(toward(obs))
+        finish(proc)
+    finally:
+        proc.kill()
+    assert len(refused) == 4
+    assert "non-finite" in refused[0] and "non-finite" in refused[1], refused
+    assert "expected two numbers" in refused[2] and "expected two numbers" in refused[3], refused
+    metrics = json.loads((tmp_path / "run" / "metrics.json").read_text())
+    assert metrics["robots"]["a0"]["commands_rejected"] == 0
+    assert metrics["robots"]["a0"]["reached_goal"]
 
 
 def test_a_closed_agent_leaves_the_run_and_may_be_freed_on_any_thread(repo, tmp_path):

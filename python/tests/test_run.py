@@ -113,17 +113,48 @@ def test_a_planner_that_returns_the_wrong_shape_stops_the_run(repo, tmp_path, an
     assert "expected two numbers" in str(e)
 
 
-def test_a_planner_slower_than_the_limit_stops_the_run(repo, tmp_path):
-    import time
+def test_a_planner_that_never_returns_stops_the_run_after_the_limit(repo, tmp_path):
+    import json
+    import threading
 
+    # The limit is on the wall clock: 1 s is many times what an answer of
+    # (0, 0) takes on a busy machine, GIL waits included.
     def plan(obs):
         if obs.tick == 2:
-            time.sleep(0.3)
+            threading.Event().wait()  # never set: the call never returns
         return (0.0, 0.0)
 
-    e = failing(repo, tmp_path, plan, plan_timeout=0.1)
+    e = failing(repo, tmp_path, plan, plan_timeout=1.0)
     assert (e.robot, e.tick) == ("b1", 2)
-    assert "over the limit of 0.100 s" in str(e)
+    assert "did not return within the limit of 1.000 s" in str(e)
+    # The outputs so far are written: the ticks before, and the metrics.
+    lines = (tmp_path / "run" / "trajectory.csv").read_text().splitlines()
+    assert len(lines) > 2 * 8
+    metrics = json.loads((tmp_path / "run" / "metrics.json").read_text())
+    assert metrics["interrupted"] and metrics["ticks"] >= 2
+
+
+def test_a_non_positive_plan_timeout_is_refused(repo, tmp_path):
+    for t in [0.0, -1.0, float("nan")]:
+        with pytest.raises(ValueError, match="plan_timeout"):
+            mrsim.run(crossing(repo), plan_timeout=t, out=tmp_path / "run")
+
+
+def test_a_planner_that_returns_infinity_stops_the_run(repo, tmp_path):
+    e = failing(repo, tmp_path, lambda obs: (0.0, -np.inf) if obs.tick == 4 else (0.0, 0.0))
+    assert (e.robot, e.tick) == ("b1", 4)
+    assert "non-finite" in str(e)
+
+
+def test_a_planner_class_without_plan_is_refused_before_the_run(repo, tmp_path):
+    class NoPlan:
+        def __init__(self, params):
+            pass
+
+    with pytest.raises(ValueError, match="NoPlan has no plan"):
+        mrsim.run(crossing(repo), planners={"noplan": NoPlan}, set=["robot.a0.planner=noplan"],
+                  out=tmp_path / "run")
+    assert not (tmp_path / "run").exists()
 
 
 def test_a_planner_whose_constructor_raises_is_refused_before_the_run(repo, tmp_path):

@@ -370,3 +370,37 @@ pub fn hand_started_world(scenario: &Path, out: &Path, id: &str, start_timeout: 
         .spawn()
         .expect("start world")
 }
+
+/// Says that `test` could not run and why, where it is seen: on the
+/// terminal (written to stderr directly, past libtest's capture of a passing
+/// test's output) and as a line of `target/tmp/skipped.txt`, which CI prints
+/// at its end. When the environment variable `require` is `1` (CI sets
+/// `MRSIM_REQUIRE_NETNS=1`, where it runs as root with iproute2) the skip is
+/// a failure instead.
+pub fn skip(test: &str, require: &str, why: &str) {
+    use std::io::Write;
+    assert!(
+        std::env::var(require).as_deref() != Ok("1"),
+        "{test} cannot run ({why}), and {require}=1 requires it"
+    );
+    let line = format!("skipped: {test}: {why}\n");
+    let _ = std::io::stderr().write_all(line.as_bytes());
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
+    let _ = std::fs::create_dir_all(&dir);
+    if let Ok(mut f) = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(dir.join("skipped.txt"))
+    {
+        let _ = f.write_all(line.as_bytes());
+    }
+}
+
+/// Held by a test whose assertions need the machine's cores to themselves
+/// (realtime runs of many agents, a link cut and its lease): such tests of
+/// one test binary run one at a time (cargo runs the binaries one after
+/// another). A test that failed while holding it does not block the others.
+pub fn heavy() -> std::sync::MutexGuard<'static, ()> {
+    static HEAVY: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    HEAVY.lock().unwrap_or_else(|e| e.into_inner())
+}

@@ -36,6 +36,12 @@ pub struct AgentRequest {
     pub usage_out: Option<PathBuf>,
     /// Over Zenoh (where the world is, the config file) instead of iceoryx2.
     pub zenoh: Option<ZenohOptions>,
+    /// Over Zenoh: how long an agent that lost its world (a link cut, the
+    /// world's liveliness gone) keeps trying to reach it again and rejoin,
+    /// with a new token, before it ends with "the world is gone". Zero:
+    /// it ends at once. (Over shared memory the world is on this machine:
+    /// gone is gone.)
+    pub reconnect: Duration,
 }
 
 /// Why an agent failed.
@@ -102,11 +108,13 @@ pub fn run(req: &AgentRequest) -> AgentEnd {
         [first, ..] => format!("mrsim-agent-{first}-{}", req.robots.len()),
         [] => "mrsim-agent".to_string(),
     };
-    let link: Result<Box<dyn AgentTransport>, _> = match &req.zenoh {
-        None => ShmAgent::connect(&ns, &node_name, req.timeout).map(|a| Box::new(a) as _),
-        Some(z) => ZenohAgent::connect(&ns, z, req.timeout).map(|a| Box::new(a) as _),
+    let connect = |timeout: Duration| -> Result<Box<dyn AgentTransport>, TransportError> {
+        match &req.zenoh {
+            None => ShmAgent::connect(&ns, &node_name, timeout).map(|a| Box::new(a) as _),
+            Some(z) => ZenohAgent::connect(&ns, z, timeout).map(|a| Box::new(a) as _),
+        }
     };
-    let mut link = match link {
+    let mut link = match connect(req.timeout) {
         Ok(l) => l,
         Err(source) => {
             return fail(AgentError::Connect {
@@ -131,11 +139,46 @@ pub fn run(req: &AgentRequest) -> AgentEnd {
         })
         .collect();
     let mut metered = Metered::new(link.as_mut(), Scope::Process);
-    let result = mrsim_agents::run_group(&mut metered, &opts);
+    let mut result = mrsim_agents::run_group(&mut metered, &opts);
+    let mut usage = metered.usage();
+    // Over Zenoh a lost world may be a cut link: reach it again within the
+    // window and rejoin (each robot with a new token, as a restarted agent).
+    let window = if req.zenoh.is_some() {
+        req.reconnect
+    } else {
+        Duration::ZERO
+    };
+    while matches!(result, Err(mrsim_agents::AgentError::WorldGone)) && !window.is_zero() {
+        eprintln!(
+            "agent {robot}: the world is gone; trying to reach it again for {:.0} s",
+            window.as_secs_f64()
+        );
+        drop(link);
+        link = match connect(window) {
+            Ok(l) => l,
+            Err(_) => break,
+        };
+        let mut metered = Metered::new(link.as_mut(), Scope::Process);
+        let again = mrsim_agents::run_group(&mut metered, &opts);
+        usage = metered.usage();
+        match again {
+            // Not reached in time (no world of this run answers a join):
+            // the world is gone after all.
+            Err(
+                mrsim_agents::AgentError::Timeout { .. } | mrsim_agents::AgentError::NoWorld { .. },
+            ) => {
+                break;
+            }
+            other => {
+                eprintln!("agent {robot}: rejoined its world");
+                result = other;
+            }
+        }
+    }
     let usage_error = req
         .usage_out
         .as_ref()
-        .and_then(|path| crate::usage::write_agent(path, &metered.usage()).err());
+        .and_then(|path| crate::usage::write_agent(path, &usage).err());
     AgentEnd {
         result: result
             .map(|_| ())

@@ -69,6 +69,12 @@ pub struct RunRequest {
     /// With [`Transport::Zenoh`]: where the world listens (`None`: a free
     /// loopback port) and the Zenoh config file, if any.
     pub zenoh: ZenohOptions,
+    /// With [`Transport::Inproc`] in lockstep: the longest one robot's
+    /// answer (observe, plan, send) may take before the run stops with
+    /// [`RunError::Planner`] naming the robot and the tick, the outputs so
+    /// far written. `None`: no limit (a planner that never returns holds
+    /// the run).
+    pub plan_timeout: Option<Duration>,
 }
 
 /// What happens while a run goes on, for a caller that shows it.
@@ -174,6 +180,7 @@ pub struct Prepared {
 /// this process).
 pub fn prepare(validated: Validated, request: RunRequest) -> Result<Prepared, RunError> {
     check_transport(&validated, request.transport)?;
+    check_memory(&validated, request.transport)?;
     let dir = crate::out::prepare(request.out.as_deref(), &validated.scenario().name)?;
     let run_id = request
         .run_id
@@ -211,6 +218,9 @@ pub struct InProcess {
     pub out: Option<PathBuf>,
     /// Draw plot.svg/png and replay.html at the end.
     pub render: bool,
+    /// In lockstep: the longest one robot's answer may take before the run
+    /// stops with [`RunError::Planner`] ([`RunRequest::plan_timeout`]).
+    pub plan_timeout: Option<Duration>,
 }
 
 /// What a finished in-process run gives back.
@@ -237,9 +247,11 @@ pub fn run_in_process(req: &InProcess) -> Result<RunResult, RunError> {
         out: req.out.clone(),
         transport: Transport::Inproc,
         render: req.render,
+        plan_timeout: req.plan_timeout,
         ..Default::default()
     };
     check_transport(&validated, request.transport)?;
+    check_memory(&validated, request.transport)?;
     let dir = crate::out::prepare(request.out.as_deref(), &validated.scenario().name)?;
     let ns = Namespace::new(&Namespace::fresh_run_id()).map_err(|e| Invalid(e.to_string()))?;
     let prepared = Prepared {
@@ -289,6 +301,17 @@ fn check_transport(validated: &Validated, transport: Transport) -> Result<(), In
         validated.origin(),
         mrsim_world::names::first_few(&quoted, 5)
     )))
+}
+
+/// Refuses a run that would not fit in the memory available now
+/// ([`crate::memory`]).
+fn check_memory(validated: &Validated, transport: Transport) -> Result<(), Invalid> {
+    crate::memory::check(
+        validated.origin(),
+        validated.scenario(),
+        transport,
+        mrsim_sys::memory::available_bytes(),
+    )
 }
 
 /// Clears what a crashed earlier run with this id left behind, unless a
@@ -393,6 +416,7 @@ impl Prepared {
             ns.run_id(),
             stop,
             &agents,
+            request.plan_timeout,
             &mut |obs| on_event(Event::WaitingInproc(Observing(obs))),
         );
         on_event(Event::WorldEnded);

@@ -33,6 +33,7 @@ pub mod error;
 pub mod finish;
 pub mod inproc;
 pub mod launch;
+pub mod memory;
 pub mod out;
 pub mod sched;
 pub mod sim;

@@ -263,15 +263,13 @@ fn random(
     }
     let gap = 2.0 * r * 1.1;
     let mut rng = Rng(world.seed);
-    let mut draw = |taken: &[P], fixed: &[(P, f64)]| -> Option<P> {
+    let mut draw = |taken: &Taken, fixed: &[(P, f64)]| -> Option<P> {
         for _ in 0..2_000 {
             let p = [
                 lo[0] + rng.unit() * (hi[0] - lo[0]),
                 lo[1] + rng.unit() * (hi[1] - lo[1]),
             ];
-            let free = taken
-                .iter()
-                .all(|q| (p[0] - q[0]).hypot(p[1] - q[1]) >= gap)
+            let free = taken.far_from_all(p)
                 && fixed
                     .iter()
                     .all(|(q, rq)| (p[0] - q[0]).hypot(p[1] - q[1]) >= (r + rq) * 1.1);
@@ -287,8 +285,8 @@ fn random(
         .chain(obstacles.iter().map(|o| (o.start, o.radius)))
         .collect();
     let fixed_goals: Vec<(P, f64)> = robots.iter().map(|x| (x.goal, x.radius)).collect();
-    let mut starts = Vec::new();
-    let mut goals = Vec::new();
+    let mut starts = Taken::new(gap);
+    let mut goals = Taken::new(gap);
     let full = || {
         Fail::new(
             Some(g.span()),
@@ -309,5 +307,62 @@ fn random(
         let q = draw(&goals, &fixed_goals).ok_or_else(full)?;
         goals.push(q);
     }
-    Ok(starts.into_iter().zip(goals).collect())
+    Ok(starts.order.into_iter().zip(goals.order).collect())
+}
+
+/// The points drawn so far, in order and in square cells as wide as
+/// `gap`: a point nearer than `gap` to a new one is in the 3 x 3 cells
+/// around it, so a draw looks at a few points instead of every earlier
+/// one (the same answer: a million robots took minutes scanning them all).
+struct Taken {
+    gap: f64,
+    order: Vec<P>,
+    cells: std::collections::HashMap<(i64, i64), Vec<P>>,
+}
+
+impl Taken {
+    fn new(gap: f64) -> Self {
+        Self {
+            gap,
+            order: Vec::new(),
+            cells: Default::default(),
+        }
+    }
+
+    fn key(&self, p: P) -> (i64, i64) {
+        (
+            (p[0] / self.gap).floor() as i64,
+            (p[1] / self.gap).floor() as i64,
+        )
+    }
+
+    /// Whether `p` is at least `gap` from every point taken.
+    fn far_from_all(&self, p: P) -> bool {
+        if !(self.gap > 0.0 && self.gap.is_finite()) {
+            // Every distance is at least a gap of zero (or the grid cannot
+            // be built): the scan of every point decides.
+            return self
+                .order
+                .iter()
+                .all(|q| (p[0] - q[0]).hypot(p[1] - q[1]) >= self.gap);
+        }
+        let (cx, cy) = self.key(p);
+        (-1..=1_i64).all(|dx| {
+            (-1..=1_i64).all(|dy| {
+                let key = (cx.saturating_add(dx), cy.saturating_add(dy));
+                self.cells.get(&key).is_none_or(|qs| {
+                    qs.iter()
+                        .all(|q| (p[0] - q[0]).hypot(p[1] - q[1]) >= self.gap)
+                })
+            })
+        })
+    }
+
+    fn push(&mut self, p: P) {
+        self.order.push(p);
+        if self.gap > 0.0 && self.gap.is_finite() {
+            let key = self.key(p);
+            self.cells.entry(key).or_default().push(p);
+        }
+    }
 }

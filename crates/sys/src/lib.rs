@@ -13,6 +13,7 @@
 //! must know.
 #![warn(missing_docs)]
 
+pub mod memory;
 pub mod process;
 pub mod sched;
 pub mod signal;

@@ -130,7 +130,10 @@ impl Recording {
                 let name = self.names[*robot].clone();
                 self.event(
                     at,
-                    json!({"type": "agent_rejoined", "robot": name, "pid": pid}),
+                    // `token`: "new" for a join (a new token), "kept" for
+                    // an agent that answered again with its old one.
+                    json!({"type": "agent_rejoined", "robot": name, "pid": pid,
+                           "token": if *by_command { "kept" } else { "new" }}),
                 );
             }
             Event::JoinRefused { robot, pid, reason } => self.event(

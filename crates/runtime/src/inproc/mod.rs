@@ -87,6 +87,16 @@ pub struct InprocOutcome {
 /// 20 ms with an observer of the run's live statistics (for progress).
 /// Each agent joins with `agents`'s options (its robot's name put in):
 /// where planners come from, and what stops the run when one fails.
+///
+/// With `plan_timeout` (lockstep only) this thread is also the run's
+/// watchdog: a robot whose answer has taken longer than that stops the
+/// run through `agents.halt` ([`mrsim_agents::PlanFault::TimedOut`], naming
+/// the robot and the tick), and the world ends it as a termination request,
+/// writing its outputs. A thread cannot be stopped from outside, so the
+/// one stuck in the planner is left behind (it ends if the planner ever
+/// returns), and the world's thread does not plan in such a run: stuck, it
+/// could not end the run.
+#[allow(clippy::too_many_arguments)]
 pub fn run_scenario(
     scenario: &Scenario,
     world: mrsim_world::World,
@@ -94,14 +104,18 @@ pub fn run_scenario(
     run_id: &str,
     stop: Arc<AtomicBool>,
     agents: &mrsim_agents::AgentOptions,
+    plan_timeout: Option<Duration>,
     on_wait: &mut dyn FnMut(&mut dyn mrsim_transport::ObserverTransport),
 ) -> Result<InprocOutcome, InprocError> {
     let n = scenario.robots.len();
     let cpus = std::thread::available_parallelism().map_or(1, |p| p.get());
     let lockstep = scenario.world.mode == mrsim_scenario::Mode::Lockstep;
+    let plan_timeout = plan_timeout.filter(|_| lockstep);
     // In lockstep the world's thread plans too while it waits (it has
-    // nothing else to do), so the pool has one worker fewer than CPUs.
-    let workers = if lockstep { cpus - 1 } else { cpus }.clamp(1, n.max(1));
+    // nothing else to do), so the pool has one worker fewer than CPUs;
+    // not under a watchdog (above).
+    let helps = lockstep && plan_timeout.is_none();
+    let workers = if helps { cpus - 1 } else { cpus }.clamp(1, n.max(1));
     // In lockstep the world and the workers poll briefly for each other's
     // next message instead of sleeping at once (see `pooled_channels`).
     let spin = if lockstep {
@@ -120,8 +134,12 @@ pub fn run_scenario(
         .iter()
         .filter_map(mrsim_agents::reach)
         .reduce(f64::max);
-    let pool = Arc::new(Pool::new(n, reach, workers + usize::from(lockstep)));
-    if lockstep {
+    let mut pool = Pool::new(n, reach, workers + usize::from(helps));
+    if plan_timeout.is_some() {
+        pool.busy = (0..workers).map(|_| Busy::default()).collect();
+    }
+    let pool = Arc::new(pool);
+    if helps {
         let (pool, mut hand) = (pool.clone(), Hand::default());
         link.help_with(Box::new(move |h, b| {
             let start = mrsim_proto::now_ns();
@@ -135,7 +153,7 @@ pub fn run_scenario(
         let pool = pool.clone();
         let handle = std::thread::Builder::new()
             .name(format!("agents-{w}"))
-            .spawn(move || drive(side, &pool))
+            .spawn(move || drive(side, &pool, w))
             .map_err(|error| InprocError::Spawn {
                 robot: format!("worker {w}"),
                 error,
@@ -190,6 +208,18 @@ pub fn run_scenario(
             })?;
         while !world.is_finished() {
             on_wait(&mut observer);
+            if let (Some(limit), Some(halt)) = (plan_timeout, &agents.halt)
+                && let Some((robot, tick)) = pool.stuck(limit)
+            {
+                halt.raise(&mrsim_agents::PlanFailure {
+                    robot: scenario
+                        .robots
+                        .get(robot)
+                        .map_or_else(|| format!("#{robot}"), |r| r.name.clone()),
+                    tick,
+                    what: mrsim_agents::PlanFault::TimedOut(limit),
+                });
+            }
             std::thread::sleep(Duration::from_millis(20));
         }
         on_wait(&mut observer);
@@ -210,7 +240,12 @@ pub fn run_scenario(
     let mut exit = AgentExit::Finished;
     let mut cpu_s = 0.0;
     let mut maxrss_kb = 0;
-    for h in worker_handles {
+    for (w, h) in worker_handles.into_iter().enumerate() {
+        if pool.busy.get(w).is_some_and(Busy::is_busy) && !h.is_finished() {
+            // Still in a planner the watchdog gave up on: left behind.
+            pool.fail(None, "a planner did not return".to_string());
+            continue;
+        }
         match h.join() {
             Ok((e, usage)) => {
                 if e == AgentExit::Interrupted {
@@ -310,6 +345,44 @@ struct Pool {
     help_ns: AtomicU64,
     /// The newest snapshot being answered (for a robot that joins late).
     latest: std::sync::Mutex<Option<Snapshot>>,
+    /// Under a watchdog: what each worker is answering (empty otherwise).
+    busy: Vec<Busy>,
+}
+
+/// The robot a worker is answering and since when, for the watchdog.
+struct Busy {
+    /// The robot's index; `u64::MAX` between answers.
+    robot: AtomicU64,
+    /// The tick it answers.
+    tick: AtomicU64,
+    /// When its answer began (CLOCK_MONOTONIC ns).
+    since_ns: AtomicU64,
+}
+
+impl Default for Busy {
+    fn default() -> Self {
+        Self {
+            robot: AtomicU64::new(u64::MAX),
+            tick: AtomicU64::new(0),
+            since_ns: AtomicU64::new(0),
+        }
+    }
+}
+
+impl Busy {
+    fn begin(&self, robot: usize, tick: u64, now_ns: u64) {
+        self.tick.store(tick, Ordering::Relaxed);
+        self.since_ns.store(now_ns, Ordering::Relaxed);
+        self.robot.store(robot as u64, Ordering::Release);
+    }
+
+    fn end(&self) {
+        self.robot.store(u64::MAX, Ordering::Release);
+    }
+
+    fn is_busy(&self) -> bool {
+        self.robot.load(Ordering::Acquire) != u64::MAX
+    }
 }
 
 /// A snapshot as the workers get it.
@@ -341,7 +414,26 @@ impl Pool {
             errors: std::sync::Mutex::new(Vec::new()),
             help_ns: AtomicU64::new(0),
             latest: std::sync::Mutex::new(None),
+            busy: Vec::new(),
         }
+    }
+
+    /// A robot (index, tick) whose answer began more than `limit` ago.
+    fn stuck(&self, limit: Duration) -> Option<(usize, u64)> {
+        let now = mrsim_proto::now_ns();
+        let limit_ns = u64::try_from(limit.as_nanos()).unwrap_or(u64::MAX);
+        self.busy.iter().find_map(|b| {
+            let robot = b.robot.load(Ordering::Acquire);
+            let (tick, since) = (
+                b.tick.load(Ordering::Relaxed),
+                b.since_ns.load(Ordering::Relaxed),
+            );
+            // Read again: the same answer all along, not a new one begun
+            // between the loads.
+            let same = b.robot.load(Ordering::Acquire) == robot;
+            (robot != u64::MAX && same && now.saturating_sub(since) > limit_ns)
+                .then_some((robot as usize, tick))
+        })
     }
 
     /// Takes in the driver of robot `i`. If a snapshot is being answered
@@ -418,10 +510,15 @@ impl Pool {
 
     /// Every driver, the errors, and the world thread's planning time.
     fn finish(&self) -> (Vec<Driver>, Vec<RobotError>, u64) {
+        // A chunk still held by a worker stuck in a planner stays with it.
         let drivers = self
             .chunks
             .iter()
-            .flat_map(|c| std::mem::take(&mut *lock(c)))
+            .flat_map(|c| match c.try_lock() {
+                Ok(mut g) => std::mem::take(&mut *g),
+                Err(std::sync::TryLockError::Poisoned(p)) => std::mem::take(&mut *p.into_inner()),
+                Err(std::sync::TryLockError::WouldBlock) => Vec::new(),
+            })
             .collect();
         let errors = std::mem::take(&mut *lock(&self.errors));
         (drivers, errors, self.help_ns.load(Ordering::Relaxed))
@@ -448,6 +545,18 @@ impl Hand {
         h: &mrsim_proto::SnapshotHeader,
         b: &Arc<[mrsim_proto::BodyState]>,
     ) {
+        self.answer_watched(pool, h, b, None);
+    }
+
+    /// As [`Hand::answer`], noting in `busy` (under a watchdog) each robot
+    /// being answered.
+    fn answer_watched(
+        &mut self,
+        pool: &Pool,
+        h: &mrsim_proto::SnapshotHeader,
+        b: &Arc<[mrsim_proto::BodyState]>,
+        busy: Option<&Busy>,
+    ) {
         pool.saw(h, b);
         let mut gridded = None;
         let mut clock = mrsim_proto::now_ns();
@@ -457,6 +566,9 @@ impl Hand {
                 let among = gridded && self.grid.near(d, b, &mut self.near);
                 let near = among.then_some(self.near.as_slice());
                 let batch = &mut self.batch;
+                if let Some(busy) = busy {
+                    busy.begin(d.robot_id(), h.tick, clock);
+                }
                 clock = d
                     .on_snapshot_among(h, b, near, clock, Some(clock), &mut |m| {
                         batch.push(*m);
@@ -466,17 +578,20 @@ impl Hand {
                         pool.fail(Some(d.robot_id()), e.to_string());
                         mrsim_proto::now_ns()
                     });
+                if let Some(busy) = busy {
+                    busy.end();
+                }
             }
         }
     }
 }
 
-/// A worker thread: on each snapshot, answers for the chunks of robots it
+/// Worker `w`: on each snapshot, answers for the chunks of robots it
 /// claims and sends their commands in one batch. Ends on the run's last
 /// snapshot, when asked to stop, or when the world is gone. Returns how
 /// the robots' control ended, and its CPU time (from the first snapshot
 /// to the end).
-fn drive(side: InprocWorker, pool: &Pool) -> (AgentExit, AgentUsage) {
+fn drive(side: InprocWorker, pool: &Pool, w: usize) -> (AgentExit, AgentUsage) {
     let mut hand = Hand::default();
     let mut cpu_start = None;
     let exit = loop {
@@ -489,7 +604,7 @@ fn drive(side: InprocWorker, pool: &Pool) -> (AgentExit, AgentUsage) {
                     break AgentExit::Finished;
                 }
                 cpu_start.get_or_insert_with(|| crate::usage::rusage(Scope::Thread).0);
-                hand.answer(pool, &h, &b);
+                hand.answer_watched(pool, &h, &b, pool.busy.get(w));
                 if let Err(e) = side.send_commands(std::mem::take(&mut hand.batch)) {
                     pool.fail(None, e.to_string());
                     break AgentExit::Finished;
