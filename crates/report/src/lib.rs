@@ -6,7 +6,8 @@
 //! `plot.svg` and `plot.png` (map with trajectories, speeds, diagnostics);
 //! [`write_replay`] writes `replay.html`, one self-contained page that
 //! animates the run. [`render_all`] does all three; `mrsim run` calls it at
-//! the end of a run and `mrsim report DIR` on a folder.
+//! the end of a run and `mrsim report DIR` on a folder. [`sweep_plot`] and
+//! [`bench_plot`] draw a sweep's and a bench's figures.
 #![warn(missing_docs)]
 
 pub mod bench_plot;
@@ -16,6 +17,7 @@ mod plot;
 mod replay;
 mod run;
 mod sensing;
+pub mod sweep_plot;
 
 pub use palette::{COLLISION, PALETTE, hex, robot_color};
 pub use plot::{MAX_PLOT_POINTS, PLOT_WIDTH, plot_every, plot_size, write_plots};
