@@ -25,6 +25,10 @@ fn main() {
         Command::Report { dir } => mrsim::report::main(&dir),
         Command::Planners => mrsim::planners::main(),
         Command::Sweep(args) => mrsim::sweep::main(&args),
+        Command::Spin { parent } => {
+            mrsim_sys::sched::spin_while_child_of(parent);
+            Ok(0)
+        }
         Command::Check { scenario } => mrsim::check::main(&scenario),
     };
     std::process::exit(mrsim::exit::code(result));

@@ -850,6 +850,21 @@ mod tests {
     use super::*;
 
     #[test]
+    fn an_axis_names_the_unit_its_key_says() {
+        assert_eq!(key_unit("world.dt", "m").as_deref(), Some("s"));
+        assert_eq!(
+            key_unit("defaults.timing.compute.ms", "m").as_deref(),
+            Some("ms")
+        );
+        assert_eq!(key_unit("robot.*.max_speed", "cm").as_deref(), Some("cm/s"));
+        assert_eq!(
+            key_unit("defaults.field_of_view_deg", "m").as_deref(),
+            Some("deg")
+        );
+        assert_eq!(key_unit("generate.count", "m"), None);
+    }
+
+    #[test]
     fn labels_are_short_safe_and_numbered() {
         let axes = vec![("obstacle.*.motion".to_string(), Vec::new())];
         let l = label(
