@@ -186,15 +186,28 @@ fn complete_lines(summary: &str, mode: &str, other: Option<&str>, n: usize) -> u
     lines
 }
 
-#[test]
-fn a_sweep_draws_every_metric_with_one_line_per_combination_of_the_other_keys() {
-    let dir = fresh_dir("sweep-plot");
+/// Runs `mrsim sweep` of the tiny scenario with `args` into a fresh folder;
+/// returns that folder and the output.
+fn sweep_tiny(tag: &str, args: &[&str]) -> (std::path::PathBuf, std::process::Output) {
+    let dir = fresh_dir(tag);
     let scenario = dir.join("tiny.toml");
     std::fs::write(&scenario, SCENARIO).expect("write scenario");
     let out = mrsim()
         .arg("sweep")
         .arg(&scenario)
-        .args([
+        .args(args)
+        .arg("--out")
+        .arg(dir.join("o"))
+        .output()
+        .expect("start mrsim");
+    (dir.join("o"), out)
+}
+
+#[test]
+fn a_sweep_draws_every_metric_with_one_line_per_combination_of_the_other_keys() {
+    let (o, out) = sweep_tiny(
+        "sweep-plot",
+        &[
             "--set",
             "robot.r0.max_speed=0.5,1,1.5",
             "--set",
@@ -203,14 +216,11 @@ fn a_sweep_draws_every_metric_with_one_line_per_combination_of_the_other_keys() 
             "2",
             "--x",
             "robot.r0.max_speed",
-        ])
-        .arg("--out")
-        .arg(dir.join("o"))
-        .output()
-        .expect("start mrsim");
+        ],
+    );
     assert_ok(&out);
-    let svg = std::fs::read_to_string(dir.join("o/sweep.svg")).expect("sweep.svg");
-    let png = std::fs::read(dir.join("o/sweep.png")).expect("sweep.png");
+    let svg = std::fs::read_to_string(o.join("sweep.svg")).expect("sweep.svg");
+    let png = std::fs::read(o.join("sweep.png")).expect("sweep.png");
     assert_eq!(&png[1..4], b"PNG");
     let texts = svg_texts(&svg);
     // The legend: one entry per value of the other key.
@@ -236,7 +246,7 @@ fn a_sweep_draws_every_metric_with_one_line_per_combination_of_the_other_keys() 
     // Two lines (one per dt) of three points in each of the nine panels,
     // except where a point has no value (time_to_goal where the robot
     // never arrived).
-    let summary = std::fs::read_to_string(dir.join("o/summary.csv")).expect("summary.csv");
+    let summary = std::fs::read_to_string(o.join("summary.csv")).expect("summary.csv");
     let want = complete_lines(&summary, "lockstep", Some("world.dt"), 3);
     assert!(want >= 2 * 8, "{summary}");
     assert_eq!(solid_curves(&svg, 3), want, "{svg}");
@@ -244,21 +254,14 @@ fn a_sweep_draws_every_metric_with_one_line_per_combination_of_the_other_keys() 
 
 #[test]
 fn the_summary_intervals_are_students_t_over_the_seeds() {
-    let dir = fresh_dir("sweep-ci");
-    let scenario = dir.join("tiny.toml");
-    std::fs::write(&scenario, SCENARIO).expect("write scenario");
-    let out = mrsim()
-        .arg("sweep")
-        .arg(&scenario)
-        .args(["--set", "robot.r0.max_speed=0.5,1.5", "--seeds", "3"])
-        .arg("--out")
-        .arg(dir.join("o"))
-        .output()
-        .expect("start mrsim");
+    let (o, out) = sweep_tiny(
+        "sweep-ci",
+        &["--set", "robot.r0.max_speed=0.5,1.5", "--seeds", "3"],
+    );
     assert_ok(&out);
-    let csv = std::fs::read_to_string(dir.join("o/sweep.csv")).expect("sweep.csv");
+    let csv = std::fs::read_to_string(o.join("sweep.csv")).expect("sweep.csv");
     let rows: Vec<Vec<&str>> = csv.lines().map(|l| l.split(',').collect()).collect();
-    let summary = std::fs::read_to_string(dir.join("o/summary.csv")).expect("summary.csv");
+    let summary = std::fs::read_to_string(o.join("summary.csv")).expect("summary.csv");
     let srows: Vec<Vec<&str>> = summary.lines().map(|l| l.split(',').collect()).collect();
     let (h, sh) = (&rows[0], &srows[0]);
     let mut checked = 0;
@@ -303,26 +306,19 @@ fn the_summary_intervals_are_students_t_over_the_seeds() {
 
 #[test]
 fn realtime_runs_go_one_at_a_time_and_both_modes_share_one_figure() {
-    let dir = fresh_dir("sweep-both");
-    let scenario = dir.join("tiny.toml");
-    std::fs::write(&scenario, SCENARIO).expect("write scenario");
-    let out = mrsim()
-        .arg("sweep")
-        .arg(&scenario)
-        .args([
+    let (o, out) = sweep_tiny(
+        "sweep-both",
+        &[
             "--set",
             "robot.r0.max_speed=0.5,1,1.5",
             "--seeds",
             "2",
             "--mode",
             "both",
-        ])
-        .arg("--out")
-        .arg(dir.join("o"))
-        .output()
-        .expect("start mrsim");
+        ],
+    );
     assert_ok(&out);
-    let csv = std::fs::read_to_string(dir.join("o/sweep.csv")).expect("sweep.csv");
+    let csv = std::fs::read_to_string(o.join("sweep.csv")).expect("sweep.csv");
     let rows: Vec<Vec<&str>> = csv.lines().map(|l| l.split(',').collect()).collect();
     let h = &rows[0];
     let modes: Vec<&str> = rows[1..].iter().map(|r| r[column(h, "mode")]).collect();
@@ -343,7 +339,7 @@ fn realtime_runs_go_one_at_a_time_and_both_modes_share_one_figure() {
         .iter()
         .filter(|r| r[column(h, "mode")] == "realtime")
         .map(|r| {
-            let run = dir.join("o").join(r[column(h, "run")]);
+            let run = o.join(r[column(h, "run")]);
             assert_eq!(metrics(&run)["mode"], "realtime");
             span(&run)
         })
@@ -352,12 +348,12 @@ fn realtime_runs_go_one_at_a_time_and_both_modes_share_one_figure() {
         assert!(pair[0].1 <= pair[1].0, "realtime runs overlapped: {pair:?}");
     }
     // One figure with the modelled and the measured curve.
-    let svg = std::fs::read_to_string(dir.join("o/sweep.svg")).expect("sweep.svg");
+    let svg = std::fs::read_to_string(o.join("sweep.svg")).expect("sweep.svg");
     let texts = svg_texts(&svg);
     for label in ["lockstep (modelled)", "realtime (measured)"] {
         assert!(texts.iter().any(|t| t == label), "{label} in {texts:?}");
     }
-    let summary = std::fs::read_to_string(dir.join("o/summary.csv")).expect("summary.csv");
+    let summary = std::fs::read_to_string(o.join("summary.csv")).expect("summary.csv");
     let want = complete_lines(&summary, "lockstep", None, 3);
     assert!(want >= 8, "{summary}");
     assert_eq!(solid_curves(&svg, 3), want, "one modelled line per panel");
@@ -368,25 +364,18 @@ fn realtime_runs_go_one_at_a_time_and_both_modes_share_one_figure() {
 
 #[test]
 fn realtime_runs_in_parallel_are_refused() {
-    let dir = fresh_dir("sweep-rt-jobs");
-    let scenario = dir.join("tiny.toml");
-    std::fs::write(&scenario, SCENARIO).expect("write scenario");
-    let out = mrsim()
-        .arg("sweep")
-        .arg(&scenario)
-        .args([
+    let (o, out) = sweep_tiny(
+        "sweep-rt-jobs",
+        &[
             "--set",
             "robot.r0.max_speed=0.5,1.5",
             "--mode",
             "realtime",
             "--jobs",
             "2",
-        ])
-        .arg("--out")
-        .arg(dir.join("o"))
-        .output()
-        .expect("start mrsim");
+        ],
+    );
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("one at a time"));
-    assert!(!dir.join("o").exists());
+    assert!(!o.exists());
 }
