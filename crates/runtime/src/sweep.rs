@@ -572,10 +572,7 @@ impl Sweep {
         std::thread::scope(|s| {
             for _ in 0..workers.clamp(1, batch.len().max(1)) {
                 s.spawn(|| {
-                    loop {
-                        let Some(&i) = batch.get(next.fetch_add(1, Ordering::SeqCst)) else {
-                            break;
-                        };
+                    while let Some(&i) = batch.get(next.fetch_add(1, Ordering::SeqCst)) {
                         let job = &self.jobs[i];
                         let r = self.run_one(exe, job);
                         let n = done.fetch_add(1, Ordering::SeqCst) + 1;
