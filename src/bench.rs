@@ -6,7 +6,7 @@ use crate::cli::BenchArgs;
 use crate::exit::fail;
 use crate::table::{num, text};
 use anyhow::Result;
-use mrsim_runfolder::bench::BenchRow;
+use mrsim_runfolder::bench::{BenchRow, Overhead};
 use mrsim_runtime::bench::{BenchPlan, BenchStep};
 use std::io::{IsTerminal, Write};
 use std::time::Instant;
@@ -52,6 +52,8 @@ impl Progress {
 /// The table printed at the end: one row per combination.
 pub fn table(rows: &[BenchRow]) -> String {
     let header = [
+        "stress",
+        "rep",
         "agents",
         "transport",
         "rt p50",
@@ -74,6 +76,8 @@ pub fn table(rows: &[BenchRow]) -> String {
         .iter()
         .map(|r| {
             vec![
+                r.stress.to_string(),
+                r.repeat.to_string(),
                 r.agents.to_string(),
                 text(&r.transport),
                 num(r.roundtrip_us.p50, 0),
@@ -122,6 +126,30 @@ pub fn table(rows: &[BenchRow]) -> String {
     out
 }
 
+/// The overhead over the bare fan-out: the median of the interleaved pairs'
+/// ratios with its quartiles and range.
+pub fn overhead_table(rows: &[Overhead]) -> String {
+    let mut out =
+        String::from("\nmrsim over bare iceoryx2, all-in p50 ratio of interleaved pairs:\n");
+    out.push_str(&format!(
+        "{:>6}  {:>6}  {:>9}  {:>5}  {:>6}  {:>13}  {:>13}\n",
+        "stress", "agents", "transport", "pairs", "median", "IQR", "min-max"
+    ));
+    for o in rows {
+        out.push_str(&format!(
+            "{:>6}  {:>6}  {:>9}  {:>5}  {:>6.2}  {:>13}  {:>13}\n",
+            o.stress,
+            o.agents,
+            o.transport,
+            o.pairs,
+            o.median,
+            format!("{:.2}-{:.2}", o.q1, o.q3),
+            format!("{:.2}-{:.2}", o.min, o.max),
+        ));
+    }
+    out
+}
+
 /// Runs `mrsim bench`; returns the exit status.
 pub fn main(args: &BenchArgs) -> Result<i32> {
     let plan = BenchPlan {
@@ -134,6 +162,8 @@ pub fn main(args: &BenchArgs) -> Result<i32> {
         baseline: args.baseline,
         out: args.out.clone(),
         sched: (&args.sched).into(),
+        stress: args.stress.clone(),
+        repeat: args.repeat,
     };
     let prepared = mrsim_runtime::bench::prepare(&plan).map_err(fail)?;
     let applied = prepared.applied().clone();
@@ -157,11 +187,25 @@ pub fn main(args: &BenchArgs) -> Result<i32> {
         eprintln!("warning: cannot draw bench.svg: {e}");
     }
     print!("{}", table(&outcome.rows));
+    if !outcome.overhead.is_empty() {
+        print!("{}", overhead_table(&outcome.overhead));
+    }
     println!(
-        "pinned to CPUs {:?}{}; wrote {}/bench.json, bench.csv, bench.svg",
+        "pinned to CPUs {:?}{}; wrote {}/bench.json, bench.csv, bench.svg{}",
         applied.cpus,
         if applied.rt { ", SCHED_FIFO" } else { "" },
-        outcome.out.display()
+        outcome.out.display(),
+        if args
+            .stress
+            .iter()
+            .collect::<std::collections::BTreeSet<_>>()
+            .len()
+            > 1
+        {
+            ", stress.svg, stress.png"
+        } else {
+            ""
+        }
     );
     Ok(0)
 }

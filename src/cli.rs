@@ -282,6 +282,15 @@ pub struct BenchArgs {
     /// and --rt for SCHED_FIFO.
     #[command(flatten)]
     pub sched: SchedArgs,
+    /// Loads, comma-separated: measure everything beside that many
+    /// CPU-bound processes on the same CPUs (e.g. 0,1,2), one table and
+    /// stress.svg/png.
+    #[arg(long, value_delimiter = ',', value_name = "N,N,...")]
+    pub stress: Vec<usize>,
+    /// Make each measurement N times, interleaved with its baseline: with
+    /// --baseline, the median overhead ratio and its spread.
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    pub repeat: usize,
 }
 
 /// What `mrsim sweep` was asked.
@@ -306,6 +315,38 @@ pub struct SweepArgs {
     /// this swept key whose run had no collision.
     #[arg(long, value_name = "KEY")]
     pub allowable: Option<String>,
+    /// lockstep (the modelled curve, runs in parallel), realtime (the
+    /// measured curve, one run at a time) or both (lockstep, then realtime,
+    /// on one figure).
+    #[arg(long, value_enum, default_value = "lockstep")]
+    pub mode: SweepModeArg,
+    /// The swept key on sweep.svg's x axis (default: the first swept key
+    /// whose values are all numbers).
+    #[arg(long, value_name = "KEY")]
+    pub x: Option<String>,
+}
+
+/// How a sweep's runs keep time.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ValueEnum)]
+pub enum SweepModeArg {
+    /// Lockstep, several runs at once.
+    #[default]
+    Lockstep,
+    /// Realtime, one run at a time.
+    Realtime,
+    /// Lockstep, then realtime.
+    Both,
+}
+
+impl From<SweepModeArg> for mrsim_runtime::sweep::SweepMode {
+    fn from(m: SweepModeArg) -> Self {
+        use mrsim_runtime::sweep::SweepMode;
+        match m {
+            SweepModeArg::Lockstep => SweepMode::Lockstep,
+            SweepModeArg::Realtime => SweepMode::Realtime,
+            SweepModeArg::Both => SweepMode::Both,
+        }
+    }
 }
 
 /// The subcommands.
@@ -382,10 +423,18 @@ pub enum Command {
     },
     /// List the planners.
     Planners,
-    /// Run every combination of values (x seeds 1..N) in lockstep and
-    /// tabulate the metrics: sweep.csv, summary.csv, a table of means with
-    /// 95 % intervals.
+    /// Run every combination of values (x seeds 1..N) and tabulate and
+    /// draw the metrics: sweep.csv, summary.csv, a table of means with
+    /// 95 % intervals, sweep.svg and sweep.png.
     Sweep(SweepArgs),
+    /// A CPU-bound load of `bench --stress`; exits when process PARENT is
+    /// no longer its parent.
+    #[command(hide = true)]
+    Spin {
+        /// The bench's pid.
+        #[arg(long)]
+        parent: u32,
+    },
     /// Check a scenario file without running it.
     Check {
         /// Scenario and overrides.

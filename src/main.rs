@@ -39,6 +39,10 @@ fn main() {
         Command::Export { dir, mcap } => mrsim::export::main(&dir, mcap),
         Command::Planners => mrsim::planners::main(),
         Command::Sweep(args) => mrsim::sweep::main(&args),
+        Command::Spin { parent } => {
+            mrsim_sys::sched::spin_while_child_of(parent);
+            Ok(0)
+        }
         Command::Check { scenario } => mrsim::check::main(&scenario),
     };
     std::process::exit(mrsim::exit::code(result));

@@ -1,13 +1,15 @@
 //! `mrsim sweep`: runs every combination of values with each seed (see
 //! `mrsim_runtime::sweep`) and tabulates the metrics.
 //!
-//! Outputs: `DIR/sweep.csv`, one row per run (the varied values, the seed,
-//! the run's metrics, its folder relative to DIR; `collided` is 1 if the run
-//! had any collision, so its mean is the collision rate); `DIR/summary.csv` and a
-//! table on stdout with, per combination, the mean of each metric and the
-//! half-width of its 95 % confidence interval (Student's t, n - 1 degrees of
-//! freedom). Nothing in sweep.csv depends on the wall clock, so the same
-//! command gives the same file byte for byte.
+//! Outputs: `DIR/sweep.csv`, one row per run (the varied values, the mode,
+//! the seed, the run's metrics, its folder relative to DIR; `collided` is 1
+//! if the run had any collision, so its mean is the collision rate);
+//! `DIR/summary.csv` and a table on stdout with, per combination and mode,
+//! the mean of each metric and the half-width of its 95 % confidence
+//! interval (Student's t, n - 1 degrees of freedom); `DIR/sweep.svg` and
+//! `sweep.png`, every metric against a swept number. In lockstep nothing in
+//! sweep.csv depends on the wall clock, so the same command gives the same
+//! file byte for byte.
 //!
 //! `--allowable KEY` (a swept numeric key, e.g. `robot.*.max_speed`) also
 //! reports, per combination of the other keys, the mean over seeds of the
@@ -20,7 +22,7 @@ use crate::exit::fail;
 use anyhow::{Context, Result, anyhow};
 use mrsim_runfolder::{ALLOWABLE_FILE, SUMMARY_FILE, SWEEP_FILE};
 use mrsim_runtime::sweep::{
-    Job, JobDone, JobResult, METRICS, RunMetrics, SweepPlan, largest_allowable, mean_ci,
+    Job, JobDone, JobResult, METRICS, SweepPlan, largest_allowable, mean_ci,
 };
 use std::io::IsTerminal;
 
@@ -45,6 +47,8 @@ pub fn main(args: &SweepArgs) -> Result<i32> {
         out: args.out.clone(),
         jobs: args.jobs,
         allowable: args.allowable.clone(),
+        mode: args.mode.into(),
+        x: args.x.clone(),
     })
     .map_err(fail)?;
     let (axes, combos, jobs, dir) = (&sweep.axes, &sweep.combos, &sweep.jobs, &sweep.dir);
@@ -61,12 +65,19 @@ pub fn main(args: &SweepArgs) -> Result<i32> {
     } else {
         None
     };
+    let at_once = match args.mode {
+        crate::cli::SweepModeArg::Lockstep => format!("{} at once", sweep.workers),
+        crate::cli::SweepModeArg::Realtime => "one at a time".to_string(),
+        crate::cli::SweepModeArg::Both => format!(
+            "lockstep {} at once, then realtime one at a time",
+            sweep.workers
+        ),
+    };
     eprintln!(
-        "sweep: {} combinations x {} seeds = {} runs, {} at once, into {}",
+        "sweep: {} combinations x {} seeds = {} runs, {at_once}, into {}",
         combos.len(),
         args.seeds,
         jobs.len(),
-        sweep.workers,
         dir.display()
     );
     let results = sweep
@@ -91,6 +102,7 @@ pub fn main(args: &SweepArgs) -> Result<i32> {
     // sweep.csv
     let mut csv = String::new();
     let mut header: Vec<String> = axes.iter().map(|(k, _)| csv_field(k)).collect();
+    header.push("mode".into());
     header.push("seed".into());
     header.extend(METRICS.iter().map(|(n, _)| n.to_string()));
     header.push("run".into());
@@ -99,6 +111,7 @@ pub fn main(args: &SweepArgs) -> Result<i32> {
     let mut failed = 0;
     for (job, r) in jobs.iter().zip(&results) {
         let mut row: Vec<String> = combos[job.combo].iter().map(|v| csv_field(v)).collect();
+        row.push(job.mode.to_string());
         row.push(job.seed.to_string());
         match r {
             Ok(m) => row.extend(METRICS.iter().map(|(_, f)| fmt_opt(f(m)))),
@@ -117,6 +130,7 @@ pub fn main(args: &SweepArgs) -> Result<i32> {
     // Summary: per combination, mean and 95 % half-width of each metric.
     let mut summary = String::new();
     let mut sheader: Vec<String> = axes.iter().map(|(k, _)| csv_field(k)).collect();
+    sheader.push("mode".into());
     sheader.push("runs".into());
     for (n, _) in METRICS {
         sheader.push(format!("{n}_mean"));
@@ -134,6 +148,7 @@ pub fn main(args: &SweepArgs) -> Result<i32> {
     ];
     let mut table: Vec<Vec<String>> = Vec::new();
     let mut theader: Vec<String> = axes.iter().map(|(k, _)| k.clone()).collect();
+    theader.push("mode".into());
     theader.push("runs".into());
     // In METRICS order, as the rows are filled.
     theader.extend(
@@ -143,23 +158,19 @@ pub fn main(args: &SweepArgs) -> Result<i32> {
             .map(|(n, _)| n.to_string()),
     );
     table.push(theader);
-    for (ci, combo) in combos.iter().enumerate() {
-        let runs: Vec<&RunMetrics> = jobs
-            .iter()
-            .zip(&results)
-            .filter(|(j, _)| j.combo == ci)
-            .filter_map(|(_, r)| r.as_ref().ok())
-            .collect();
+    let summaries = sweep.summarize(&results);
+    for sum in &summaries {
+        let combo = &combos[sum.combo];
         let mut srow: Vec<String> = combo.iter().map(|v| csv_field(v)).collect();
-        srow.push(runs.len().to_string());
+        srow.push(sum.mode.to_string());
+        srow.push(sum.runs.to_string());
         let mut trow: Vec<String> = combo.clone();
-        trow.push(runs.len().to_string());
-        for (n, f) in METRICS {
-            let xs: Vec<f64> = runs.iter().filter_map(|m| f(m)).collect();
-            let (mean, hw) = mean_ci(&xs);
+        trow.push(sum.mode.to_string());
+        trow.push(sum.runs.to_string());
+        for ((n, _), &(mean, hw)) in METRICS.iter().zip(&sum.stats) {
             srow.push(fmt_opt(mean));
             srow.push(fmt_opt(hw));
-            if shown.contains(&n) {
+            if shown.contains(n) {
                 trow.push(match (mean, hw) {
                     (Some(m), Some(h)) => format!("{m:.3} ± {h:.3}"),
                     (Some(m), None) => format!("{m:.3}"),
@@ -204,6 +215,17 @@ pub fn main(args: &SweepArgs) -> Result<i32> {
         "(mean ± half-width of the 95 % interval, Student's t, over seeds 1..={})",
         args.seeds
     );
+    let drawn = match sweep.draw(&summaries) {
+        Ok(true) => ", sweep.svg, sweep.png",
+        Ok(false) => {
+            eprintln!("note: no swept key is a number, so there is no sweep.svg to draw");
+            ""
+        }
+        Err(e) => {
+            eprintln!("warning: cannot draw sweep.svg: {e}");
+            ""
+        }
+    };
     if let Some(key) = &args.allowable {
         let text = allowable(key, axes, combos, jobs, &results)?;
         std::fs::write(dir.join(ALLOWABLE_FILE), &text.0)
@@ -211,7 +233,7 @@ pub fn main(args: &SweepArgs) -> Result<i32> {
         print!("{}", text.1);
     }
     println!(
-        "sweep folder: {} (sweep.csv, summary.csv, runs/)",
+        "sweep folder: {} (sweep.csv, summary.csv{drawn}, runs/)",
         dir.display()
     );
     if failed > 0 {
@@ -234,11 +256,14 @@ fn allowable(
         .iter()
         .position(|(a, _)| a == key)
         .ok_or_else(|| anyhow!("--allowable {key}: not a swept key"))?;
+    // The mode counts as one more of the other keys.
+    let mode_key = "mode".to_string();
     let others: Vec<&String> = axes
         .iter()
         .enumerate()
         .filter(|(i, _)| *i != k)
         .map(|(_, (a, _))| a)
+        .chain([&mode_key])
         .collect();
     // Group runs by (the other values, seed).
     // (the other values, seed, [(value of key, collided)])
@@ -252,6 +277,7 @@ fn allowable(
             .enumerate()
             .filter(|(i, _)| *i != k)
             .map(|(_, v)| v.clone())
+            .chain([job.mode.to_string()])
             .collect();
         let v: f64 = combo[k].parse().unwrap_or(f64::NAN);
         let run = (v, m.collisions_total > 0.0);

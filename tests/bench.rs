@@ -156,3 +156,123 @@ fn a_bench_with_an_unknown_planner_is_refused_before_anything_runs() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("nope"));
     assert!(!out.join("bench.json").exists());
 }
+
+/// Waits up to `secs` for `n` live `mrsim spin --parent PID` processes.
+fn wait_for_load(parent: u32, n: usize, secs: u64) -> Vec<u32> {
+    let pid = parent.to_string();
+    let start = std::time::Instant::now();
+    loop {
+        let found = find_processes(&["spin", "--parent", &pid]);
+        if found.len() == n {
+            return found;
+        }
+        assert!(
+            start.elapsed() < std::time::Duration::from_secs(secs),
+            "{} load processes of bench {parent} after {secs} s, not {n}",
+            found.len()
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+}
+
+#[test]
+fn a_bench_under_stress_measures_every_load_and_repetition_and_leaves_no_load_behind() {
+    let out = fresh_dir("bench-stress");
+    let child = mrsim()
+        .args([
+            "bench",
+            "--agents",
+            "4",
+            "--duration",
+            "1",
+            "--rate",
+            "50",
+            "--transport",
+            "shm",
+            "--stress",
+            "0,1",
+            "--repeat",
+            "2",
+            "--cpus",
+            "0",
+            "--out",
+        ])
+        .arg(&out)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("start mrsim");
+    // The load of the second level runs while it is measured.
+    let load = wait_for_load(child.id(), 1, 120);
+    let o = child.wait_with_output().expect("bench ends");
+    assert_ok(&o);
+    for pid in load {
+        assert!(process_gone(pid), "load process {pid} outlived the bench");
+    }
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("bench.json")).expect("bench.json"))
+            .expect("bench.json parses");
+    let rows = doc["rows"].as_array().expect("rows");
+    let got: Vec<(u64, u64)> = rows
+        .iter()
+        .map(|r| {
+            (
+                r["stress"].as_u64().expect("stress"),
+                r["repeat"].as_u64().expect("repeat"),
+            )
+        })
+        .collect();
+    assert_eq!(got, [(0, 1), (0, 2), (1, 1), (1, 2)]);
+    // Every run in its own folder.
+    let dirs: std::collections::BTreeSet<&str> =
+        rows.iter().filter_map(|r| r["run_dir"].as_str()).collect();
+    assert_eq!(dirs.len(), 4);
+    // Without a baseline there is no overhead to give.
+    assert!(doc.get("overhead").is_none(), "{doc:#}");
+    // The load figure: one line (shm, 4 agents) in each of its four panels.
+    let svg = std::fs::read_to_string(out.join("stress.svg")).expect("stress.svg");
+    assert!(svg.contains("shm, 4 agents"), "legend");
+    assert!(out.join("stress.png").is_file());
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("stress.svg"), "{stdout}");
+}
+
+#[test]
+fn an_interrupted_bench_leaves_no_load_behind() {
+    let out = fresh_dir("bench-stress-int");
+    let mut child = mrsim()
+        .args([
+            "bench",
+            "--agents",
+            "2",
+            "--duration",
+            "2",
+            "--rate",
+            "20",
+            "--transport",
+            "inproc",
+            "--stress",
+            "2",
+            "--cpus",
+            "0",
+            "--out",
+        ])
+        .arg(&out)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("start mrsim");
+    let load = wait_for_load(child.id(), 2, 60);
+    // Ctrl-C on the bench alone (not its process group): it dies at once,
+    // without a chance to clean up.
+    send_signal(child.id(), libc::SIGINT);
+    let _ = child.wait();
+    let start = std::time::Instant::now();
+    while !load.iter().all(|&p| process_gone(p)) {
+        assert!(
+            start.elapsed() < std::time::Duration::from_secs(10),
+            "load processes {load:?} outlived the interrupted bench"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+}

@@ -5,9 +5,10 @@
 //! `metrics.json` and the optional `diagnostics.csv`; [`write_plots`] draws
 //! `plot.svg` and `plot.png` (map with trajectories, speeds, diagnostics);
 //! [`write_replay`] writes `replay.html`, one self-contained page that
-//! animates the run; [`export_mcap`] writes `run.mcap` for Foxglove. [`render_all`]
-//! draws the first three; `mrsim run` calls it at
-//! the end of a run and `mrsim report DIR` on a folder.
+//! animates the run; [`export_mcap`] writes `run.mcap` for Foxglove.
+//! [`render_all`] draws the first three; `mrsim run` calls it at the end of
+//! a run and `mrsim report DIR` on a folder. [`sweep_plot`] and
+//! [`bench_plot`] draw a sweep's and a bench's figures.
 #![warn(missing_docs)]
 
 pub mod bench_plot;
@@ -18,6 +19,7 @@ mod plot;
 mod replay;
 mod run;
 mod sensing;
+pub mod sweep_plot;
 
 pub use foxglove::{MCAP_FILE, McapWritten, export_mcap, write_mcap};
 pub use palette::{COLLISION, PALETTE, hex, robot_color};

@@ -27,7 +27,7 @@ const MAX_DIAG_PANELS: usize = 6;
 const MAX_NAMED: usize = 16;
 
 const FONT: &[u8] = include_bytes!("../assets/DejaVuSans-ascii.ttf");
-const FAMILY: &str = "sans-serif";
+pub(crate) const FAMILY: &str = "sans-serif";
 
 pub(crate) fn register_font() -> Result<(), String> {
     static DONE: OnceLock<Result<(), String>> = OnceLock::new();
@@ -82,19 +82,25 @@ pub fn write_plots(run: &RunData, dir: &Path) -> Result<(), RenderError> {
         root.present()
             .map_err(|e| plot_error(&png_path)(e.to_string()))?;
     }
-    let file = std::fs::File::create(&png_path).map_err(|source| RenderError::Io {
-        path: png_path.clone(),
+    write_png(&png_path, &pixels, size)
+}
+
+/// Encodes an RGB buffer of `size` pixels (as the bitmap backend fills it)
+/// into the PNG file `path`.
+pub(crate) fn write_png(path: &Path, pixels: &[u8], size: (u32, u32)) -> Result<(), RenderError> {
+    let file = std::fs::File::create(path).map_err(|source| RenderError::Io {
+        path: path.to_path_buf(),
         source,
     })?;
     let png_err = |source| RenderError::Png {
-        path: png_path.clone(),
+        path: path.to_path_buf(),
         source,
     };
     let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), size.0, size.1);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
     let mut writer = encoder.write_header().map_err(png_err)?;
-    writer.write_image_data(&pixels).map_err(png_err)?;
+    writer.write_image_data(pixels).map_err(png_err)?;
     writer.finish().map_err(png_err)?;
     Ok(())
 }

@@ -13,6 +13,40 @@ use serde::{Deserialize, Serialize};
 pub struct BenchDoc {
     /// One per run.
     pub rows: Vec<BenchRow>,
+    /// `--baseline`: mrsim's all-in median over the bare fan-out's, per
+    /// agent count, transport and load, over the `--repeat` interleaved
+    /// pairs.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub overhead: Vec<Overhead>,
+}
+
+/// mrsim's overhead over the bare iceoryx2 fan-out: the ratio of the
+/// all-in medians (mrsim's run over the baseline run right after it), over
+/// several interleaved pairs, so that one command gives a figure that holds
+/// from run to run although each side alone moves.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Overhead {
+    /// Robots (one agent each).
+    pub agents: usize,
+    /// Largest ratio.
+    pub max: f64,
+    /// Median ratio.
+    pub median: f64,
+    /// Smallest ratio.
+    pub min: f64,
+    /// Pairs with both medians.
+    pub pairs: usize,
+    /// First quartile of the ratios.
+    pub q1: f64,
+    /// Third quartile of the ratios.
+    pub q3: f64,
+    /// Every pair's ratio, in the order measured.
+    pub ratios: Vec<f64>,
+    /// CPU-bound processes run beside it (`--stress`).
+    pub stress: usize,
+    /// `shm`, `inproc` or `zenoh`.
+    pub transport: String,
 }
 
 /// Median, 99th, 99.9th percentile and largest sample, µs (null: no sample).
@@ -75,6 +109,8 @@ pub struct BenchRow {
     pub rate_hz: f64,
     /// Simulated over wall time of the tick loop.
     pub realtime_factor: f64,
+    /// Which of the `--repeat` measurements it is (1-based).
+    pub repeat: usize,
     /// Snapshot published -> command received by the world, µs.
     pub roundtrip_us: Quantiles,
     /// Under SCHED_FIFO (`--rt`).
@@ -84,6 +120,8 @@ pub struct BenchRow {
     /// Time the hypervisor stole from the run's CPUs, % of wall (null where
     /// /proc/stat is unreadable).
     pub steal_pct: Option<f64>,
+    /// CPU-bound processes run beside it on its CPUs (`--stress`).
+    pub stress: usize,
     /// Ticks run.
     pub ticks: u64,
     /// `shm` or `inproc`.

@@ -55,6 +55,14 @@ pub const BENCH_FILE: &str = "bench.json";
 pub const BENCH_CSV_FILE: &str = "bench.csv";
 /// `mrsim bench`'s plot.
 pub const BENCH_SVG_FILE: &str = "bench.svg";
+/// `mrsim bench --stress`: round trip and misses against the load, vector.
+pub const STRESS_SVG_FILE: &str = "stress.svg";
+/// `mrsim bench --stress`: the same figure, bitmap.
+pub const STRESS_PNG_FILE: &str = "stress.png";
+/// `mrsim sweep`: every metric against a swept number, vector.
+pub const SWEEP_SVG_FILE: &str = "sweep.svg";
+/// `mrsim sweep`: the same figure, bitmap.
+pub const SWEEP_PNG_FILE: &str = "sweep.png";
 /// `mrsim sweep`: one row per run.
 pub const SWEEP_FILE: &str = "sweep.csv";
 /// `mrsim sweep`: means and confidence intervals per setting.

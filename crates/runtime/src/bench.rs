@@ -17,17 +17,28 @@
 //! `mrsim-baseline` program next to this one, `benches/baseline`) per agent
 //! count.
 //!
-//! Outputs: `bench.json` (`{"rows": [...]}`), `bench.csv` and `bench.svg`
-//! (p99 round trip and miss rate against agent count); the caller prints
-//! the table.
+//! Under load (`stress`: that many CPU-bound processes on the same CPUs,
+//! [`Stress`], started before and killed after each level's runs) every
+//! measurement is made at each level, and `stress.svg`/`stress.png` draw
+//! round trip and misses against the load. With `repeat` > 1 each run and
+//! its baseline are made that many times, interleaved (mrsim, then the bare
+//! fan-out, then mrsim again ...), and bench.json's `overhead` gives the
+//! median of the pairs' ratios with its spread: each side alone moves from
+//! run to run on a shared machine, the ratio of neighbours much less.
+//!
+//! Outputs: `bench.json` (`{"rows": [...], "overhead": [...]}`), `bench.csv`
+//! and `bench.svg` (p99 round trip and miss rate against agent count); the
+//! caller prints the table.
 
 use crate::error::{Invalid, Refusal};
 use crate::launch::Transport;
 use crate::sched::{Applied, Sched};
-use mrsim_runfolder::bench::{BenchDoc, BenchRow, MedianP99, Quantiles};
+use mrsim_report::sweep_plot::{Figure, Panel, Point, Series};
+use mrsim_runfolder::bench::{BenchDoc, BenchRow, MedianP99, Overhead, Quantiles};
 use mrsim_runfolder::usage::Usage;
 use mrsim_runfolder::{
     BENCH_CSV_FILE, BENCH_FILE, BENCH_SVG_FILE, FileError, Percentiles, RunMetrics,
+    STRESS_PNG_FILE, STRESS_SVG_FILE,
 };
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -54,6 +65,11 @@ pub struct BenchPlan {
     pub out: Option<PathBuf>,
     /// CPUs (`None`: the first two, or all if fewer) and SCHED_FIFO.
     pub sched: Sched,
+    /// Loads: numbers of CPU-bound processes beside each measurement
+    /// (empty: none).
+    pub stress: Vec<usize>,
+    /// Measurements of each run (and its baseline), interleaved.
+    pub repeat: usize,
 }
 
 /// The baseline's program, next to this executable.
@@ -273,6 +289,59 @@ pub struct PreparedBench {
     out: PathBuf,
     exe: PathBuf,
     agents: Vec<usize>,
+    stress: Vec<usize>,
+}
+
+/// The most CPU-bound processes `--stress` starts.
+pub const MAX_STRESS: usize = 64;
+
+/// CPU-bound processes (`mrsim spin`, [`mrsim_sys::sched::spin_while_child_of`])
+/// on the bench's CPUs, which they inherit with its affinity mask, at
+/// normal scheduling. Dropping it kills and reaps them; each also exits by
+/// itself once the bench is gone, so none outlives an interrupted bench.
+#[derive(Debug)]
+pub struct Stress {
+    children: Vec<std::process::Child>,
+}
+
+impl Stress {
+    /// Starts `n` load processes of `exe`.
+    pub fn start(exe: &Path, n: usize) -> Result<Self, BenchError> {
+        let mut stress = Stress {
+            children: Vec::new(),
+        };
+        for _ in 0..n {
+            let child = Command::new(exe)
+                .args(["spin", "--parent"])
+                .arg(std::process::id().to_string())
+                .stdin(Stdio::null())
+                .stdout(Stdio::null())
+                .stderr(Stdio::null())
+                .spawn()
+                .map_err(|source| BenchError::Start {
+                    what: "mrsim spin".into(),
+                    source,
+                })?;
+            stress.children.push(child);
+        }
+        Ok(stress)
+    }
+
+    /// The load processes' pids.
+    pub fn pids(&self) -> Vec<u32> {
+        self.children.iter().map(|c| c.id()).collect()
+    }
+}
+
+impl Drop for Stress {
+    fn drop(&mut self) {
+        for c in &mut self.children {
+            let _ = c.kill();
+        }
+        for c in &mut self.children {
+            let _ = c.wait();
+        }
+    }
 }
 
 /// What happens while a bench goes on.
@@ -287,8 +356,11 @@ pub enum BenchStep {
 /// What a bench gave.
 #[derive(Debug)]
 pub struct BenchOutcome {
-    /// bench.json's rows, one per agent count and transport.
+    /// bench.json's rows, one per load, agent count, transport and
+    /// repetition.
     pub rows: Vec<BenchRow>,
+    /// bench.json's overhead figures (with a baseline).
+    pub overhead: Vec<Overhead>,
     /// The output folder.
     pub out: PathBuf,
     /// bench.svg could not be drawn.
@@ -304,6 +376,15 @@ pub fn prepare(plan: &BenchPlan) -> Result<PreparedBench, BenchError> {
     let positive = |x: f64| x.is_finite() && x > 0.0;
     if !positive(plan.rate) || !positive(plan.duration) {
         return Err(Invalid::new("--rate and --duration must be positive").into());
+    }
+    if plan.repeat == 0 {
+        return Err(Invalid::new("--repeat must be at least 1").into());
+    }
+    if plan.stress.iter().any(|&k| k > MAX_STRESS) {
+        return Err(Invalid(format!(
+            "--stress: at most {MAX_STRESS} processes (each takes a whole CPU while it runs)"
+        ))
+        .into());
     }
     if plan.transports.is_empty() {
         return Err(Invalid::new("--transport: give one or more of shm, inproc, zenoh").into());
@@ -337,12 +418,19 @@ pub fn prepare(plan: &BenchPlan) -> Result<PreparedBench, BenchError> {
     let mut agents = plan.agents.clone();
     agents.sort_unstable();
     agents.dedup();
+    let mut stress = plan.stress.clone();
+    stress.sort_unstable();
+    stress.dedup();
+    if stress.is_empty() {
+        stress.push(0);
+    }
     Ok(PreparedBench {
         plan: plan.clone(),
         applied,
         out,
         exe,
         agents,
+        stress,
     })
 }
 
@@ -354,7 +442,10 @@ impl PreparedBench {
 
     /// How many measurements [`Self::run`] makes.
     pub fn steps(&self) -> usize {
-        self.agents.len() * (self.plan.transports.len() + usize::from(self.plan.baseline))
+        self.stress.len()
+            * self.agents.len()
+            * self.plan.repeat
+            * (self.plan.transports.len() + usize::from(self.plan.baseline))
     }
 
     /// Runs every measurement and writes bench.json, bench.csv and
@@ -378,37 +469,71 @@ impl PreparedBench {
                 path: scene.clone(),
                 source,
             })?;
-            let mut batch = Vec::new();
-            for &t in &plan.transports {
-                on_step(BenchStep::Starting(format!("{n} agents over {}", t.name())));
-                let dir = out.join("runs").join(format!("{}-{n}", t.name()));
-                let (metrics, usage) = run_one(&self.exe, &scene, &dir, t)?;
-                let mut row = row_from_run(n, t, plan.rate, &metrics, &usage);
-                row.cpus = self.applied.cpus.clone();
-                row.rt = self.applied.rt;
-                row.planner = plan.planner.clone();
-                row.run_dir = dir.to_string_lossy().into_owned();
-                batch.push(row);
-                on_step(BenchStep::Done);
-            }
-            if let Some(program) = &baseline {
-                on_step(BenchStep::Starting(format!(
-                    "{n} agents, bare iceoryx2 baseline"
-                )));
-                let b = run_baseline(program, out, n, plan)?;
-                for row in &mut batch {
-                    row.baseline_allin_us = Some(median_p99(&b.allin_us));
-                    row.baseline_roundtrip_us = Some(median_p99(&b.roundtrip_us));
+        }
+        for &k in &self.stress {
+            let _load = Stress::start(&self.exe, k)?;
+            let load = if k > 0 {
+                format!(", {k} CPU-bound beside")
+            } else {
+                String::new()
+            };
+            for &n in &self.agents {
+                let scene = out.join("runs").join(format!("crossing-{n}.toml"));
+                for r in 1..=plan.repeat {
+                    let mut suffix = String::new();
+                    if k > 0 {
+                        suffix.push_str(&format!("-stress{k}"));
+                    }
+                    if plan.repeat > 1 {
+                        suffix.push_str(&format!("-r{r}"));
+                    }
+                    let of = if plan.repeat > 1 {
+                        format!(" ({r}/{})", plan.repeat)
+                    } else {
+                        String::new()
+                    };
+                    let mut batch = Vec::new();
+                    for &t in &plan.transports {
+                        on_step(BenchStep::Starting(format!(
+                            "{n} agents over {}{load}{of}",
+                            t.name()
+                        )));
+                        let dir = out.join("runs").join(format!("{}-{n}{suffix}", t.name()));
+                        let (metrics, usage) = run_one(&self.exe, &scene, &dir, t)?;
+                        let mut row = row_from_run(n, t, plan.rate, &metrics, &usage);
+                        row.cpus = self.applied.cpus.clone();
+                        row.rt = self.applied.rt;
+                        row.planner = plan.planner.clone();
+                        row.run_dir = dir.to_string_lossy().into_owned();
+                        row.stress = k;
+                        row.repeat = r;
+                        batch.push(row);
+                        on_step(BenchStep::Done);
+                    }
+                    if let Some(program) = &baseline {
+                        on_step(BenchStep::Starting(format!(
+                            "{n} agents, bare iceoryx2 baseline{load}{of}"
+                        )));
+                        let name = format!("baseline-{n}{suffix}.json");
+                        let b = run_baseline(program, out, &name, n, plan)?;
+                        for row in &mut batch {
+                            row.baseline_allin_us = Some(median_p99(&b.allin_us));
+                            row.baseline_roundtrip_us = Some(median_p99(&b.roundtrip_us));
+                        }
+                        on_step(BenchStep::Done);
+                    }
+                    rows.extend(batch);
                 }
-                on_step(BenchStep::Done);
             }
-            rows.extend(batch);
         }
         let write = |name: &str, text: String| {
             let path = out.join(name);
             std::fs::write(&path, text).map_err(|source| BenchError::Write { path, source })
         };
-        let doc = BenchDoc { rows };
+        let doc = BenchDoc {
+            overhead: overhead(&rows),
+            rows,
+        };
         let text = serde_json::to_string_pretty(&doc).map_err(|e| BenchError::Write {
             path: out.join(BENCH_FILE),
             source: e.into(),
@@ -420,20 +545,37 @@ impl PreparedBench {
             .map(|r| serde_json::to_value(r).unwrap_or_default())
             .collect();
         write(BENCH_CSV_FILE, csv(&flat))?;
+        // The first repetition's rows; a line per transport and load.
         let series: Vec<mrsim_report::bench_plot::Point> = rows
             .iter()
+            .filter(|r| r.repeat == 1)
             .map(|r| mrsim_report::bench_plot::Point {
-                series: r.transport.clone(),
+                series: if self.stress.len() > 1 {
+                    format!("{}, {} CPU-bound beside", r.transport, r.stress)
+                } else {
+                    r.transport.clone()
+                },
                 agents: r.agents as f64,
                 roundtrip_p99_ms: r.roundtrip_us.p99.unwrap_or(0.0) / 1000.0,
                 miss_pct: 100.0 * r.miss_rate,
             })
             .collect();
-        let svg_error = mrsim_report::bench_plot::write(&series, &out.join(BENCH_SVG_FILE))
+        let mut svg_error = mrsim_report::bench_plot::write(&series, &out.join(BENCH_SVG_FILE))
             .err()
             .map(|e| e.to_string());
+        if self.stress.len() > 1 {
+            let drawn = mrsim_report::sweep_plot::write_figure(
+                &stress_figure(&rows, &self.stress),
+                &out.join(STRESS_SVG_FILE),
+                &out.join(STRESS_PNG_FILE),
+            );
+            if let Err(e) = drawn {
+                svg_error = Some(e.to_string());
+            }
+        }
         Ok(BenchOutcome {
             rows,
+            overhead: doc.overhead,
             out: self.out,
             svg_error,
         })
@@ -483,11 +625,11 @@ fn run_one(
 fn run_baseline(
     program: &Path,
     dir: &Path,
+    name: &str,
     agents: usize,
     plan: &BenchPlan,
 ) -> Result<BaselineResult, BenchError> {
-    let name = format!("baseline-{agents}.json");
-    let file = dir.join(&name);
+    let file = dir.join(name);
     let run_id = mrsim_transport::Namespace::fresh_run_id();
     let out = Command::new(program)
         .args(["world", "--run", &run_id, "--agents"])
@@ -515,7 +657,122 @@ fn run_baseline(
             stderr: String::from_utf8_lossy(&out.stderr).trim().to_string(),
         });
     }
-    read_json(dir, &name)
+    read_json(dir, name)
+}
+
+/// The value at fraction `q` of sorted `xs`, interpolated linearly between
+/// neighbours (as numpy's default).
+fn quantile(xs: &[f64], q: f64) -> f64 {
+    if xs.is_empty() {
+        return f64::NAN;
+    }
+    let pos = q * (xs.len() - 1) as f64;
+    let (lo, hi) = (pos.floor() as usize, pos.ceil() as usize);
+    xs[lo] + (xs[hi] - xs[lo]) * (pos - lo as f64)
+}
+
+/// Per agent count, transport and load: the ratio of mrsim's all-in
+/// median to the bare fan-out's measured right after it, over the
+/// repetitions, with its median, quartiles and range.
+fn overhead(rows: &[BenchRow]) -> Vec<Overhead> {
+    let mut out: Vec<Overhead> = Vec::new();
+    for r in rows {
+        let ratio = match (r.allin_us.p50, r.baseline_allin_us.and_then(|b| b.p50)) {
+            (Some(a), Some(b)) if b > 0.0 => a / b,
+            _ => continue,
+        };
+        match out
+            .iter_mut()
+            .find(|o| o.agents == r.agents && o.transport == r.transport && o.stress == r.stress)
+        {
+            Some(o) => o.ratios.push(ratio),
+            None => out.push(Overhead {
+                agents: r.agents,
+                transport: r.transport.clone(),
+                stress: r.stress,
+                ratios: vec![ratio],
+                ..Default::default()
+            }),
+        }
+    }
+    for o in &mut out {
+        let mut xs = o.ratios.clone();
+        xs.sort_by(f64::total_cmp);
+        o.pairs = xs.len();
+        o.median = quantile(&xs, 0.5);
+        o.q1 = quantile(&xs, 0.25);
+        o.q3 = quantile(&xs, 0.75);
+        o.min = xs[0];
+        o.max = xs[xs.len() - 1];
+    }
+    out
+}
+
+/// `stress.svg`: round trip and misses against the number of CPU-bound
+/// processes, one line per transport and agent count, each point the mean
+/// over the repetitions with its 95 % interval.
+fn stress_figure(rows: &[BenchRow], levels: &[usize]) -> Figure {
+    let mut lines: Vec<(String, usize)> = Vec::new();
+    for r in rows {
+        let key = (r.transport.clone(), r.agents);
+        if !lines.contains(&key) {
+            lines.push(key);
+        }
+    }
+    type Metric = (&'static str, &'static str, fn(&BenchRow) -> Option<f64>);
+    let metrics: [Metric; 4] = [
+        ("round trip p50", "us", |r| r.roundtrip_us.p50),
+        ("round trip p99", "us", |r| r.roundtrip_us.p99),
+        ("all-in p99", "us (published -> last command in)", |r| {
+            r.allin_us.p99
+        }),
+        ("deadline misses", "% of agent-ticks", |r| {
+            Some(100.0 * r.miss_rate)
+        }),
+    ];
+    let panels = metrics
+        .iter()
+        .map(|(title, unit, value)| Panel {
+            title: title.to_string(),
+            y_label: unit.to_string(),
+            fraction: false,
+            lines: lines
+                .iter()
+                .map(|(t, n)| {
+                    levels
+                        .iter()
+                        .filter_map(|&k| {
+                            let xs: Vec<f64> = rows
+                                .iter()
+                                .filter(|r| r.transport == *t && r.agents == *n && r.stress == k)
+                                .filter_map(value)
+                                .collect();
+                            let (mean, half_width) = crate::sweep::mean_ci(&xs);
+                            Some(Point {
+                                x: k as f64,
+                                mean: mean?,
+                                half_width,
+                            })
+                        })
+                        .collect()
+                })
+                .collect(),
+        })
+        .collect();
+    Figure {
+        title: "mrsim bench --stress: timing against CPU-bound load on the run's CPUs".into(),
+        x_label: "CPU-bound processes beside the run".into(),
+        series: lines
+            .iter()
+            .enumerate()
+            .map(|(i, (t, n))| Series {
+                label: format!("{t}, {n} agents"),
+                colour: i,
+                measured: false,
+            })
+            .collect(),
+        panels,
+    }
 }
 
 /// What the baseline program writes: its all-in time and round trip.
@@ -618,6 +875,58 @@ mod tests {
         assert_eq!(row.allin_us, MedianP99::default(), "no sample: null");
         assert_eq!((row.world_rss_mb, row.agent_rss_mb), (Some(2.0), Some(1.0)));
         assert_eq!(row.world_cpu_pct, 50.0);
+    }
+
+    fn pair(agents: usize, stress: usize, mrsim: f64, bare: f64) -> BenchRow {
+        BenchRow {
+            agents,
+            stress,
+            transport: "shm".into(),
+            allin_us: MedianP99 {
+                p50: Some(mrsim),
+                p99: None,
+            },
+            baseline_allin_us: Some(MedianP99 {
+                p50: Some(bare),
+                p99: None,
+            }),
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn the_overhead_is_the_median_of_the_pairs_ratios_with_quartiles_and_range() {
+        let rows = [
+            pair(64, 0, 120.0, 100.0),
+            pair(64, 0, 150.0, 100.0),
+            pair(64, 0, 100.0, 100.0),
+            pair(64, 0, 260.0, 200.0),
+            pair(64, 0, 140.0, 100.0),
+            pair(64, 1, 300.0, 100.0),
+            // No baseline median: not a pair.
+            BenchRow {
+                agents: 64,
+                stress: 1,
+                transport: "shm".into(),
+                ..Default::default()
+            },
+        ];
+        let o = overhead(&rows);
+        assert_eq!(o.len(), 2);
+        assert_eq!(o[0].ratios, [1.2, 1.5, 1.0, 1.3, 1.4]);
+        assert_eq!(o[0].pairs, 5);
+        assert!((o[0].median - 1.3).abs() < 1e-12);
+        // Sorted 1.0 1.2 1.3 1.4 1.5: quartiles at positions 1 and 3.
+        assert!((o[0].q1 - 1.2).abs() < 1e-12 && (o[0].q3 - 1.4).abs() < 1e-12);
+        assert_eq!((o[0].min, o[0].max), (1.0, 1.5));
+        assert_eq!((o[1].stress, o[1].pairs, o[1].median), (1, 1, 3.0));
+    }
+
+    #[test]
+    fn quantiles_interpolate_between_neighbours() {
+        assert_eq!(quantile(&[1.0, 2.0], 0.5), 1.5);
+        assert_eq!(quantile(&[1.0, 2.0, 4.0, 8.0], 0.25), 1.75);
+        assert!(quantile(&[], 0.5).is_nan());
     }
 
     #[test]

@@ -3,10 +3,19 @@
 //!
 //! A sweep runs every combination of the values of some keys (the
 //! cartesian product, the first key varying slowest) with each seed 1..=N
-//! (`world.seed`). Each run is an ordinary `mrsim run` child process,
-//! forced to lockstep, with its own run folder `DIR/runs/<combination>-s<seed>/`;
-//! up to `jobs` run at once. Every combination is validated before any run
+//! (`world.seed`). Each run is an ordinary `mrsim run` child process with
+//! its own run folder `DIR/runs/<combination>-s<seed>/`. In lockstep (the
+//! modelled curve: time costs nothing but what the scenario says) up to
+//! `jobs` run at once; in realtime (the measured curve) runs go one at a
+//! time, in folders ending `-realtime`, since runs side by side would take
+//! each other's CPU and the measurement would be of the sweep, not of the
+//! setting. [`SweepMode::Both`] runs every job in lockstep first, then in
+//! realtime. Every combination is validated (in each mode) before any run
 //! starts.
+//!
+//! [`Sweep::summarize`] gives each combination's means with their 95 %
+//! intervals; [`Sweep::figure`] draws them against a swept number
+//! (`sweep.svg`, `sweep.png`).
 //!
 //! Values are split at commas outside brackets, braces and quotes, so
 //! `--set 'obstacle.*.motion={ model = "static" },{ model = "random", ... }'`
@@ -16,6 +25,7 @@
 
 use crate::error::{Invalid, Refusal};
 use crate::validate::{ScenarioSource, Validated};
+use mrsim_report::sweep_plot::{Figure, Panel, Point, Series, write_figure};
 use mrsim_scenario::Mode;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -37,6 +47,35 @@ pub struct SweepPlan {
     pub jobs: Option<usize>,
     /// A swept numeric key whose largest collision-free value is reported.
     pub allowable: Option<String>,
+    /// How the runs keep time.
+    pub mode: SweepMode,
+    /// The swept key on the figure's x axis (`None`: the first swept key
+    /// whose values are all numbers).
+    pub x: Option<String>,
+}
+
+/// How a sweep's runs keep time.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SweepMode {
+    /// Every run in lockstep, several at once: the modelled curve.
+    #[default]
+    Lockstep,
+    /// Every run in realtime, one at a time: the measured curve.
+    Realtime,
+    /// Every run in lockstep, then again in realtime: both curves, on one
+    /// figure.
+    Both,
+}
+
+impl SweepMode {
+    /// The modes run, in order.
+    pub fn modes(self) -> &'static [Mode] {
+        match self {
+            SweepMode::Lockstep => &[Mode::Lockstep],
+            SweepMode::Realtime => &[Mode::Realtime],
+            SweepMode::Both => &[Mode::Lockstep, Mode::Realtime],
+        }
+    }
 }
 
 /// Why a sweep failed.
@@ -312,6 +351,8 @@ pub struct Job {
     pub combo: usize,
     /// Its seed.
     pub seed: u64,
+    /// How it keeps time.
+    pub mode: Mode,
     /// Its folder, relative to the sweep's.
     pub folder: String,
 }
@@ -327,10 +368,14 @@ pub struct Sweep {
     pub combos: Vec<Vec<String>>,
     /// Every run, combination by combination, seed by seed.
     pub jobs: Vec<Job>,
-    /// Runs at once.
+    /// Lockstep runs at once (realtime runs go one at a time).
     pub workers: usize,
     /// The sweep's folder.
     pub dir: PathBuf,
+    /// The scenario's name.
+    pub name: String,
+    /// The scenario's length unit (`m`, `cm`, `mm`), for the figure's axes.
+    pub length_unit: &'static str,
 }
 
 /// One run's result: its metrics, or why there are none.
@@ -372,32 +417,50 @@ pub fn prepare(plan: &SweepPlan) -> Result<Sweep, SweepError> {
             _ => {}
         }
     }
+    if plan.mode != SweepMode::Lockstep && plan.jobs.is_some_and(|j| j > 1) {
+        return Err(Invalid::new(
+            "--jobs: realtime runs go one at a time (runs side by side would take each \
+             other's CPU); --jobs applies to lockstep runs only, so drop it or use --mode lockstep",
+        )
+        .into());
+    }
+    if let Some(x) = &plan.x {
+        numeric_axis(&axes, x)?;
+    }
     let combos = combinations(&axes);
     // Validate every combination before anything runs.
     let mut name = String::new();
-    for combo in &combos {
-        let v = Validated::new(ScenarioSource {
-            path: Some(plan.scenario.clone()),
-            mode: Some(Mode::Lockstep),
-            set: sets(&axes, combo, 1),
-        })
-        .map_err(|e| {
-            let what: Vec<String> = axes
-                .iter()
-                .zip(combo)
-                .map(|((k, _), v)| format!("{k}={v}"))
-                .collect();
-            Invalid(format!("combination {}: {e}", what.join(" ")))
-        })?;
-        if let Some(r) = v.external_robots().first() {
-            return Err(Invalid(format!(
-                "{}: robot `{r}` has planner = \"external\": a sweep starts its runs \
-                 unattended, with no program of yours to join them",
-                v.origin()
-            ))
-            .into());
+    let mut length_unit = "m";
+    for &mode in plan.mode.modes() {
+        for combo in &combos {
+            let v = Validated::new(ScenarioSource {
+                path: Some(plan.scenario.clone()),
+                mode: Some(mode),
+                set: sets(&axes, combo, 1),
+            })
+            .map_err(|e| {
+                let what: Vec<String> = axes
+                    .iter()
+                    .zip(combo)
+                    .map(|((k, _), v)| format!("{k}={v}"))
+                    .collect();
+                Invalid(format!("combination {} ({mode}): {e}", what.join(" ")))
+            })?;
+            if let Some(r) = v.external_robots().first() {
+                return Err(Invalid(format!(
+                    "{}: robot `{r}` has planner = \"external\": a sweep starts its runs \
+                     unattended, with no program of yours to join them",
+                    v.origin()
+                ))
+                .into());
+            }
+            name = v.scenario().name.clone();
+            length_unit = match v.scenario().length_unit {
+                mrsim_scenario::LengthUnit::M => "m",
+                mrsim_scenario::LengthUnit::Cm => "cm",
+                mrsim_scenario::LengthUnit::Mm => "mm",
+            };
         }
-        name = v.scenario().name.clone();
     }
     let dir = crate::out::prepare(plan.out.as_deref(), &format!("sweep-{name}"))?;
     std::fs::create_dir_all(dir.join("runs")).map_err(|e| {
@@ -406,18 +469,22 @@ pub fn prepare(plan: &SweepPlan) -> Result<Sweep, SweepError> {
             dir.display()
         ))
     })?;
-    let jobs: Vec<Job> = combos
-        .iter()
-        .enumerate()
-        .flat_map(|(i, c)| {
+    let mut jobs: Vec<Job> = Vec::new();
+    for &mode in plan.mode.modes() {
+        for (i, c) in combos.iter().enumerate() {
             let l = label(i, &axes, c);
-            (1..=plan.seeds).map(move |seed| Job {
+            let suffix = match mode {
+                Mode::Lockstep => "",
+                Mode::Realtime => "-realtime",
+            };
+            jobs.extend((1..=plan.seeds).map(|seed| Job {
                 combo: i,
                 seed,
-                folder: format!("runs/{l}-s{seed}"),
-            })
-        })
-        .collect();
+                mode,
+                folder: format!("runs/{l}-s{seed}{suffix}"),
+            }));
+        }
+    }
     let workers = plan
         .jobs
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
@@ -430,7 +497,22 @@ pub fn prepare(plan: &SweepPlan) -> Result<Sweep, SweepError> {
         jobs,
         workers,
         dir,
+        name,
+        length_unit,
     })
+}
+
+/// The index of swept key `key`, if its values are all numbers.
+fn numeric_axis(axes: &[(String, Vec<String>)], key: &str) -> Result<usize, Invalid> {
+    match axes.iter().position(|(k, _)| k == key) {
+        None => Err(Invalid(format!(
+            "--x {key}: not a swept key (give it --set {key}=V1,V2,...)"
+        ))),
+        Some(i) if axes[i].1.iter().any(|v| v.parse::<f64>().is_err()) => Err(Invalid(format!(
+            "--x {key}: its values must be numbers to be an axis"
+        ))),
+        Some(i) => Ok(i),
+    }
 }
 
 /// The `--set` overrides of one run: the combination's values and the seed.
@@ -445,26 +527,54 @@ fn sets(axes: &[(String, Vec<String>)], combo: &[String], seed: u64) -> Vec<Stri
 }
 
 impl Sweep {
-    /// Runs every job, [`Sweep::workers`] at once, each an `mrsim run` child
-    /// process; `on_done` hears of each as it ends (from the worker
-    /// threads). A failed run's output is kept in its folder's
-    /// `sweep-run.log`. Returns the results in job order.
+    /// Runs every job, each an `mrsim run` child process: the lockstep
+    /// ones [`Sweep::workers`] at once, then the realtime ones one at a
+    /// time; `on_done` hears of each as it ends (from the worker threads).
+    /// A failed run's output is kept in its folder's `sweep-run.log`.
+    /// Returns the results in job order.
     pub fn run(
         &self,
         on_done: &(dyn Fn(JobDone<'_>) + Sync),
     ) -> Result<Vec<JobResult>, SweepError> {
         let exe = std::env::current_exe().map_err(SweepError::Exe)?;
-        let next = AtomicUsize::new(0);
         let done = AtomicUsize::new(0);
         let results: Mutex<Vec<Option<JobResult>>> =
             Mutex::new((0..self.jobs.len()).map(|_| None).collect());
+        for &mode in self.plan.mode.modes() {
+            let batch: Vec<usize> = (0..self.jobs.len())
+                .filter(|&i| self.jobs[i].mode == mode)
+                .collect();
+            let workers = match mode {
+                Mode::Lockstep => self.workers,
+                Mode::Realtime => 1,
+            };
+            self.run_batch(&exe, &batch, workers, &done, &results, on_done);
+        }
+        let results = results.into_inner().map_err(|_| SweepError::Panicked)?;
+        Ok(results
+            .into_iter()
+            .map(|r| r.unwrap_or_else(|| Err("not run".to_string())))
+            .collect())
+    }
+
+    /// Runs the jobs `batch` (indices into [`Sweep::jobs`]), `workers` at
+    /// once.
+    fn run_batch(
+        &self,
+        exe: &Path,
+        batch: &[usize],
+        workers: usize,
+        done: &AtomicUsize,
+        results: &Mutex<Vec<Option<JobResult>>>,
+        on_done: &(dyn Fn(JobDone<'_>) + Sync),
+    ) {
+        let next = AtomicUsize::new(0);
         std::thread::scope(|s| {
-            for _ in 0..self.workers {
+            for _ in 0..workers.clamp(1, batch.len().max(1)) {
                 s.spawn(|| {
-                    loop {
-                        let i = next.fetch_add(1, Ordering::SeqCst);
-                        let Some(job) = self.jobs.get(i) else { break };
-                        let r = self.run_one(&exe, job);
+                    while let Some(&i) = batch.get(next.fetch_add(1, Ordering::SeqCst)) {
+                        let job = &self.jobs[i];
+                        let r = self.run_one(exe, job);
                         let n = done.fetch_add(1, Ordering::SeqCst) + 1;
                         on_done(JobDone {
                             done: n,
@@ -478,11 +588,6 @@ impl Sweep {
                 });
             }
         });
-        let results = results.into_inner().map_err(|_| SweepError::Panicked)?;
-        Ok(results
-            .into_iter()
-            .map(|r| r.unwrap_or_else(|| Err("not run".to_string())))
-            .collect())
     }
 
     fn run_one(&self, exe: &Path, job: &Job) -> JobResult {
@@ -490,7 +595,7 @@ impl Sweep {
         let mut cmd = Command::new(exe);
         cmd.arg("run")
             .arg(&self.plan.scenario)
-            .args(["--mode", "lockstep", "--quiet", "--out"])
+            .args(["--mode", &job.mode.to_string(), "--quiet", "--out"])
             .arg(&out);
         for s in sets(&self.axes, &self.combos[job.combo], job.seed) {
             cmd.arg("--set").arg(s);
@@ -513,9 +618,248 @@ impl Sweep {
     }
 }
 
+/// One combination's means in one mode.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Summary {
+    /// The combination (index into [`Sweep::combos`]).
+    pub combo: usize,
+    /// How its runs kept time.
+    pub mode: Mode,
+    /// Runs that gave metrics.
+    pub runs: usize,
+    /// Per column of [`METRICS`], in order: the mean over the runs and the
+    /// half-width of its 95 % interval ([`mean_ci`]).
+    pub stats: Vec<(Option<f64>, Option<f64>)>,
+}
+
+/// A metric's axis label (with its unit) and whether it is a fraction (an
+/// axis from 0 to 1), for the figure.
+fn metric_axis(name: &str, length: &str) -> (String, bool) {
+    match name {
+        "success_rate" => ("robots at their goal (fraction)".into(), true),
+        "collisions_total" => ("contacts per run".into(), false),
+        "collided" => ("runs with a contact (fraction)".into(), true),
+        "makespan" => ("last arrival [s]".into(), false),
+        "path_length_ratio" => ("path / straight line".into(), false),
+        "min_clearance" => (format!("smallest gap [{length}]"), false),
+        "time_to_goal" => ("mean time to goal [s]".into(), false),
+        "agents_lost" => ("agents lost per run".into(), false),
+        "ticks" => ("ticks per run".into(), false),
+        other => (other.to_string(), false),
+    }
+}
+
+/// The unit of a swept key's values, where its name says it (`[ms]` for a
+/// key ending `ms`, seconds for `world.dt`, the length unit for a radius).
+fn key_unit(key: &str, length: &str) -> Option<String> {
+    let last = key.rsplit('.').next().unwrap_or(key);
+    let unit = match last {
+        "ms" => "ms".to_string(),
+        "dt" | "duration" | "stall_timeout" | "horizon" => "s".to_string(),
+        "max_speed" => format!("{length}/s"),
+        "max_accel" => format!("{length}/s^2"),
+        "radius" | "sensing_range" | "goal_tolerance" => length.to_string(),
+        _ if last.ends_with("_ms") => "ms".to_string(),
+        _ if last.ends_with("_deg") => "deg".to_string(),
+        _ if last.ends_with("_s") => "s".to_string(),
+        _ => return None,
+    };
+    Some(unit)
+}
+
+/// A legend's text: `key=value` with the key's last part, cut short.
+fn short_pair(key: &str, value: &str) -> String {
+    let short = key.rsplit('.').next().unwrap_or(key);
+    let mut v: String = value.chars().take(32).collect();
+    if value.chars().count() > 32 {
+        v.push_str("...");
+    }
+    format!("{short}={v}")
+}
+
+impl Sweep {
+    /// Each combination's means and 95 % intervals over its seeds, mode by
+    /// mode (lockstep first), combination by combination.
+    pub fn summarize(&self, results: &[JobResult]) -> Vec<Summary> {
+        let mut out = Vec::new();
+        for &mode in self.plan.mode.modes() {
+            for combo in 0..self.combos.len() {
+                let runs: Vec<&RunMetrics> = self
+                    .jobs
+                    .iter()
+                    .zip(results)
+                    .filter(|(j, _)| j.combo == combo && j.mode == mode)
+                    .filter_map(|(_, r)| r.as_ref().ok())
+                    .collect();
+                let stats = METRICS
+                    .iter()
+                    .map(|(_, f)| mean_ci(&runs.iter().filter_map(|m| f(m)).collect::<Vec<_>>()))
+                    .collect();
+                out.push(Summary {
+                    combo,
+                    mode,
+                    runs: runs.len(),
+                    stats,
+                });
+            }
+        }
+        out
+    }
+
+    /// The swept key on the figure's x axis: `--x`, else the first swept
+    /// key whose values are all numbers (none: no figure).
+    pub fn x_axis(&self) -> Option<usize> {
+        match &self.plan.x {
+            Some(x) => numeric_axis(&self.axes, x).ok(),
+            None => self
+                .axes
+                .iter()
+                .position(|(_, vs)| vs.iter().all(|v| v.parse::<f64>().is_ok())),
+        }
+    }
+
+    /// The figure of `summaries` ([`Sweep::summarize`]): every metric
+    /// against the swept number [`Sweep::x_axis`], one line per combination
+    /// of the other keys (and per mode), with its 95 % band. None if no
+    /// swept key is a number.
+    pub fn figure(&self, summaries: &[Summary]) -> Option<Figure> {
+        let xi = self.x_axis()?;
+        let others = |combo: usize| -> Vec<&String> {
+            self.combos[combo]
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| *i != xi)
+                .map(|(_, v)| v)
+                .collect()
+        };
+        // Lines: (other values, mode), in order of first appearance.
+        let mut lines: Vec<(Vec<&String>, Mode)> = Vec::new();
+        for s in summaries {
+            let key = (others(s.combo), s.mode);
+            if !lines.contains(&key) {
+                lines.push(key);
+            }
+        }
+        let mut colours: Vec<&Vec<&String>> = Vec::new();
+        let both = self.plan.mode == SweepMode::Both;
+        let series: Vec<Series> = lines
+            .iter()
+            .map(|(rest, mode)| {
+                let colour = match colours.iter().position(|c| *c == rest) {
+                    Some(c) => c,
+                    None => {
+                        colours.push(rest);
+                        colours.len() - 1
+                    }
+                };
+                let pairs: Vec<String> = self
+                    .axes
+                    .iter()
+                    .enumerate()
+                    .filter(|(i, _)| *i != xi)
+                    .zip(rest)
+                    .map(|((_, (k, _)), v)| short_pair(k, v))
+                    .collect();
+                let how = match mode {
+                    Mode::Lockstep => "lockstep (modelled)",
+                    Mode::Realtime => "realtime (measured)",
+                };
+                let label = match (pairs.is_empty(), both) {
+                    (true, _) => how.to_string(),
+                    (false, false) => pairs.join(", "),
+                    (false, true) => format!("{}, {how}", pairs.join(", ")),
+                };
+                Series {
+                    label,
+                    colour,
+                    measured: *mode == Mode::Realtime,
+                }
+            })
+            .collect();
+        let panels = METRICS
+            .iter()
+            .enumerate()
+            .map(|(m, (name, _))| {
+                let (y_label, fraction) = metric_axis(name, self.length_unit);
+                let lines = lines
+                    .iter()
+                    .map(|(rest, mode)| {
+                        summaries
+                            .iter()
+                            .filter(|s| s.mode == *mode && others(s.combo) == *rest)
+                            .filter_map(|s| {
+                                let x = self.combos[s.combo][xi].parse::<f64>().ok()?;
+                                let (mean, half_width) = s.stats[m];
+                                Some(Point {
+                                    x,
+                                    mean: mean?,
+                                    half_width,
+                                })
+                            })
+                            .collect()
+                    })
+                    .collect();
+                Panel {
+                    title: name.to_string(),
+                    y_label,
+                    fraction,
+                    lines,
+                }
+            })
+            .collect();
+        let key = &self.axes[xi].0;
+        let modes = match self.plan.mode {
+            SweepMode::Lockstep => "lockstep runs",
+            SweepMode::Realtime => "realtime runs",
+            SweepMode::Both => "lockstep (solid) and realtime (dashed) runs",
+        };
+        Some(Figure {
+            title: format!(
+                "{}: mean over seeds 1..{} with its 95 % interval, {modes}",
+                self.name, self.plan.seeds
+            ),
+            x_label: match key_unit(key, self.length_unit) {
+                Some(u) => format!("{key} [{u}]"),
+                None => key.clone(),
+            },
+            series,
+            panels,
+        })
+    }
+
+    /// Draws [`Sweep::figure`] into `sweep.svg` and `sweep.png` in the
+    /// sweep's folder; false (nothing drawn) if no swept key is a number.
+    pub fn draw(&self, summaries: &[Summary]) -> Result<bool, mrsim_report::RenderError> {
+        match self.figure(summaries) {
+            Some(f) => write_figure(
+                &f,
+                &self.dir.join(mrsim_runfolder::SWEEP_SVG_FILE),
+                &self.dir.join(mrsim_runfolder::SWEEP_PNG_FILE),
+            )
+            .map(|()| true),
+            None => Ok(false),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_axis_names_the_unit_its_key_says() {
+        assert_eq!(key_unit("world.dt", "m").as_deref(), Some("s"));
+        assert_eq!(
+            key_unit("defaults.timing.compute.ms", "m").as_deref(),
+            Some("ms")
+        );
+        assert_eq!(key_unit("robot.*.max_speed", "cm").as_deref(), Some("cm/s"));
+        assert_eq!(
+            key_unit("defaults.field_of_view_deg", "m").as_deref(),
+            Some("deg")
+        );
+        assert_eq!(key_unit("generate.count", "m"), None);
+    }
 
     #[test]
     fn labels_are_short_safe_and_numbered() {

@@ -135,6 +135,31 @@ pub fn background_thread() {
     }
 }
 
+/// Burns CPU under normal scheduling (SCHED_OTHER, nice 0, whatever policy
+/// the parent passed down) until process `parent` is no longer this
+/// process's parent, i.e. it has exited, however it ended: the load of
+/// `mrsim bench --stress`, a CPU-bound neighbour as another program on the
+/// same cores would be. The parent is checked every few milliseconds, so a
+/// killed bench leaves no load behind.
+pub fn spin_while_child_of(parent: u32) {
+    let param = libc::sched_param { sched_priority: 0 };
+    // SAFETY: the param struct lives for the call; 0 = the calling thread,
+    // the process's only one.
+    unsafe {
+        libc::sched_setscheduler(0, libc::SCHED_OTHER, &param);
+        libc::setpriority(libc::PRIO_PROCESS, 0, 0);
+    }
+    let mut x: u64 = 1;
+    while std::os::unix::process::parent_id() == parent {
+        for _ in 0..1_000_000 {
+            x = x
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            std::hint::black_box(x);
+        }
+    }
+}
+
 /// The world's place under SCHED_FIFO (`--rt`) while it ticks: one level
 /// below its agents. An agent woken by the tick's doorbell then runs at
 /// once, instead of waiting on the world's CPU until the world has woken
