@@ -122,6 +122,7 @@ pub mod outcome;
 pub mod planners;
 pub mod progress;
 pub mod report;
+pub mod rerun;
 pub mod run;
 pub mod sweep;
 pub mod table;

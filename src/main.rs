@@ -25,6 +25,7 @@ fn main() {
         Command::Report { dir } => mrsim::report::main(&dir),
         Command::Planners => mrsim::planners::main(),
         Command::Sweep(args) => mrsim::sweep::main(&args),
+        Command::Rerun(args) => mrsim::rerun::main(&args),
         Command::Check { scenario } => mrsim::check::main(&scenario),
     };
     std::process::exit(mrsim::exit::code(result));

@@ -14,6 +14,8 @@
 //!   written, metrics read, plots and replay drawn) that returns an
 //!   [`Outcome`].
 //! - [`bench`] and [`sweep`]: experiments made of many runs.
+//! - [`rerun`]: a recorded run again, in lockstep, with the timing it
+//!   recorded (byte-identical, or a counterfactual with overrides).
 //!
 //! It is shaped so because more than the command line starts runs (tests
 //! today, the planned Python bindings): what a run does lives here once,
@@ -34,6 +36,7 @@ pub mod finish;
 pub mod inproc;
 pub mod launch;
 pub mod out;
+pub mod rerun;
 pub mod sched;
 pub mod sim;
 pub mod sweep;
