@@ -349,6 +349,23 @@ impl From<SweepModeArg> for mrsim_runtime::sweep::SweepMode {
     }
 }
 
+/// What `mrsim rerun` was asked.
+#[derive(Debug, Clone, Args)]
+pub struct RerunArgs {
+    /// The recorded run's folder (with timing.csv, source.json, scenario.json).
+    pub run: PathBuf,
+    /// Output folder (default: a fresh folder under runs/).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// A counterfactual: override a scenario value on top of the run's own
+    /// overrides (KEY=VALUE as for `run --set`); the timing stays as recorded.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Skip plot.svg, plot.png and replay.html.
+    #[arg(long)]
+    pub no_report: bool,
+}
+
 /// The subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
@@ -435,6 +452,10 @@ pub enum Command {
         #[arg(long)]
         parent: u32,
     },
+    /// Run a recorded run again in lockstep with the timing it recorded
+    /// (timing.csv): the same trajectory byte for byte, or with --set a
+    /// counterfactual under the same timing.
+    Rerun(RerunArgs),
     /// Check a scenario file without running it.
     Check {
         /// Scenario and overrides.

@@ -124,6 +124,7 @@ pub mod outcome;
 pub mod planners;
 pub mod progress;
 pub mod report;
+pub mod rerun;
 pub mod run;
 pub mod sweep;
 pub mod table;

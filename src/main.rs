@@ -43,6 +43,7 @@ fn main() {
             mrsim_sys::sched::spin_while_child_of(parent);
             Ok(0)
         }
+        Command::Rerun(args) => mrsim::rerun::main(&args),
         Command::Check { scenario } => mrsim::check::main(&scenario),
     };
     std::process::exit(mrsim::exit::code(result));

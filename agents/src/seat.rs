@@ -12,8 +12,10 @@ use crate::guard::{Halt, PlanFailure, PlanFault, plan_checked};
 use crate::{AgentError, AgentExit, AgentOptions, diagnostics, fault, observe};
 use mrsim_planners::{Command, DesignatedPath, Observation, Planner, Registry, Segment, Vec2};
 use mrsim_proto::{BodyState, CommandMsg, JoinReply, SnapshotHeader, command_kind, now_ns};
-use mrsim_scenario::RobotSpec;
+use mrsim_scenario::timing::{CallStatus, Clerk, RecordedCall, Timing};
+use mrsim_scenario::{RobotSpec, WorldConfig};
 use mrsim_transport::TransportError;
+use std::collections::{BTreeMap, VecDeque};
 use std::sync::Arc;
 
 /// One joined robot, without its planner.
@@ -36,6 +38,78 @@ pub(crate) struct Seat {
     /// The first failure of the planner in a realtime run (reported at
     /// the end; the run goes on, each failed tick a miss).
     failed: Option<PlanFailure>,
+    /// The robot's timing model or recorded calls, if any.
+    timed: Option<Timed>,
+}
+
+/// How timing drives one robot's planner (`mrsim_scenario::timing`).
+struct Timed {
+    how: TimedBy,
+    /// The age of the state shown, in ticks, and the snapshots kept for it
+    /// (the newest last).
+    delay_ticks: u64,
+    history: VecDeque<(SnapshotHeader, Vec<BodyState>)>,
+}
+
+/// Where a robot's timing comes from.
+enum TimedBy {
+    /// Lockstep: the clerk decides from the model.
+    Modelled(Clerk),
+    /// Realtime: the model is spent for real.
+    Spent { timing: Timing, seed: u64 },
+    /// A recorded run's planner calls (`mrsim rerun`), by tick; `deadline_ns`
+    /// after publication is the tick's deadline.
+    Replayed {
+        calls: BTreeMap<u64, RecordedCall>,
+        deadline_ns: u64,
+    },
+}
+
+impl Timed {
+    /// The timing of the robot `spec` (index `me`) in a run of `world`'s
+    /// settings, if it has a model or replays a record.
+    fn of(spec: &RobotSpec, me: usize, world: &WorldConfig) -> Option<Self> {
+        let lockstep = world.mode == mrsim_scenario::Mode::Lockstep;
+        let how = match (&spec.replay, &spec.timing) {
+            (Some(calls), _) => TimedBy::Replayed {
+                calls: calls.iter().map(|c| (c.tick, *c)).collect(),
+                deadline_ns: mrsim_scenario::timing::s_to_ns(world.dt * world.deadline),
+            },
+            (None, Some(t)) if lockstep => {
+                TimedBy::Modelled(Clerk::new(t.clone(), world.seed, me as u64, world.dt))
+            }
+            (None, Some(t)) => TimedBy::Spent {
+                timing: t.clone(),
+                seed: world.seed,
+            },
+            (None, None) => return None,
+        };
+        let delay_ticks = spec
+            .timing
+            .as_ref()
+            .map_or(0, |t| t.observation_delay_ticks(world.dt));
+        Some(Self {
+            how,
+            delay_ticks,
+            history: VecDeque::new(),
+        })
+    }
+}
+
+/// What the planner does with one snapshot, timing considered.
+enum Step {
+    /// No timing: plan and send as soon as done.
+    Plain,
+    /// Not this tick (busy, off period, snapshot lost, not in the record):
+    /// in lockstep answered with [`command_kind::NONE`].
+    Skip,
+    /// Plan; in lockstep the command is sent `start_ns` into the tick plus
+    /// the modelled compute time.
+    Modelled { start_ns: u64 },
+    /// Plan; the command is sent as recorded.
+    Replayed(RecordedCall),
+    /// Plan, then spend the model's compute time for real (realtime).
+    Spent,
 }
 
 /// The walls every robot of the run whose setup is `view` sees (its
@@ -72,7 +146,9 @@ pub(crate) fn seat_of(
     let observer =
         observe::Observer::for_robot(&scenario.world, Some(&spec), me, capacity, walls.clone());
     let diag = start_diagnostics(view.out_dir.as_deref(), me, &spec.name);
+    let timed = Timed::of(&spec, me, &scenario.world);
     Ok(Seat {
+        timed,
         me,
         claim: opts.impersonate.unwrap_or(me as u32),
         token: reply.token,
@@ -223,8 +299,21 @@ impl Seat {
         times: [u64; 3],
         send: &mut dyn FnMut(&CommandMsg) -> Result<(), TransportError>,
     ) -> Result<(), AgentError> {
+        self.send_as(header, cmd, times, false, send)
+    }
+
+    /// [`Seat::send`], as a command lost on its way when `lost`.
+    fn send_as(
+        &mut self,
+        header: &SnapshotHeader,
+        cmd: Command,
+        times: [u64; 3],
+        lost: bool,
+        send: &mut dyn FnMut(&CommandMsg) -> Result<(), TransportError>,
+    ) -> Result<(), AgentError> {
         let [compute_ns, woke_ns, sent_ns] = times;
         let (kind, v) = match cmd {
+            _ if lost => (command_kind::LOST, cmd_value(cmd)),
             Command::Force(f) => (command_kind::FORCE, f),
             Command::Velocity(v) => (command_kind::VELOCITY, v),
             Command::Unicycle { v, omega } => (command_kind::UNICYCLE, Vec2::new(v, omega)),
@@ -270,7 +359,28 @@ impl Seat {
             return Ok(start.unwrap_or(woke));
         }
         let t0 = start.unwrap_or_else(now_ns);
-        let obs = self.observe_among(header, bodies, near);
+        let step = self.step(header, bodies);
+        if matches!(step, Step::Skip) {
+            self.answered = Some(header.tick);
+            if self.lockstep {
+                send(&self.no_command(header))?;
+            }
+            return Ok(now_ns());
+        }
+        let obs = match self.timed.as_ref().filter(|t| t.delay_ticks > 0) {
+            Some(t) => {
+                // The newest at least `delay_ticks` old (or the run's
+                // first).
+                let (h, b) = &t.history[0];
+                self.observer
+                    .observe_among(h, b, None, &self.spec, self.path.as_deref())
+            }
+            None => {
+                self.observer
+                    .observe_among(header, bodies, near, &self.spec, self.path.as_deref())
+            }
+        };
+        let sensed = obs.others.len();
         let cmd = match plan_checked(planner, &obs) {
             Ok(cmd) => cmd,
             Err(what) => {
@@ -279,13 +389,98 @@ impl Seat {
             }
         };
         let t1 = now_ns();
-        self.send(header, cmd, [t1.saturating_sub(t0), woke, t1], send)?;
+        let (sent, lost) = self.sent(&step, header, t0, t1, sensed);
+        self.send_as(header, cmd, [t1.saturating_sub(t0), woke, sent], lost, send)?;
         // After the command is out: off the tick's critical path (asking a
         // planner for its diagnostics costs it something).
         if let Some(d) = &mut self.diag {
             d.push(header.tick, header.sim_time, planner.diagnostics());
         }
         Ok(t1)
+    }
+
+    /// What the planner does with this snapshot, timing considered (and
+    /// the snapshot kept for an observation delay).
+    fn step(&mut self, header: &SnapshotHeader, bodies: &[BodyState]) -> Step {
+        let Some(t) = self.timed.as_mut() else {
+            return Step::Plain;
+        };
+        if t.delay_ticks > 0 {
+            // Keep the newest snapshot at least `delay_ticks` old and those
+            // after it: the first is the one shown.
+            t.history.push_back((*header, bodies.to_vec()));
+            let shown = header.tick.saturating_sub(t.delay_ticks);
+            while t.history.len() > 1 && t.history[1].0.tick <= shown {
+                t.history.pop_front();
+            }
+        }
+        let tick = header.tick;
+        let me = self.me as u64;
+        match &t.how {
+            TimedBy::Modelled(clerk) => match clerk.turn(tick) {
+                mrsim_scenario::timing::Turn::Plan { start_ns } => Step::Modelled { start_ns },
+                _ => Step::Skip,
+            },
+            TimedBy::Spent { timing, seed } => match timing.skips(*seed, me, tick) {
+                Some(_) => Step::Skip,
+                None => Step::Spent,
+            },
+            TimedBy::Replayed { calls, .. } => match calls.get(&tick) {
+                Some(c) => Step::Replayed(*c),
+                None => Step::Skip,
+            },
+        }
+    }
+
+    /// When the command of a planner call that began at `t0` and ended at
+    /// `t1` (this clock) is sent, and whether it is lost: modelled,
+    /// replayed, or now after spending the model's compute time.
+    fn sent(
+        &mut self,
+        step: &Step,
+        header: &SnapshotHeader,
+        t0: u64,
+        t1: u64,
+        sensed: usize,
+    ) -> (u64, bool) {
+        let me = self.me as u64;
+        match (step, self.timed.as_mut().map(|t| &mut t.how)) {
+            (Step::Modelled { start_ns }, Some(TimedBy::Modelled(clerk))) => {
+                let s = clerk.planned(header.tick, *start_ns, sensed);
+                (header.published_ns + s.sent_ns, s.lost)
+            }
+            (Step::Replayed(c), Some(TimedBy::Replayed { deadline_ns, .. })) => {
+                // A late answer stays late, however soon it was sent (the
+                // world may have closed the tick before it arrived).
+                let sent = match c.status {
+                    CallStatus::Late => c.sent_ns.max(*deadline_ns + 1),
+                    _ => c.sent_ns,
+                };
+                (header.published_ns + sent, c.status == CallStatus::Lost)
+            }
+            (Step::Spent, Some(TimedBy::Spent { timing, seed })) => {
+                let due = t0 + timing.compute_ns(*seed, me, header.tick, sensed);
+                if due > t1 {
+                    std::thread::sleep(std::time::Duration::from_nanos(due - t1));
+                }
+                (now_ns(), timing.command_lost(*seed, me, header.tick))
+            }
+            _ => (t1, false),
+        }
+    }
+
+    /// The lockstep answer of a tick the planner does not plan on.
+    fn no_command(&self, header: &SnapshotHeader) -> CommandMsg {
+        CommandMsg {
+            robot_id: self.claim,
+            kind: command_kind::NONE,
+            token: self.token,
+            tick: header.tick,
+            value: [0.0, 0.0],
+            compute_ns: 0,
+            woke_ns: header.published_ns,
+            sent_ns: header.published_ns,
+        }
     }
 
     /// The planner failed at `tick`. Lockstep: the robot answers no more,
@@ -324,5 +519,13 @@ impl Seat {
             Some(f) => Err(AgentError::Plan(f)),
             None => Ok(exit),
         }
+    }
+}
+
+/// A command's two numbers.
+fn cmd_value(cmd: Command) -> Vec2 {
+    match cmd {
+        Command::Force(v) | Command::Velocity(v) => v,
+        Command::Unicycle { v, omega } => Vec2::new(v, omega),
     }
 }

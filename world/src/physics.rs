@@ -98,6 +98,12 @@ pub struct World {
     /// never removed, so the index alone names one).
     owners: Vec<Option<Owner>>,
     commands: Vec<Applied>,
+    /// Commands that take effect at a later physics substep (counted from
+    /// the run's start), per robot, in the order they take effect (a
+    /// timing model's compute time and actuation delay).
+    pending: Vec<std::collections::VecDeque<(u64, Applied)>>,
+    /// True while some robot has a pending command.
+    any_pending: bool,
     /// Each robot's heading, rad (unicycles turn it; 0 for the others).
     headings: Vec<f64>,
     /// Each robot's turn rate, rad/s.
@@ -329,6 +335,8 @@ impl World {
             bodies: Vec::with_capacity(scenario.robots.len() + scenario.obstacles.len()),
             owners,
             commands: vec![Applied::BRAKE; scenario.robots.len()],
+            pending: vec![Default::default(); scenario.robots.len()],
+            any_pending: false,
             headings: scenario.robots.iter().map(initial_heading).collect(),
             turn_rates: vec![0.0; scenario.robots.len()],
             states: initial_states(scenario),
@@ -377,6 +385,42 @@ impl World {
         }
     }
 
+    /// Robot `i` follows `cmd` from physics substep `at` on (counted from
+    /// the run's start: tick k's substeps are k * substeps, ...); one at or
+    /// before the next substep is set now.
+    pub fn set_command_at(&mut self, i: usize, at: u64, cmd: Applied) {
+        let sub = u64::from(self.scenario.world.substeps.max(1));
+        if at <= self.tick * sub {
+            self.set_command(i, cmd);
+        } else if let Some(q) = self.pending.get_mut(i) {
+            q.push_back((at, cmd));
+            self.any_pending = true;
+        }
+    }
+
+    /// Forgets robot `i`'s commands not yet in effect (its agent is lost).
+    pub fn clear_pending(&mut self, i: usize) {
+        if let Some(q) = self.pending.get_mut(i) {
+            q.clear();
+        }
+    }
+
+    /// Puts in effect every pending command due at substep `at`.
+    fn take_due(&mut self, at: u64) {
+        let mut any = false;
+        for (i, q) in self.pending.iter_mut().enumerate() {
+            while let Some(&(when, cmd)) = q.front() {
+                if when > at {
+                    break;
+                }
+                self.commands[i] = cmd;
+                q.pop_front();
+            }
+            any |= !q.is_empty();
+        }
+        self.any_pending = any;
+    }
+
     /// Time the last [`World::step`] spent in rapier's own step (all its
     /// substeps), ns: the floor the world's tick is measured against.
     pub fn physics_ns(&self) -> u64 {
@@ -405,7 +449,10 @@ impl World {
             m.begin_tick(&self.bodies);
         }
         self.physics_ns = 0;
-        for _ in 0..sub {
+        for j in 0..sub {
+            if self.any_pending {
+                self.take_due(self.tick * u64::from(sub) + u64::from(j));
+            }
             for (i, handle) in self.robots.iter().enumerate() {
                 let spec = &self.scenario.robots[i];
                 let Some(body) = self.phys.bodies.get_mut(*handle) else {

@@ -20,8 +20,11 @@ use iceoryx2::prelude::ZeroCopySend;
 /// running (ARCHITECTURE.md, "Channels" and "Ownership"; how each came
 /// about is in the git log). Version 7: a [`BodyState`] carries the body's
 /// heading and angular velocity, and a unicycle robot is driven by
-/// [`command_kind::UNICYCLE`] commands (forward speed, turn rate).
-pub const PROTOCOL_VERSION: u32 = 7;
+/// [`command_kind::UNICYCLE`] commands (forward speed, turn rate). Version
+/// 8: a robot under a timing model answers a lockstep tick it does not plan
+/// on with [`command_kind::NONE`], and a command its model lost arrives as
+/// [`command_kind::LOST`].
+pub const PROTOCOL_VERSION: u32 = 8;
 
 /// Longest robot name, in bytes, that fits a [`JoinRequest`].
 pub const MAX_NAME_LEN: usize = 64;
@@ -105,6 +108,14 @@ pub mod command_kind {
     /// rate omega in rad/s), tracked within the robot's speed and
     /// acceleration limits (since protocol 7).
     pub const UNICYCLE: u32 = 3;
+    /// An answer without a command: the robot's timing model kept its
+    /// planner from answering this tick (busy on an earlier snapshot, not a
+    /// tick of its period, or its snapshot lost). Sent in lockstep only, so
+    /// that the world need not wait (since protocol 8).
+    pub const NONE: u32 = 4;
+    /// A command the robot's timing model lost on its way (`command_loss`):
+    /// counted and recorded as lost, never applied (since protocol 8).
+    pub const LOST: u32 = 5;
 }
 
 /// One agent's answer to one tick.

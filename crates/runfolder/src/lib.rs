@@ -15,11 +15,13 @@
 //!
 //! The trajectory is `trajectory.csv`, `trajectory.parquet` ([`trajectory`]
 //! has its schema, a writer and a reader) or absent, as the scenario's
-//! `[output]` says.
+//! `[output]` says. What timing decided per planner call is `timing.csv`
+//! ([`timing`]).
 #![warn(missing_docs)]
 
 pub mod bench;
 pub mod metrics;
+pub mod timing;
 pub mod trajectory;
 pub mod usage;
 
@@ -37,6 +39,9 @@ pub const TRAJECTORY_FILE: &str = "trajectory.csv";
 pub const TRAJECTORY_PARQUET_FILE: &str = "trajectory.parquet";
 /// One JSON object per line: joins, losses, contacts, goals, rejections.
 pub const EVENTS_FILE: &str = "events.jsonl";
+/// How the run's scenario was given ([`SourceDoc`]): what `mrsim rerun`
+/// loads it from again.
+pub const SOURCE_FILE: &str = "source.json";
 /// The run's metrics ([`metrics::RunMetrics`]).
 pub const METRICS_FILE: &str = "metrics.json";
 /// The planners' per-tick diagnostics (only when some planner reported any).
@@ -88,6 +93,28 @@ pub fn diagnostics_part_file(robot_id: usize, pid: u32) -> String {
 /// them).
 pub fn agent_usage_file(robot: &str) -> String {
     format!(".usage-{robot}.json")
+}
+
+/// `source.json`: the scenario file and overrides a run was started with.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct SourceDoc {
+    /// The scenario file, absolute; `None` for the built-in demo.
+    pub file: Option<PathBuf>,
+    /// The `--set KEY=VALUE` overrides, in order.
+    pub set: Vec<String>,
+    /// The `--mode` override (`lockstep` or `realtime`), if any.
+    pub mode: Option<String>,
+}
+
+/// Writes `dir/source.json`.
+pub fn write_source(dir: &Path, doc: &SourceDoc) -> Result<(), FileError> {
+    let path = dir.join(SOURCE_FILE);
+    let text = serde_json::to_string_pretty(doc).map_err(|source| FileError::Json {
+        path: path.clone(),
+        source,
+    })?;
+    std::fs::write(&path, text).map_err(|source| FileError::Io { path, source })
 }
 
 /// Why a run folder's file could not be read or written.

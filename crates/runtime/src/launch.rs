@@ -182,6 +182,7 @@ pub fn prepare(validated: Validated, request: RunRequest) -> Result<Prepared, Ru
     check_transport(&validated, request.transport)?;
     check_memory(&validated, request.transport)?;
     let dir = crate::out::prepare(request.out.as_deref(), &validated.scenario().name)?;
+    write_source(&dir, validated.source())?;
     let run_id = request
         .run_id
         .clone()
@@ -243,16 +244,27 @@ pub struct RunResult {
 /// ([`RunError::Planner`], the outputs so far written).
 pub fn run_in_process(req: &InProcess) -> Result<RunResult, RunError> {
     let validated = Validated::with_registry(req.scenario.clone(), req.registry.clone())?;
+    run_validated_in_process(validated, req.out.clone(), req.render, req.plan_timeout)
+}
+
+/// [`run_in_process`] of a scenario already validated.
+pub(crate) fn run_validated_in_process(
+    validated: Validated,
+    out: Option<PathBuf>,
+    render: bool,
+    plan_timeout: Option<Duration>,
+) -> Result<RunResult, RunError> {
     let request = RunRequest {
-        out: req.out.clone(),
+        out,
         transport: Transport::Inproc,
-        render: req.render,
-        plan_timeout: req.plan_timeout,
+        render,
+        plan_timeout,
         ..Default::default()
     };
     check_transport(&validated, request.transport)?;
     check_memory(&validated, request.transport)?;
     let dir = crate::out::prepare(request.out.as_deref(), &validated.scenario().name)?;
+    write_source(&dir, validated.source())?;
     let ns = Namespace::new(&Namespace::fresh_run_id()).map_err(|e| Invalid(e.to_string()))?;
     let prepared = Prepared {
         validated,
@@ -273,6 +285,23 @@ pub fn run_in_process(req: &InProcess) -> Result<RunResult, RunError> {
         metrics,
         agent_failures: outcome.agent_failures,
     })
+}
+
+/// Writes the run folder's source.json: how `mrsim rerun` loads the
+/// scenario again (the file made absolute).
+fn write_source(dir: &Path, source: &crate::ScenarioSource) -> Result<(), Invalid> {
+    let doc = mrsim_runfolder::SourceDoc {
+        file: source
+            .path
+            .as_ref()
+            .map(|p| std::fs::canonicalize(p).unwrap_or_else(|_| p.clone())),
+        set: source.set.clone(),
+        mode: source
+            .mode
+            .map(|m| crate::validate::mode_name(m).to_string()),
+    };
+    mrsim_runfolder::write_source(dir, &doc)
+        .map_err(|e| Invalid(format!("cannot write the run folder: {e}")))
 }
 
 /// Refuses a transport the scenario's robots cannot run over: an

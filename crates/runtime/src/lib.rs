@@ -14,6 +14,8 @@
 //!   written, metrics read, plots and replay drawn) that returns an
 //!   [`Outcome`].
 //! - [`bench`] and [`sweep`]: experiments made of many runs.
+//! - [`rerun`]: a recorded run again, in lockstep, with the timing it
+//!   recorded (byte-identical, or a counterfactual with overrides).
 //!
 //! It is shaped so because more than the command line starts runs (tests
 //! and the Python bindings): what a run does lives here once,
@@ -35,6 +37,7 @@ pub mod inproc;
 pub mod launch;
 pub mod memory;
 pub mod out;
+pub mod rerun;
 pub mod sched;
 pub mod sim;
 pub mod sweep;

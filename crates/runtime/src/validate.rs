@@ -202,6 +202,26 @@ impl Validated {
         (self.loaded.scenario, self.world)
     }
 
+    /// The same scenario with every robot replaying the planner calls
+    /// `calls` gives it (by robot name; a robot without any replays none:
+    /// it never answered), the world rebuilt for it (`mrsim rerun`).
+    pub fn with_replay(
+        mut self,
+        mut calls: std::collections::BTreeMap<String, Vec<mrsim_scenario::timing::RecordedCall>>,
+    ) -> Result<Self, Invalid> {
+        for r in &mut self.loaded.scenario.robots {
+            r.replay = Some(calls.remove(&r.name).unwrap_or_default());
+        }
+        if let Some(name) = calls.keys().next() {
+            return Err(Invalid(format!(
+                "the recorded timing names robot `{name}`, which {} does not have",
+                self.loaded.origin()
+            )));
+        }
+        self.world = World::new(&self.loaded.scenario).map_err(|e| Invalid(e.to_string()))?;
+        Ok(self)
+    }
+
     /// Where the scenario came from and the scenario itself, without the
     /// world (for a process that starts the world elsewhere).
     pub fn into_scenario(self) -> (ScenarioSource, Scenario) {

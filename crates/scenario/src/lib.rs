@@ -31,6 +31,7 @@ mod overrides;
 mod raw;
 mod resolve;
 pub mod rng;
+pub mod timing;
 mod types;
 
 pub use error::ScenarioError;

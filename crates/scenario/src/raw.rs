@@ -117,6 +117,33 @@ pub(crate) struct RawRobot {
     pub max_angular_accel: Option<S<f64>>,
     pub lookahead: Option<S<f64>>,
     pub sensor: Option<S<RawSensor>>,
+    pub timing: Option<S<RawTiming>>,
+}
+
+/// `[defaults.timing]`, `[robot.timing]`.
+#[derive(Debug, Default, Clone, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub(crate) struct RawTiming {
+    pub compute: Option<S<RawCompute>>,
+    pub observation_delay_ms: Option<S<f64>>,
+    pub actuation_delay_ms: Option<S<f64>>,
+    pub period_ticks: Option<S<i64>>,
+    pub snapshot_loss: Option<S<f64>>,
+    pub command_loss: Option<S<f64>>,
+}
+
+/// `compute = { model, ... }`: the union of every model's keys.
+#[derive(Debug, Default, Clone, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub(crate) struct RawCompute {
+    pub model: Option<S<String>>,
+    pub ms: Option<S<f64>>,
+    pub min_ms: Option<S<f64>>,
+    pub max_ms: Option<S<f64>>,
+    pub median_ms: Option<S<f64>>,
+    pub sigma: Option<S<f64>>,
+    pub base_ms: Option<S<f64>>,
+    pub per_body_ms: Option<S<f64>>,
 }
 
 /// `sensor = { kind = "lidar", beams, fov_deg, range, noise, record }`.

@@ -224,6 +224,14 @@ pub struct RobotSpec {
     /// The robot's laser scanner, if it has one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sensor: Option<Lidar>,
+    /// The robot's timing model (`[defaults.timing]`, `[robot.timing]`),
+    /// if it has one (see [`crate::timing`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub timing: Option<crate::timing::Timing>,
+    /// The planner calls of a recorded realtime run this robot replays
+    /// (`mrsim rerun`): never from a file, set by the rerun itself.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub replay: Option<Vec<crate::timing::RecordedCall>>,
 }
 
 /// Built-in `max_angular_speed`, rad/s.

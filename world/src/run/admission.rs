@@ -116,6 +116,9 @@ pub struct TickWindow {
     pub realtime: bool,
 }
 
+/// Why an answer to a tick before the previous one is rejected.
+pub const PAST_TICK: &str = "command for a past tick";
+
 /// The agent table and this tick's answers.
 #[derive(Debug, Clone)]
 pub struct Admission {
@@ -304,7 +307,7 @@ impl Admission {
                 // Answered the previous tick after its deadline: already a miss.
                 return Verdict::Late { robot: i };
             }
-            return reject("command for a past tick");
+            return reject(PAST_TICK);
         }
         if cmd.sent_ns < now.published_ns {
             // Named this tick before the tick existed: a guess, not an answer.
@@ -320,7 +323,11 @@ impl Admission {
         }
         if !matches!(
             cmd.kind,
-            command_kind::FORCE | command_kind::VELOCITY | command_kind::UNICYCLE
+            command_kind::FORCE
+                | command_kind::VELOCITY
+                | command_kind::UNICYCLE
+                | command_kind::NONE
+                | command_kind::LOST
         ) {
             self.garbage[i] = true;
             return reject("unknown command kind");

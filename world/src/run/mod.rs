@@ -33,7 +33,9 @@ use admission::{Admission, Agent, Event, TickWindow, Verdict};
 use mrsim_proto::{
     CommandMsg, JoinRequest, SnapshotHeader, StatsHeader, command_kind, flags, now_ns, run_phase,
 };
+use mrsim_runfolder::timing::{Status, TIMING_FILE, TimingWriter};
 use mrsim_runfolder::{FileError, METRICS_FILE, SCENARIO_FILE, TRAJECTORY_FILE};
+use mrsim_scenario::timing::{Timing, s_to_ns};
 use mrsim_scenario::{MissPolicy, Mode};
 use mrsim_sys::sched::BelowAgents;
 use mrsim_sys::usage::{CpusTime, process_usage, thread_usage};
@@ -66,6 +68,60 @@ struct Loop<'a> {
     last_pid_check: Instant,
     pid_checks: u64,
     clock_start: Option<Instant>,
+    /// What timing decides per robot: its model, and how the world judges
+    /// and applies its commands (see [`Timed`]).
+    timed: Timed,
+    /// Every planner call's command as the world heard of it (timing.csv):
+    /// realtime runs and runs with a timing model.
+    calls: Option<TimingWriter>,
+}
+
+/// The world's side of the robots' timing models
+/// (`mrsim_scenario::timing`): a robot with a model has its commands take
+/// effect from the physics substep they arrive in (plus its actuation
+/// delay) and misses only at the ticks of its period; in lockstep the world
+/// judges a modelled or replayed command's send time against the deadline.
+struct Timed {
+    /// Each robot's model, if it has one.
+    models: Vec<Option<Timing>>,
+    /// Each robot replays a recorded run's planner calls.
+    replayed: Vec<bool>,
+    /// The tick, ns.
+    dt_ns: u64,
+    /// The deadline, ns after a tick's publication.
+    deadline_ns: u64,
+    substeps: u32,
+    lockstep: bool,
+}
+
+impl Timed {
+    fn new(scenario: &mrsim_scenario::Scenario) -> Self {
+        let w = &scenario.world;
+        Self {
+            models: scenario.robots.iter().map(|r| r.timing.clone()).collect(),
+            replayed: scenario.robots.iter().map(|r| r.replay.is_some()).collect(),
+            dt_ns: s_to_ns(w.dt).max(1),
+            deadline_ns: s_to_ns(w.dt * w.deadline),
+            substeps: w.substeps,
+            lockstep: w.mode == Mode::Lockstep,
+        }
+    }
+
+    /// True if robot `i`'s send times are judged here rather than by the
+    /// clock: modelled or replayed, in lockstep.
+    fn judged(&self, i: usize) -> bool {
+        self.lockstep && (self.models[i].is_some() || self.replayed[i])
+    }
+
+    /// True if robot `i`'s planner runs at `tick` (else no answer is no miss).
+    fn plans_at(&self, i: usize, tick: u64) -> bool {
+        self.models[i].as_ref().is_none_or(|t| t.plans_at(tick))
+    }
+
+    /// True if the run writes timing.csv.
+    fn recorded(&self) -> bool {
+        !self.lockstep || self.models.iter().any(Option::is_some)
+    }
 }
 
 impl<'a> Loop<'a> {
@@ -84,6 +140,7 @@ impl<'a> Loop<'a> {
         let n = scenario.robots.len();
         let robots = names[..n].to_vec();
         let schedule = Schedule::new(scenario);
+        let timed = Timed::new(scenario);
         Self {
             admission: Admission::new(robots, std::process::id()),
             recording: Recording::new(rec, timings, names, n),
@@ -104,6 +161,8 @@ impl<'a> Loop<'a> {
             last_pid_check: clock.now(),
             pid_checks: 0,
             clock_start: None,
+            timed,
+            calls: None,
         }
     }
 
@@ -147,6 +206,7 @@ impl<'a> Loop<'a> {
                 self.log(&format!("refused a join: {reason}"));
             }
             Event::Lost { robot, reason, .. } => {
+                self.world.clear_pending(robot);
                 self.world.set_command(robot, Applied::BRAKE);
                 let flags = self.world.states()[robot].flags | flags::LOST;
                 self.world.set_flags(robot, flags);
@@ -183,9 +243,41 @@ impl<'a> Loop<'a> {
         self.link.reply_join(&reply)
     }
 
+    /// Writes one planner call's row of timing.csv; a failure to write
+    /// ends the file (said once), never the run.
+    fn call(&mut self, robot: usize, cmd: &CommandMsg, status: Status) {
+        let Some(w) = &mut self.calls else { return };
+        let sent = cmd.sent_ns.saturating_sub(self.window.published_ns);
+        let name = self.recording.name(robot);
+        if let Err(e) = w.row(cmd.tick, name, sent, status) {
+            eprintln!("world: {e}; timing.csv stops here");
+            self.calls = None;
+        }
+    }
+
     fn handle_command(&mut self, cmd: CommandMsg, received_ns: u64) {
         match self.admission.command(&cmd, self.window) {
+            Verdict::Accepted { robot, .. } if cmd.kind == command_kind::NONE => {
+                let _ = robot;
+            }
+            Verdict::Accepted { robot, .. } if cmd.kind == command_kind::LOST => {
+                self.call(robot, &cmd, Status::Lost);
+            }
+            Verdict::Accepted { robot, .. }
+                if self.timed.judged(robot)
+                    && cmd.sent_ns.saturating_sub(self.window.published_ns)
+                        > self.timed.deadline_ns =>
+            {
+                // Modelled (or replayed) as sent after the deadline: late,
+                // an answer that drives nothing.
+                self.call(robot, &cmd, Status::Late);
+                self.recording.late(robot);
+                if let Some(g) = self.admission.got[robot].as_mut() {
+                    g.kind = command_kind::NONE;
+                }
+            }
             Verdict::Accepted { robot, rejoined } => {
+                self.call(robot, &cmd, Status::Accepted);
                 if let Some(pid) = rejoined {
                     self.apply(Event::Rejoined {
                         robot,
@@ -203,7 +295,24 @@ impl<'a> Loop<'a> {
                 self.last_in_ns = self.last_in_ns.max(received_ns);
             }
             Verdict::Ready { .. } => {}
-            Verdict::Late { robot } => self.recording.late(robot),
+            Verdict::Late { robot } => {
+                self.call(robot, &cmd, Status::Late);
+                self.recording.late(robot);
+            }
+            Verdict::Rejected {
+                robot: Some(robot),
+                reason,
+            } if self.window.realtime
+                && reason == admission::PAST_TICK
+                && matches!(self.admission.agents()[robot], Agent::Live { token, .. } if token == cmd.token) =>
+            {
+                // Its owner's answer to a tick long gone: a planner call
+                // like any other, late.
+                self.call(robot, &cmd, Status::Late);
+                let at = self.stamp();
+                self.recording
+                    .rejected(at, Some(robot), cmd.robot_id, reason, cmd.tick);
+            }
             Verdict::Rejected { robot, reason } => {
                 let at = self.stamp();
                 self.recording
@@ -424,16 +533,32 @@ impl<'a> Loop<'a> {
                 self.admission.garbage[i],
             );
             match (agent, got) {
-                (Agent::Live { .. }, Some(c)) => {
+                (Agent::Live { .. }, Some(c))
+                    if !matches!(c.kind, command_kind::NONE | command_kind::LOST) =>
+                {
                     let applied = match c.kind {
                         command_kind::VELOCITY => Applied::Velocity(c.value),
                         command_kind::UNICYCLE => Applied::Unicycle(c.value),
                         _ => Applied::Force(c.value),
                     };
-                    self.world.set_command(i, applied);
+                    match &self.timed.models[i] {
+                        Some(t) => {
+                            let sent = c.sent_ns.saturating_sub(self.window.published_ns);
+                            let at = t.effect_substep(
+                                self.window.tick,
+                                sent,
+                                self.timed.dt_ns,
+                                self.timed.substeps,
+                            );
+                            self.world.set_command_at(i, at, applied);
+                        }
+                        None => self.world.set_command(i, applied),
+                    }
                 }
                 (Agent::Live { .. }, None) if garbage => self.world.set_command(i, Applied::BRAKE),
-                (Agent::Live { .. }, None) => {
+                // Not a tick its planner runs on: the command holds.
+                (Agent::Live { .. }, _) if !self.timed.plans_at(i, self.window.tick) => {}
+                (Agent::Live { .. }, _) => {
                     let at = self.stamp();
                     self.recording.miss(at, i);
                     if brake_on_miss {
@@ -585,6 +710,14 @@ fn run_with_clock(
     link.publish_setup(&setup)?;
     let timings = TimingRecorder::start(n).map_err(out_err(METRICS_FILE))?;
     let mut lp = Loop::new(world, link, clock, opts, rec, timings);
+    if lp.timed.recorded() {
+        lp.calls = Some(TimingWriter::create(&dir).map_err(|e| match e {
+            mrsim_runfolder::timing::TimingFileError::Io { source, .. } => {
+                out_err(TIMING_FILE)(source)
+            }
+            other => out_err(TIMING_FILE)(std::io::Error::other(other.to_string())),
+        })?);
+    }
 
     // Join: every robot's agent must be there, then ready (setup read,
     // planner built), before the clock starts, so that the first ticks are
@@ -693,6 +826,11 @@ fn finish(
             .event(lp.stamp(), json!({"type": "interrupted"}));
     }
 
+    if let Some(w) = lp.calls.take()
+        && let Err(e) = w.finish()
+    {
+        eprintln!("world: {e}");
+    }
     // Every tick's states taken in: the motion metrics are complete.
     let Recording {
         mut rec,

@@ -10,6 +10,7 @@
 
 mod obstacles;
 mod output;
+mod timing;
 mod world;
 
 pub(crate) mod checks;

@@ -164,6 +164,7 @@ pub(super) fn resolve_robot(
         Some((raw, what)) => Some(lidar(raw, what)?),
         None => None,
     };
+    let timing = super::timing::resolve_timing(layers)?;
     let spec = RobotSpec {
         name,
         start,
@@ -264,6 +265,8 @@ pub(super) fn resolve_robot(
             DEFAULT_LOOKAHEAD,
         )?,
         sensor,
+        timing,
+        replay: None,
     };
     let spans = RobotSpans {
         table,

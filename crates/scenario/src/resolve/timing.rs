@@ -1,0 +1,195 @@
+//! A robot's `timing` from its layers: each key from the highest layer that
+//! has it (`compute`'s model and each of its numbers too, so that
+//! `--set defaults.timing.compute.ms=40` changes only the time), every
+//! value checked where it is written.
+
+use super::checks::{Rule, check};
+use super::robots::Layer;
+use crate::error::Fail;
+use crate::raw::{RawCompute, RawTiming, S};
+use crate::timing::{Compute, Timing};
+
+/// The known compute models and the numbers each takes.
+const MODELS: &[(&str, &[&str])] = &[
+    ("none", &[]),
+    ("fixed", &["ms"]),
+    ("uniform", &["min_ms", "max_ms"]),
+    ("lognormal", &["median_ms", "sigma"]),
+    ("per-body", &["base_ms", "per_body_ms"]),
+];
+
+/// A compute number by key.
+fn number<'a>(c: &'a RawCompute, key: &str) -> &'a Option<S<f64>> {
+    match key {
+        "ms" => &c.ms,
+        "min_ms" => &c.min_ms,
+        "max_ms" => &c.max_ms,
+        "median_ms" => &c.median_ms,
+        "sigma" => &c.sigma,
+        "base_ms" => &c.base_ms,
+        _ => &c.per_body_ms,
+    }
+}
+
+/// Every compute number key.
+const NUMBERS: &[&str] = &[
+    "ms",
+    "min_ms",
+    "max_ms",
+    "median_ms",
+    "sigma",
+    "base_ms",
+    "per_body_ms",
+];
+
+/// The robot's timing, or `None` when no layer has a `timing` table.
+pub(super) fn resolve_timing(layers: &[Layer]) -> Result<Option<Timing>, Fail> {
+    let tables: Vec<(&S<RawTiming>, &str)> = layers
+        .iter()
+        .filter_map(|l| l.raw.timing.as_ref().map(|t| (t, l.what.as_str())))
+        .collect();
+    if tables.is_empty() {
+        return Ok(None);
+    }
+    let mut t = Timing::default();
+    let num = |f: fn(&RawTiming) -> &Option<S<f64>>, key: &str, default: f64| {
+        let mut chosen = None;
+        for (raw, what) in &tables {
+            if let Some(v) = f(raw.get_ref()) {
+                let x = check(v, &format!("timing.{key}"), Rule::NonNeg, what)?;
+                chosen.get_or_insert(x);
+            }
+        }
+        Ok::<f64, Fail>(chosen.unwrap_or(default))
+    };
+    let prob = |f: fn(&RawTiming) -> &Option<S<f64>>, key: &str| {
+        let mut chosen = None;
+        for (raw, what) in &tables {
+            if let Some(v) = f(raw.get_ref()) {
+                let x = check(v, &format!("timing.{key}"), Rule::Finite, what)?;
+                if !(0.0..=1.0).contains(&x) {
+                    return Err(Fail::new(
+                        Some(v.span()),
+                        *what,
+                        format!("timing.{key} is a probability, in [0, 1], got {x}"),
+                    ));
+                }
+                chosen.get_or_insert(x);
+            }
+        }
+        Ok(chosen.unwrap_or(0.0))
+    };
+    t.observation_delay_ms = num(|r| &r.observation_delay_ms, "observation_delay_ms", 0.0)?;
+    t.actuation_delay_ms = num(|r| &r.actuation_delay_ms, "actuation_delay_ms", 0.0)?;
+    t.snapshot_loss = prob(|r| &r.snapshot_loss, "snapshot_loss")?;
+    t.command_loss = prob(|r| &r.command_loss, "command_loss")?;
+    let mut period = None;
+    for (raw, what) in &tables {
+        if let Some(v) = &raw.get_ref().period_ticks {
+            let k = *v.get_ref();
+            if k < 1 || k > i64::from(u32::MAX) {
+                return Err(Fail::new(
+                    Some(v.span()),
+                    *what,
+                    format!("timing.period_ticks must be a whole number >= 1, got {k}"),
+                ));
+            }
+            period.get_or_insert(k as u32);
+        }
+    }
+    t.period_ticks = period.unwrap_or(1);
+    t.compute = compute(&tables)?;
+    Ok(Some(t))
+}
+
+/// `compute`: the model from the highest layer that names one, each of
+/// its numbers from the highest layer that has it.
+fn compute(tables: &[(&S<RawTiming>, &str)]) -> Result<Compute, Fail> {
+    let computes: Vec<(&S<RawCompute>, &str)> = tables
+        .iter()
+        .filter_map(|(t, what)| t.get_ref().compute.as_ref().map(|c| (c, *what)))
+        .collect();
+    let Some((top, top_what)) = computes.first().copied() else {
+        return Ok(Compute::None);
+    };
+    let Some((model, model_what, model_table)) = computes
+        .iter()
+        .find_map(|(c, what)| c.get_ref().model.as_ref().map(|m| (m, *what, c.get_ref())))
+    else {
+        return Err(Fail::new(
+            Some(top.span()),
+            top_what,
+            "timing.compute needs `model` (none, fixed, uniform, lognormal, per-body)",
+        ));
+    };
+    let Some((_, keys)) = MODELS.iter().find(|(m, _)| m == model.get_ref()) else {
+        return Err(Fail::new(
+            Some(model.span()),
+            model_what,
+            format!(
+                "unknown timing.compute model `{}` (known: none, fixed, uniform, lognormal, per-body)",
+                model.get_ref()
+            ),
+        ));
+    };
+    // A number the model does not take, written beside the model: a typo
+    // or a misunderstanding, never silently ignored.
+    for key in NUMBERS.iter().filter(|k| !keys.contains(k)) {
+        if let Some(v) = number(model_table, key) {
+            return Err(Fail::new(
+                Some(v.span()),
+                model_what,
+                format!(
+                    "timing.compute model `{}` takes no `{key}` (it takes: {})",
+                    model.get_ref(),
+                    if keys.is_empty() {
+                        "nothing".to_string()
+                    } else {
+                        keys.join(", ")
+                    }
+                ),
+            ));
+        }
+    }
+    let get = |key: &str, rule: Rule| {
+        let mut chosen = None;
+        for (c, what) in &computes {
+            if let Some(v) = number(c.get_ref(), key) {
+                let x = check(v, &format!("timing.compute.{key}"), rule, what)?;
+                chosen.get_or_insert(x);
+            }
+        }
+        chosen.ok_or_else(|| {
+            Fail::new(
+                Some(model.span()),
+                model_what,
+                format!("timing.compute model `{}` needs `{key}`", model.get_ref()),
+            )
+        })
+    };
+    Ok(match model.get_ref().as_str() {
+        "none" => Compute::None,
+        "fixed" => Compute::Fixed {
+            ms: get("ms", Rule::NonNeg)?,
+        },
+        "uniform" => {
+            let (min_ms, max_ms) = (get("min_ms", Rule::NonNeg)?, get("max_ms", Rule::NonNeg)?);
+            if max_ms < min_ms {
+                return Err(Fail::new(
+                    Some(model.span()),
+                    model_what,
+                    format!("timing.compute max_ms ({max_ms}) must be >= min_ms ({min_ms})"),
+                ));
+            }
+            Compute::Uniform { min_ms, max_ms }
+        }
+        "lognormal" => Compute::Lognormal {
+            median_ms: get("median_ms", Rule::Pos)?,
+            sigma: get("sigma", Rule::NonNeg)?,
+        },
+        _ => Compute::PerBody {
+            base_ms: get("base_ms", Rule::NonNeg)?,
+            per_body_ms: get("per_body_ms", Rule::NonNeg)?,
+        },
+    })
+}
