@@ -148,6 +148,10 @@ impl Planner for LookAhead {
     fn native_unicycle(&self) -> bool {
         true
     }
+
+    fn needs_scan(&self) -> bool {
+        self.inner.needs_scan()
+    }
 }
 
 #[cfg(test)]

@@ -158,7 +158,7 @@ impl Clearance {
                 crate::dist(self.centre(k % w, k / w), s)
             }
         };
-        let mut best = |site: &mut Vec<P>, k: usize, from: usize| {
+        let best = |site: &mut Vec<P>, k: usize, from: usize| {
             let s = site[from];
             if !s[0].is_nan() && d(k, s) < d(k, site[k]) {
                 site[k] = s;
