@@ -13,9 +13,11 @@
 //! obstacles, or without them if they leave no way.
 //!
 //! The route keeps the centre [`margin`] more than the radius from walls
-//! wherever the map leaves room (half the radius: the local planners' own
+//! wherever the map leaves room (one more radius: the local planners' own
 //! clearance needs room to work in, and a route grazing a corner at the
-//! bare radius leaves none). The grid is the map's own cells when the
+//! bare radius leaves none). The waypoint shown is pulled back along the
+//! route, if need be, until the robot's disc (grown by half the margin)
+//! reaches it in a straight line, so that it never lies round a corner. The grid is the map's own cells when the
 //! scenario has a `[map]`, else half the radius.
 
 use mrsim_planners::{Command, Diagnostic, Observation, Planner, Segment, Vec2};
@@ -27,7 +29,7 @@ pub const PATIENCE: f64 = 8.0;
 
 /// Extra clearance a route keeps over the radius where it can.
 pub fn margin(spec: &RobotSpec) -> f64 {
-    spec.radius / 2.0
+    spec.radius
 }
 
 /// How far along the route, beyond the robot's progress, its planner's
@@ -137,6 +139,7 @@ pub struct Routed {
     goal: P,
     radius: f64,
     margin: f64,
+    ahead: f64,
     reach: f64,
     slow: f64,
     replans: u32,
@@ -153,6 +156,7 @@ impl Routed {
             goal: spec.goal,
             radius: spec.radius,
             margin: margin(spec),
+            ahead,
             reach: 2.0 * ahead,
             slow: spec.max_speed / 10.0,
             replans: 0,
@@ -187,7 +191,23 @@ impl Planner for Routed {
         if self.follower.stuck(obs.time) {
             self.replan(obs, p);
         }
-        let w = self.follower.waypoint(p, obs.time);
+        let far = self.follower.waypoint(p, obs.time);
+        // Round a corner: the furthest point up to the waypoint, and at
+        // least a quarter of the way there, that the disc (grown by half
+        // the margin) reaches in a straight line; the waypoint itself if
+        // none is.
+        let need = self.radius + self.margin / 2.0;
+        let (s0, step) = (self.follower.progress(), self.grid.resolution());
+        let mut s = s0 + self.ahead;
+        let mut w = far;
+        while !self.grid.sees(p, w, need) {
+            s -= step;
+            if s < s0 + self.ahead / 4.0 {
+                w = far;
+                break;
+            }
+            w = self.follower.at(s);
+        }
         let mut seen = *obs;
         seen.goal = Vec2::new(w[0], w[1]);
         self.inner.plan(&seen)

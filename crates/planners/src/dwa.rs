@@ -88,6 +88,12 @@
 //! so a robot that cannot advance turns towards its goal and waits for the
 //! way to clear; the back-off is what gets two robots that touch apart.
 //!
+//! **Padding** (`padding`, unicycle only; default a quarter of the
+//! radius): the arcs are checked for a disc that much larger, so the robot
+//! keeps that distance from everything it can (DWA alone admits any arc it
+//! can stop on, however close; a scan of discrete beams can also miss a
+//! corner between two of them by up to the beams' spacing there).
+//!
 //! **Obstacles** (`obstacles`): `truth` (default) avoids the sensed bodies
 //! at their velocities and the walls, as above; `scan` avoids only the
 //! returns of the robot's laser scan (the `sensor` key; a robot without
@@ -128,6 +134,9 @@ pub struct Dwa {
     pub horizon: f64,
     /// Bodies and walls, or the laser scan.
     pub obstacles: Obstacles,
+    /// A unicycle's safety distance, kept from everything as if its disc
+    /// were that much larger; `None`: a quarter of its radius.
+    pub padding: Option<f64>,
     /// A unicycle's recovery state (`dwa_unicycle`).
     pub(crate) recovery: crate::dwa_unicycle::Recovery,
 }
@@ -141,6 +150,7 @@ impl Default for Dwa {
             w_speed: 0.2,
             horizon: 3.0,
             obstacles: Obstacles::Truth,
+            padding: None,
             recovery: Default::default(),
         }
     }
@@ -200,8 +210,8 @@ pub(crate) fn time_to_segment(p: Vec2, v: Vec2, r: f64, s: &Segment) -> Option<f
 }
 
 impl Dwa {
-    /// Reads `samples`, `w_heading`, `w_clearance`, `w_speed`, `horizon`
-    /// and `obstacles` (`truth` or `scan`).
+    /// Reads `samples`, `w_heading`, `w_clearance`, `w_speed`, `horizon`,
+    /// `obstacles` (`truth` or `scan`) and `padding` (>= 0).
     pub fn from_params(params: &Params) -> Result<Self, ParamError> {
         let d = Self::default();
         let mut r = ParamReader::new("dwa", params);
@@ -214,6 +224,11 @@ impl Dwa {
             "scan" => Obstacles::Scan,
             _ => Obstacles::Truth,
         };
+        let padding = match r.number("padding", f64::NAN)? {
+            p if p.is_nan() => None,
+            p if p >= 0.0 => Some(p),
+            p => return Err(r.invalid("padding", format!("must be >= 0, got {p}"))),
+        };
         r.finish()?;
         Ok(Self {
             samples,
@@ -222,6 +237,7 @@ impl Dwa {
             w_speed,
             horizon,
             obstacles,
+            padding,
             recovery: Default::default(),
         })
     }

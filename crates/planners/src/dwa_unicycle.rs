@@ -24,8 +24,10 @@ fn arc(p: Vec2, theta: f64, v: f64, omega: f64, t: f64) -> (Vec2, f64) {
 /// `horizon` (infinite if none): the arc is followed chord by chord (steps
 /// of `step`), each chord checked exactly against every sensed body
 /// (moving at its velocity) and every wall in `walls`.
+#[allow(clippy::too_many_arguments)]
 fn arc_contact(
     obs: &Observation,
+    radius: f64,
     others: &[Sensed],
     walls: &[&Segment],
     v: f64,
@@ -43,12 +45,12 @@ fn arc_contact(
         for o in others {
             let rel = vel - o.velocity;
             let at = o.position + o.velocity * t;
-            if let Some(h) = time_to_disc(p - at, rel, me.radius + o.radius) {
+            if let Some(h) = time_to_disc(p - at, rel, radius + o.radius) {
                 hit = hit.min(h);
             }
         }
         for w in walls {
-            if let Some(h) = time_to_segment(p, vel, me.radius, w) {
+            if let Some(h) = time_to_segment(p, vel, radius, w) {
                 hit = hit.min(h);
             }
         }
@@ -173,7 +175,8 @@ pub(crate) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
     let at_goal = d_goal <= obs.goal_tolerance;
     // What is avoided: the scan's returns, or the bodies and the walls the
     // robot can reach within the horizon.
-    let reach = me.max_speed * dwa.horizon + me.radius;
+    let padded = me.radius + dwa.padding.unwrap_or(me.radius / 4.0);
+    let reach = me.max_speed * dwa.horizon + padded;
     let scan = dwa.obstacles == Obstacles::Scan;
     let points: Vec<Vec2> = if scan {
         scan_points(obs).filter(|q| q.norm() <= reach).collect()
@@ -191,11 +194,11 @@ pub(crate) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
     let others: &[Sensed] = if scan { &[] } else { obs.others };
     let step = dt / 2.0;
     let contact_time = |v: f64, w: f64| {
-        let t = arc_points(&points, me.radius, v, w, dwa.horizon);
+        let t = arc_points(&points, padded, v, w, dwa.horizon);
         if walls.is_empty() && others.is_empty() {
             t
         } else {
-            t.min(arc_contact(obs, others, &walls, v, w, step, dwa.horizon))
+            t.min(arc_contact(obs, padded, others, &walls, v, w, step, dwa.horizon))
         }
     };
 

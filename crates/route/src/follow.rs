@@ -131,6 +131,11 @@ impl Follower {
         self.path.at(self.progress + self.ahead)
     }
 
+    /// The point of the path `s` along it.
+    pub fn at(&self, s: f64) -> P {
+        self.path.at(s)
+    }
+
     /// Has the robot made no progress for `patience` s (by `time`)? Never
     /// once the waypoint is the goal.
     pub fn stuck(&self, time: f64) -> bool {

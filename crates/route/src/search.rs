@@ -212,6 +212,21 @@ impl Clearance {
         out
     }
 
+    /// Can a disc of `radius` go straight from `a` to `b`: does every
+    /// cell the line crosses have at least `radius` of clearance?
+    /// Cells within `radius` of `a` are not looked at (the disc is there
+    /// already).
+    pub fn sees(&self, a: P, b: P, radius: f64) -> bool {
+        self.line_clear(a, b, radius, &|k| {
+            let c = self.centre(k % self.w, k / self.w);
+            if crate::dist(c, a) <= radius {
+                f64::INFINITY
+            } else {
+                self.c[k]
+            }
+        })
+    }
+
     /// Does every cell the line from `a` to `b` crosses have at least
     /// `need` of clearance?
     fn line_clear(&self, a: P, b: P, need: f64, clear: &dyn Fn(usize) -> f64) -> bool {
