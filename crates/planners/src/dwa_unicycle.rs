@@ -23,7 +23,8 @@ fn arc(p: Vec2, theta: f64, v: f64, omega: f64, t: f64) -> (Vec2, f64) {
 /// Time to the first contact along the arc of (v, omega), up to
 /// `horizon` (infinite if none): the arc is followed chord by chord (steps
 /// of `step`), each chord checked exactly against every sensed body
-/// (moving at its velocity) and every wall in `walls`.
+/// (moving at its velocity, and also standing where it is) and every wall
+/// in `walls`.
 #[allow(clippy::too_many_arguments)]
 fn arc_contact(
     obs: &Observation,
@@ -46,6 +47,11 @@ fn arc_contact(
             let rel = vel - o.velocity;
             let at = o.position + o.velocity * t;
             if let Some(h) = time_to_disc(p - at, rel, radius + o.radius) {
+                hit = hit.min(h);
+            }
+            // Also where it stands: a robot need not hold its velocity
+            // (it plans too), and may stop or turn into the arc.
+            if let Some(h) = time_to_disc(p - o.position, vel, radius + o.radius) {
                 hit = hit.min(h);
             }
         }
