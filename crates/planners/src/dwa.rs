@@ -100,7 +100,11 @@
 //! one is refused), each a still point, as a robot with a real lidar must.
 //! On a unicycle each return is checked exactly against the circle the
 //! centre drives; on a holonomic robot the returns become still bodies of
-//! radius 0. Only returns within max_speed x horizon + radius matter.
+//! radius 0. Only returns within max_speed x horizon + radius matter. A
+//! return may be another robot coming the other way, which the scan cannot
+//! tell, so on a unicycle an arc is admissible only if both could stop in
+//! the gap, each after a tick's delay: v^2 / a <= v (t_c - 2 dt), t_c the
+//! time to contact with the return standing still.
 
 use crate::{
     BodyKind, Command, Kinematics, Observation, ParamError, ParamReader, Params, Planner, Segment,

@@ -279,7 +279,15 @@ pub(crate) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
                 least_bad = (t_c, v, w);
             }
             // V_a: can stop before the contact, v <= sqrt(2 (v t_c) a).
-            if t_c.is_finite() && v > 2.0 * a * t_c {
+            // From a scan, whatever is seen may be a robot coming the other
+            // way as fast: both must stop within the gap after a tick's
+            // delay each, v^2 / a <= v (t_c - 2 dt).
+            let brake = if scan {
+                a * (t_c - 2.0 * dt)
+            } else {
+                2.0 * a * t_c
+            };
+            if t_c.is_finite() && v > brake {
                 continue;
             }
             let score = if at_goal {
