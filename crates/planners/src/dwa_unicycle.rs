@@ -374,4 +374,90 @@ mod tests {
         // in time (v <= 2 a t_c fails), so it slows down.
         assert!(v < 0.6, "{v}");
     }
+
+    #[test]
+    fn a_scan_return_on_the_arc_is_met_where_the_circle_says() {
+        // Straight on at 1 m/s, a return 2 m ahead, 0.05 off the line,
+        // disc radius 0.1: contact after 2 - sqrt(0.1^2 - 0.05^2).
+        let t = arc_points(&[Vec2::new(2.0, 0.05)], 0.1, 1.0, 0.0, 10.0);
+        assert!((t - (2.0 - 0.0075f64.sqrt())).abs() < 1e-12, "{t}");
+        // A quarter turn of radius 1 ends at (1, 1): a return there is met
+        // where the chord to it is 0.1, 2 asin(0.05) short of the quarter.
+        let t = arc_points(&[Vec2::new(1.0, 1.0)], 0.1, 1.0, 1.0, 10.0);
+        let want = PI / 2.0 - 2.0 * 0.05f64.asin();
+        assert!((t - want).abs() < 1e-12, "{t} vs {want}");
+        // The same turn to the right meets its mirror image; backwards,
+        // the return behind.
+        let t = arc_points(&[Vec2::new(1.0, -1.0)], 0.1, 1.0, -1.0, 10.0);
+        assert!((t - want).abs() < 1e-12, "{t}");
+        let t = arc_points(&[Vec2::new(-2.0, 0.0)], 0.1, -1.0, 0.0, 10.0);
+        assert!((t - 1.9).abs() < 1e-12, "{t}");
+        // Turning in place meets nothing.
+        assert!(arc_points(&[Vec2::new(0.15, 0.0)], 0.1, 0.0, 1.0, 10.0).is_infinite());
+    }
+
+    #[test]
+    fn a_robot_touching_another_ahead_backs_off_turning_away() {
+        let other = [crate::Sensed {
+            id: 1,
+            kind: crate::BodyKind::Robot,
+            position: Vec2::new(0.5, 0.1),
+            velocity: Vec2::zeros(),
+            acceleration: Vec2::zeros(),
+            radius: 0.25,
+        }];
+        let mut obs = crate::testkit::observation(me(0.0), Vec2::new(5.0, 0.0), &other);
+        obs.time = 1.0;
+        let Command::Unicycle { v, omega } = crate::Planner::plan(&mut Dwa::default(), &obs)
+        else {
+            panic!("unicycle command expected");
+        };
+        // Ahead and to the left: backwards, the nose turned right.
+        assert!(v < 0.0 && omega < 0.0, "{v} {omega}");
+    }
+
+    #[test]
+    fn from_the_scan_a_robot_brakes_for_a_return_ahead_and_ignores_true_states() {
+        let mut s = me(0.0);
+        s.velocity = Vec2::new(0.6, 0.0);
+        // A wall 0.6 ahead, seen within 60 degrees of the heading.
+        let ranges: Vec<f64> = (0..360)
+            .map(|k| {
+                let a = -PI + 2.0 * PI * k as f64 / 360.0;
+                if a.abs() < PI / 3.0 {
+                    0.6 / a.cos()
+                } else {
+                    f64::INFINITY
+                }
+            })
+            .collect();
+        let scan = crate::lidar::LaserScan {
+            angle_min: -PI,
+            angle_increment: 2.0 * PI / 360.0,
+            range_max: 3.0,
+            ranges,
+        };
+        // A body in the true states right ahead, which the scan does not show.
+        let hidden = [crate::Sensed {
+            id: 1,
+            kind: crate::BodyKind::Robot,
+            position: Vec2::new(0.3, 0.0),
+            velocity: Vec2::zeros(),
+            acceleration: Vec2::zeros(),
+            radius: 0.25,
+        }];
+        let mut obs = crate::testkit::observation(s, Vec2::new(5.0, 0.0), &hidden);
+        obs.scan = Some(&scan);
+        let mut dwa = Dwa {
+            obstacles: crate::dwa::Obstacles::Scan,
+            ..Dwa::default()
+        };
+        let Command::Unicycle { v, .. } = crate::Planner::plan(&mut dwa, &obs) else {
+            panic!("unicycle command expected");
+        };
+        // Free, it would keep 0.6 or speed up; the wall makes it brake
+        // (the hidden body, in contact, would have made it back off).
+        assert!((0.0..0.6).contains(&v), "{v}");
+    }
+
 }
