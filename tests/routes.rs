@@ -118,8 +118,20 @@ fn turtlebots_with_orca_reach_their_goals_across_the_office() {
     let file = dir.join("orca.toml");
     let src = std::fs::read_to_string(&scenario)
         .unwrap()
-        .replace("planner = \"dwa\"\nparams = { obstacles = \"scan\" }", "planner = \"orca\"")
-        .replace("file = \"office.yaml\"", &format!("file = {:?}", root().join("scenarios/maps/office.yaml").display().to_string()));
+        .replace(
+            "planner = \"dwa\"\nparams = { obstacles = \"scan\" }",
+            "planner = \"orca\"",
+        )
+        .replace(
+            "file = \"office.yaml\"",
+            &format!(
+                "file = {:?}",
+                root()
+                    .join("scenarios/maps/office.yaml")
+                    .display()
+                    .to_string()
+            ),
+        );
     std::fs::write(&file, src).unwrap();
     let out = run_lockstep(&file, "tb-orca", &[]);
     assert_arrived(&outcome(&file, &out), "orca");
@@ -151,7 +163,10 @@ fn two_differential_drives_started_touching_get_apart_and_arrive() {
         let out = run_lockstep(&file, &format!("touching-{obstacles}-run"), &[]);
         let m = metrics(&out);
         for r in ["a", "b"] {
-            assert_eq!(m["robots"][r]["reached_goal"], true, "{obstacles}: {r}: {m:#}");
+            assert_eq!(
+                m["robots"][r]["reached_goal"], true,
+                "{obstacles}: {r}: {m:#}"
+            );
         }
     }
 }
@@ -190,7 +205,12 @@ fn a_goal_no_route_reaches_is_refused_with_the_widest_gap() {
         "unreachable",
         src,
         11,
-        &["robot `r`", "cannot be reached", "radius 0.2", "clearance of 0.1"],
+        &[
+            "robot `r`",
+            "cannot be reached",
+            "radius 0.2",
+            "clearance of 0.1",
+        ],
     );
 }
 

@@ -160,7 +160,6 @@ pub(crate) struct ScenarioView<'a> {
     length_unit: mrsim_scenario::LengthUnit,
 }
 
-
 impl Seat {
     /// Builds the robot's planner from `registry`.
     pub(crate) fn build_planner(

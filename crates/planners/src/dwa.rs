@@ -415,8 +415,8 @@ impl Dwa {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testkit::Sim;
     use crate::SelfState;
+    use crate::testkit::Sim;
 
     fn obs<'a>(velocity: Vec2, others: &'a [Sensed], walls: &'a [Segment]) -> Observation<'a> {
         Observation {

@@ -81,7 +81,11 @@ fn arc_points(points: &[Vec2], r: f64, v: f64, omega: f64, horizon: f64) -> f64 
     }
     // Backwards is forwards in the frame mirrored about the wheel axis,
     // with the turn mirrored too.
-    let (sx, w) = if v < 0.0 { (-1.0, -omega) } else { (1.0, omega) };
+    let (sx, w) = if v < 0.0 {
+        (-1.0, -omega)
+    } else {
+        (1.0, omega)
+    };
     let sy = if w < 0.0 { -1.0 } else { 1.0 };
     let curv = w.abs() / speed;
     let mut best = f64::INFINITY;
@@ -143,7 +147,12 @@ pub(crate) const BACK_OFF_FOR: f64 = 1.5;
 
 /// The nearest obstacle's surface distance from the disc and its
 /// direction in the robot's frame (a unit vector; zero if none).
-fn nearest(obs: &Observation, points: &[Vec2], walls: &[&Segment], others: &[Sensed]) -> (f64, Vec2) {
+fn nearest(
+    obs: &Observation,
+    points: &[Vec2],
+    walls: &[&Segment],
+    others: &[Sensed],
+) -> (f64, Vec2) {
     let me = &obs.me;
     let (s, c) = me.heading.sin_cos();
     let to_robot = |d: Vec2| Vec2::new(c * d.x + s * d.y, -s * d.x + c * d.y);
@@ -204,7 +213,16 @@ pub(crate) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
         if walls.is_empty() && others.is_empty() {
             t
         } else {
-            t.min(arc_contact(obs, padded, others, &walls, v, w, step, dwa.horizon))
+            t.min(arc_contact(
+                obs,
+                padded,
+                others,
+                &walls,
+                v,
+                w,
+                step,
+                dwa.horizon,
+            ))
         }
     };
 
@@ -408,8 +426,7 @@ mod tests {
         }];
         let mut obs = crate::testkit::observation(me(0.0), Vec2::new(5.0, 0.0), &other);
         obs.time = 1.0;
-        let Command::Unicycle { v, omega } = crate::Planner::plan(&mut Dwa::default(), &obs)
-        else {
+        let Command::Unicycle { v, omega } = crate::Planner::plan(&mut Dwa::default(), &obs) else {
             panic!("unicycle command expected");
         };
         // Ahead and to the left: backwards, the nose turned right.
@@ -459,5 +476,4 @@ mod tests {
         // (the hidden body, in contact, would have made it back off).
         assert!((0.0..0.6).contains(&v), "{v}");
     }
-
 }

@@ -674,7 +674,11 @@ fn parse_routes(path: &Path, text: &str) -> Result<BTreeMap<String, Vec<[f64; 2]
         let [y, x, _seq, robot] = cols[..] else {
             return Err(bad("expected robot,seq,x,y"));
         };
-        let num = |v: &str| v.trim().parse::<f64>().map_err(|_| bad("x and y must be numbers"));
+        let num = |v: &str| {
+            v.trim()
+                .parse::<f64>()
+                .map_err(|_| bad("x and y must be numbers"))
+        };
         out.entry(robot.to_string())
             .or_default()
             .push([num(x)?, num(y)?]);

@@ -38,7 +38,10 @@ impl Path {
     /// The point at arc length `s` (clamped to the path).
     pub fn at(&self, s: f64) -> P {
         let s = s.clamp(0.0, self.length());
-        let k = self.cum.partition_point(|&c| c <= s).clamp(1, self.pts.len().max(2) - 1);
+        let k = self
+            .cum
+            .partition_point(|&c| c <= s)
+            .clamp(1, self.pts.len().max(2) - 1);
         if self.pts.len() < 2 {
             return self.pts[0];
         }

@@ -266,7 +266,9 @@ mod tests {
     #[test]
     fn a_route_goes_through_the_gap_in_straight_legs() {
         let g = room(1.0);
-        let p = g.route([2.0, 1.0], [8.0, 1.0], 0.2, 0.1, &[]).expect("a way");
+        let p = g
+            .route([2.0, 1.0], [8.0, 1.0], 0.2, 0.1, &[])
+            .expect("a way");
         let pts = p.points();
         assert_eq!(pts.first(), Some(&[2.0, 1.0]));
         assert_eq!(pts.last(), Some(&[8.0, 1.0]));

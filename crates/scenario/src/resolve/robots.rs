@@ -275,13 +275,7 @@ pub(super) fn resolve_robot(
 /// goal, and the planner is told `goal_tolerance - lookahead`), or
 /// [`default_lookahead_for`] the tolerance.
 fn lookahead(layers: &[Layer], spec: &RobotSpec) -> Result<f64, Fail> {
-    let given = pick_num(
-        layers,
-        |r| &r.lookahead,
-        "lookahead",
-        Rule::Pos,
-        f64::NAN,
-    )?;
+    let given = pick_num(layers, |r| &r.lookahead, "lookahead", Rule::Pos, f64::NAN)?;
     if given.is_nan() {
         return Ok(default_lookahead_for(spec.goal_tolerance));
     }
