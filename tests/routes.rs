@@ -10,14 +10,6 @@ use common::*;
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
-/// Distance from `p` to the segment `[a, b]`.
-fn segment_distance(p: [f64; 2], [a, b]: [[f64; 2]; 2]) -> f64 {
-    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-    let len2 = dx * dx + dy * dy;
-    let t = (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0);
-    (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy)
-}
-
 /// Runs `scenario` in lockstep in-process with `extra` arguments; returns
 /// the run folder.
 fn run_lockstep(scenario: &Path, tag: &str, extra: &[&str]) -> PathBuf {
@@ -175,17 +167,7 @@ fn two_differential_drives_started_touching_get_apart_and_arrive() {
 /// stderr naming the file and line and holding each of `words`.
 fn refused(tag: &str, src: &str, line: usize, words: &[&str]) {
     let file = scenario_file(tag, src);
-    let out = file.parent().unwrap().join("out");
-    let o = mrsim()
-        .arg("run")
-        .arg(&file)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .expect("start mrsim");
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{tag}: {err}");
-    assert!(!out.join("metrics.json").exists(), "{tag}: it ran");
+    let err = run_refused(&file);
     let at = format!("{}:{line}", file.display());
     assert!(err.contains(&at), "{tag}: no {at} in: {err}");
     for w in words {
