@@ -45,13 +45,20 @@ fn outcome(scenario: &Path, out: &Path) -> Outcome {
         })
         .count();
     let walls: Vec<[[f64; 2]; 2]> = s.walls.iter().map(|w| w.segment).collect();
-    let rows = trajectory(out);
+    // trajectory.csv with its theta column (unicycles): body, x, y.
+    let text = std::fs::read_to_string(out.join("trajectory.csv")).expect("trajectory.csv");
+    let radius: std::collections::BTreeMap<&str, f64> = s
+        .robots
+        .iter()
+        .map(|r| (r.name.as_str(), r.radius))
+        .collect();
     let mut deepest = f64::INFINITY;
-    for r in &s.robots {
-        for row in track(&rows, &r.name) {
-            for w in &walls {
-                deepest = deepest.min(segment_distance([row.x, row.y], *w) - r.radius);
-            }
+    for line in text.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        let Some(r) = radius.get(f[2]) else { continue };
+        let p = [f[4].parse().expect("x"), f[5].parse().expect("y")];
+        for w in &walls {
+            deepest = deepest.min(segment_distance(p, *w) - r);
         }
     }
     Outcome {
@@ -139,7 +146,7 @@ fn scenario_file(tag: &str, src: &str) -> PathBuf {
 
 #[test]
 fn two_differential_drives_started_touching_get_apart_and_arrive() {
-    // Face to face, discs touching (centres 0.21 apart, radius 0.105),
+    // Face to face, discs touching (0.6 mm apart, radius 0.105),
     // each with its goal behind the other.
     for obstacles in ["truth", "scan"] {
         let src = format!(
@@ -148,8 +155,8 @@ fn two_differential_drives_started_touching_get_apart_and_arrive() {
              kinematics = \"unicycle\"\nradius = 0.105\nmax_speed = 0.22\nmax_accel = 2.5\n\
              max_angular_speed = 2.84\nmax_angular_accel = 3.2\ngoal_tolerance = 0.1\n\
              sensor = {{ kind = \"lidar\", beams = 360, range = 3.5 }}\n\
-             [[robot]]\nname = \"a\"\nstart = [-0.105, 0.0]\ngoal = [2.0, 0.0]\n\
-             [[robot]]\nname = \"b\"\nstart = [0.105, 0.0]\ngoal = [-2.0, 0.0]\n"
+             [[robot]]\nname = \"a\"\nstart = [-0.1053, 0.0]\ngoal = [2.0, 0.0]\n\
+             [[robot]]\nname = \"b\"\nstart = [0.1053, 0.0]\ngoal = [-2.0, 0.0]\n"
         );
         let file = scenario_file(&format!("touching-{obstacles}"), &src);
         let out = run_lockstep(&file, &format!("touching-{obstacles}-run"), &[]);
@@ -186,7 +193,7 @@ fn a_goal_no_route_reaches_is_refused_with_the_widest_gap() {
     refused(
         "unreachable",
         src,
-        11,
+        12,
         &[
             "robot `r`",
             "cannot be reached",

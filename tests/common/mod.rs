@@ -385,7 +385,10 @@ pub fn run_refused(file: &Path) -> String {
         .expect("start mrsim");
     let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
     assert_eq!(o.status.code(), Some(2), "stderr: {stderr}");
-    assert!(!out.join("metrics.json").exists(), "nothing may run: {stderr}");
+    assert!(
+        !out.join("metrics.json").exists(),
+        "nothing may run: {stderr}"
+    );
     stderr
 }
 
