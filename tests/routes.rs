@@ -158,8 +158,8 @@ fn two_differential_drives_started_touching_get_apart_and_arrive() {
              [[robot]]\nname = \"a\"\nstart = [-0.1053, 0.0]\ngoal = [2.0, 0.0]\n\
              [[robot]]\nname = \"b\"\nstart = [0.1053, 0.0]\ngoal = [-2.0, 0.0]\n"
         );
-        let file = scenario_file(&format!("touching-{obstacles}"), &src);
-        let out = run_lockstep(&file, &format!("touching-{obstacles}-run"), &[]);
+        let file = scenario_file(&format!("touch-{obstacles}"), &src);
+        let out = run_lockstep(&file, &format!("tch-{obstacles}"), &[]);
         let m = metrics(&out);
         for r in ["a", "b"] {
             assert_eq!(

@@ -83,8 +83,10 @@
 //! (within 45 degrees) for 3 s, away from its goal, backs off for up to
 //! 1.5 s at half its top speed: backwards with its nose turning away when
 //! the nearest obstacle is ahead, forwards when it is behind, not at all
-//! (turning in place) when that way is blocked too, and stops backing once
-//! half a radius clear. Turning in place is always admissible for a disc,
+//! (turning in place) when that way is blocked too, for the whole 1.5 s
+//! unless that way becomes blocked: the turn as it backs leaves it beside,
+//! not in front of, what it touched (two robots face to face each turn
+//! their noses right and pass each other on the left). Turning in place is always admissible for a disc,
 //! so a robot that cannot advance turns towards its goal and waits for the
 //! way to clear; the back-off is what gets two robots that touch apart.
 //!

@@ -231,7 +231,7 @@ pub(crate) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
     let (gap, toward) = nearest(obs, &points, &walls, others);
     let rec = &mut dwa.recovery;
     if let Some((until, v, w)) = rec.backing {
-        if obs.time < until && gap < me.radius / 2.0 && contact_time(v, 0.0) > dt {
+        if obs.time < until && contact_time(v, 0.0) > dt {
             return Command::Unicycle { v, omega: w };
         }
         rec.backing = None;
