@@ -27,6 +27,7 @@ pub mod guard;
 mod join;
 pub mod live;
 pub mod observe;
+pub mod route;
 mod seat;
 
 pub use group::{join_group, run_group};

@@ -28,6 +28,8 @@ pub(crate) struct Seat {
     pub(crate) capacity: usize,
     pub(crate) spec: RobotSpec,
     pub(crate) path: Option<Arc<DesignatedPath>>,
+    /// What its route goes around (`route = "shortest"` only).
+    route: Option<crate::route::RouteScene>,
     observer: observe::Observer,
     diag: Option<diagnostics::DiagnosticsWriter>,
     answered: Option<u64>,
@@ -142,7 +144,25 @@ pub(crate) fn seat_of(
         })
     });
     let robot_count = scenario.robots.len();
-    let capacity = robot_count + scenario.obstacles;
+    let capacity = robot_count + scenario.obstacles.len();
+    let route = match spec.route {
+        mrsim_scenario::Route::Direct => None,
+        mrsim_scenario::Route::Shortest => {
+            let obstacles = scenario
+                .obstacles
+                .iter()
+                .map(|raw| serde_json::from_str(raw.get()))
+                .collect::<Result<Vec<mrsim_scenario::ObstacleSpec>, _>>()
+                .map_err(|e| AgentError::BadSetup(e.to_string()))?;
+            let res = scenario
+                .map
+                .as_ref()
+                .map(|m| m.resolution * scenario.length_unit.per_metre());
+            Some(crate::route::RouteScene::from_segments(
+                walls, &obstacles, res,
+            ))
+        }
+    };
     let observer =
         observe::Observer::for_robot(&scenario.world, Some(&spec), me, capacity, walls.clone());
     let diag = start_diagnostics(view.out_dir.as_deref(), me, &spec.name);
@@ -158,6 +178,7 @@ pub(crate) fn seat_of(
         diag,
         spec,
         path,
+        route,
         observer,
         answered: None,
         injector: opts.fault.map(fault::Injector::new),
@@ -204,30 +225,15 @@ pub(crate) struct ScenarioView<'a> {
     world: mrsim_scenario::WorldConfig,
     #[serde(borrow)]
     robots: Vec<&'a serde_json::value::RawValue>,
-    /// Only counted.
-    #[serde(default, deserialize_with = "count")]
-    obstacles: usize,
+    /// Parsed only for a robot with a route (their number counts).
+    #[serde(default, borrow)]
+    obstacles: Vec<&'a serde_json::value::RawValue>,
     #[serde(default)]
     walls: Vec<mrsim_scenario::WallSpec>,
-}
-
-/// The length of a sequence, its items skipped.
-fn count<'de, D: serde::Deserializer<'de>>(d: D) -> Result<usize, D::Error> {
-    struct Count;
-    impl<'de> serde::de::Visitor<'de> for Count {
-        type Value = usize;
-        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-            f.write_str("a sequence")
-        }
-        fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<usize, A::Error> {
-            let mut n = 0;
-            while seq.next_element::<serde::de::IgnoredAny>()?.is_some() {
-                n += 1;
-            }
-            Ok(n)
-        }
-    }
-    d.deserialize_seq(Count)
+    #[serde(default)]
+    map: Option<mrsim_scenario::MapInfo>,
+    #[serde(default)]
+    length_unit: mrsim_scenario::LengthUnit,
 }
 
 impl Seat {
@@ -236,9 +242,18 @@ impl Seat {
         &self,
         registry: &Registry,
     ) -> Result<Box<dyn Planner>, AgentError> {
-        crate::build_planner_in(registry, &self.spec).map_err(|source| AgentError::Planner {
+        let fail = |source| AgentError::Planner {
             robot: self.spec.name.clone(),
             source,
+        };
+        let planner = crate::build_planner_in(registry, &self.spec).map_err(fail)?;
+        let Some(scene) = &self.route else {
+            return Ok(planner);
+        };
+        crate::route::fit_route(planner, &self.spec, scene).map_err(|e| {
+            fail(mrsim_planners::BuildError::Other(format!(
+                "route from start to goal: {e}"
+            )))
         })
     }
 

@@ -404,3 +404,32 @@ pub fn heavy() -> std::sync::MutexGuard<'static, ()> {
     static HEAVY: std::sync::Mutex<()> = std::sync::Mutex::new(());
     HEAVY.lock().unwrap_or_else(|e| e.into_inner())
 }
+
+/// Runs `mrsim run FILE --out DIR/out` (DIR the file's folder) for a file
+/// that must be refused: asserts exit status 2 and that nothing ran (no
+/// metrics.json); returns stderr.
+pub fn run_refused(file: &Path) -> String {
+    let out = file.parent().expect("a folder").join("out");
+    let o = mrsim()
+        .arg("run")
+        .arg(file)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .expect("start mrsim");
+    let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_eq!(o.status.code(), Some(2), "stderr: {stderr}");
+    assert!(
+        !out.join("metrics.json").exists(),
+        "nothing may run: {stderr}"
+    );
+    stderr
+}
+
+/// Distance from `p` to the segment `[a, b]`.
+pub fn segment_distance(p: [f64; 2], [a, b]: [[f64; 2]; 2]) -> f64 {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let len2 = dx * dx + dy * dy;
+    let t = (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0);
+    (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy)
+}

@@ -53,7 +53,7 @@
 //! paper reports them, quoted from the published article, IEEE Robotics &
 //! Automation Magazine 4(1), 1997); `samples` = 11 per axis and
 //! `horizon` = 3 s are our choices (the paper discretises its window
-//! without fixing a resolution).
+//! without fixing a resolution); `obstacles` = `truth` (below).
 //!
 //! **On a unicycle robot** (`kinematics = "unicycle"`) the planner searches
 //! the paper's own space, (v, omega), and answers [`Command::Unicycle`]
@@ -66,14 +66,64 @@
 //! to `horizon`; admissible when v <= sqrt(2 dist(v, omega) a_max) with
 //! dist the arc length to the first contact (section 3.1, V_a); heading is
 //! 1 - |angle to the goal from the pose predicted after dt| / pi (section
-//! 3.2), clearance and speed as above. It says so
+//! 3.2), clearance as above; speed = 1 - |v - v_goal| / max_speed with
+//! v_goal the braking profile above, further capped by omega_max d_goal /
+//! (2 |sin alpha|) (the arc from the robot through the goal, alpha the
+//! goal's bearing off the heading, needs v / omega at most its radius; a
+//! faster robot circles its goal instead of reaching it) and scaled by
+//! max(cos alpha, 0), so that a goal more than a right angle off is turned
+//! to in place. It says so
 //! ([`Planner::native_unicycle`]), so the look-ahead controller that
 //! drives the other planners on a unicycle ([`crate::unicycle`]) gives it
 //! the robot's own pose and goal tolerance, not the look-ahead point's.
+//!
+//! **Recovery** (unicycle; the paper has none, ROS's local planners back
+//! off and rotate): a robot touching something (its disc within 5 % of its
+//! radius of a body, wall or scan return) or standing still facing its goal
+//! (within 45 degrees) for 3 s, away from its goal, backs off for up to
+//! 1.5 s at half its top speed: backwards with its nose turning away when
+//! the nearest obstacle is ahead, forwards when it is behind, not at all
+//! (turning in place) when that way is blocked too, for the whole 1.5 s
+//! unless that way becomes blocked: the turn as it backs leaves it beside,
+//! not in front of, what it touched (two robots face to face each turn
+//! their noses right and pass each other on the left). Turning in place is always admissible for a disc,
+//! so a robot that cannot advance turns towards its goal and waits for the
+//! way to clear; the back-off is what gets two robots that touch apart.
+//!
+//! **Padding** (`padding`, unicycle only; default a quarter of the
+//! radius): the arcs are checked for a disc that much larger, so the robot
+//! keeps that distance from everything it can (DWA alone admits any arc it
+//! can stop on, however close; a scan of discrete beams can also miss a
+//! corner between two of them by up to the beams' spacing there).
+//!
+//! **Obstacles** (`obstacles`): `truth` (default) avoids the sensed bodies
+//! at their velocities and the walls, as above; `scan` avoids only the
+//! returns of the robot's laser scan (the `sensor` key; a robot without
+//! one is refused), each a still point, as a robot with a real lidar must.
+//! On a unicycle each return is checked exactly against the circle the
+//! centre drives; on a holonomic robot the returns become still bodies of
+//! radius 0. Only returns within max_speed x horizon + radius matter. A
+//! return may be another robot coming the other way, which the scan cannot
+//! tell, so on a unicycle an arc is admissible only if both could stop in
+//! the gap, each after a tick's delay: v^2 / a <= v (t_c - 2 dt), t_c the
+//! time to contact with the return standing still.
 
 use crate::{
-    Command, Kinematics, Observation, ParamError, ParamReader, Params, Planner, Segment, Vec2,
+    BodyKind, Command, Kinematics, Observation, ParamError, ParamReader, Params, Planner, Segment,
+    Sensed, Vec2,
 };
+
+/// What dwa avoids (its `obstacles` parameter).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Obstacles {
+    /// The sensed bodies (at their sensed velocities) and the walls
+    /// (default).
+    #[default]
+    Truth,
+    /// The robot's laser scan alone: every return is a still point in the
+    /// robot's frame; no body's state and no wall is used.
+    Scan,
+}
 
 /// Dynamic window approach for a holonomic disc.
 #[derive(Debug, Clone)]
@@ -88,6 +138,13 @@ pub struct Dwa {
     pub w_speed: f64,
     /// Look-ahead time at which clearance saturates, s.
     pub horizon: f64,
+    /// Bodies and walls, or the laser scan.
+    pub obstacles: Obstacles,
+    /// A unicycle's safety distance, kept from everything as if its disc
+    /// were that much larger; `None`: a quarter of its radius.
+    pub padding: Option<f64>,
+    /// A unicycle's recovery state (`dwa_unicycle`).
+    pub(crate) recovery: crate::dwa_unicycle::Recovery,
 }
 
 impl Default for Dwa {
@@ -98,6 +155,9 @@ impl Default for Dwa {
             w_clearance: 0.2,
             w_speed: 0.2,
             horizon: 3.0,
+            obstacles: Obstacles::Truth,
+            padding: None,
+            recovery: Default::default(),
         }
     }
 }
@@ -156,7 +216,8 @@ pub(crate) fn time_to_segment(p: Vec2, v: Vec2, r: f64, s: &Segment) -> Option<f
 }
 
 impl Dwa {
-    /// Reads `samples`, `w_heading`, `w_clearance`, `w_speed` and `horizon`.
+    /// Reads `samples`, `w_heading`, `w_clearance`, `w_speed`, `horizon`,
+    /// `obstacles` (`truth` or `scan`) and `padding` (>= 0).
     pub fn from_params(params: &Params) -> Result<Self, ParamError> {
         let d = Self::default();
         let mut r = ParamReader::new("dwa", params);
@@ -165,6 +226,15 @@ impl Dwa {
         let w_clearance = r.non_negative("w_clearance", d.w_clearance)?;
         let w_speed = r.non_negative("w_speed", d.w_speed)?;
         let horizon = r.positive("horizon", d.horizon)?;
+        let obstacles = match r.choice("obstacles", &["truth", "scan"], "truth")? {
+            "scan" => Obstacles::Scan,
+            _ => Obstacles::Truth,
+        };
+        let padding = match r.number("padding", f64::NAN)? {
+            p if p.is_nan() => None,
+            p if p >= 0.0 => Some(p),
+            p => return Err(r.invalid("padding", format!("must be >= 0, got {p}"))),
+        };
         r.finish()?;
         Ok(Self {
             samples,
@@ -172,6 +242,9 @@ impl Dwa {
             w_clearance,
             w_speed,
             horizon,
+            obstacles,
+            padding,
+            recovery: Default::default(),
         })
     }
 
@@ -245,6 +318,51 @@ impl Planner for Dwa {
         {
             return crate::dwa_unicycle::plan(self, obs, max_angular_speed, max_angular_accel);
         }
+        if self.obstacles == Obstacles::Scan {
+            // The scan's returns as still points, in the world's frame (a
+            // holonomic robot's scan is taken with heading 0).
+            let points: Vec<Sensed> = scan_points(obs)
+                .map(|q| Sensed {
+                    id: u32::MAX,
+                    kind: BodyKind::Obstacle,
+                    position: obs.me.position + q,
+                    velocity: Vec2::zeros(),
+                    acceleration: Vec2::zeros(),
+                    radius: 0.0,
+                })
+                .collect();
+            let mut seen = *obs;
+            seen.others = &points;
+            seen.walls = &[];
+            seen.scan = None;
+            return self.plan_holonomic(&seen);
+        }
+        self.plan_holonomic(obs)
+    }
+
+    fn native_unicycle(&self) -> bool {
+        true
+    }
+
+    fn needs_scan(&self) -> bool {
+        self.obstacles == Obstacles::Scan
+    }
+}
+
+/// The returns of the observation's scan (finite ranges) as points in the
+/// robot's frame (x along its heading).
+pub(crate) fn scan_points<'a>(obs: &'a Observation) -> impl Iterator<Item = Vec2> + 'a {
+    obs.scan.into_iter().flat_map(|s| {
+        s.ranges.iter().enumerate().filter_map(move |(k, &r)| {
+            let a = s.angle_min + s.angle_increment * k as f64;
+            r.is_finite().then(|| Vec2::new(a.cos(), a.sin()) * r)
+        })
+    })
+}
+
+impl Dwa {
+    /// One step on a holonomic robot (module documentation, 1-3).
+    fn plan_holonomic(&mut self, obs: &Observation) -> Command {
         let me = &obs.me;
         let to_goal = obs.goal - me.position;
         let d_goal = to_goal.norm();
@@ -294,17 +412,13 @@ impl Planner for Dwa {
         // No admissible velocity: the one that keeps contact furthest off.
         Command::Velocity(best.map_or(least_bad.1, |(_, v)| v))
     }
-
-    fn native_unicycle(&self) -> bool {
-        true
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::SelfState;
     use crate::testkit::Sim;
-    use crate::{BodyKind, SelfState, Sensed};
 
     fn obs<'a>(velocity: Vec2, others: &'a [Sensed], walls: &'a [Segment]) -> Observation<'a> {
         Observation {

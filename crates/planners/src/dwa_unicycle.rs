@@ -2,8 +2,8 @@
 //! Burgard & Thrun's section 3 (the module documentation of `dwa` gives
 //! the window, the admissibility test and the objective).
 
-use crate::dwa::{Dwa, time_to_disc, time_to_segment};
-use crate::{Command, Observation, Segment, Vec2};
+use crate::dwa::{Dwa, Obstacles, scan_points, time_to_disc, time_to_segment};
+use crate::{Command, Observation, Segment, Sensed, Vec2};
 use std::f64::consts::PI;
 
 /// Pose after driving `v`, `omega` for `t` from `p`, `theta` (the exact
@@ -23,9 +23,13 @@ fn arc(p: Vec2, theta: f64, v: f64, omega: f64, t: f64) -> (Vec2, f64) {
 /// Time to the first contact along the arc of (v, omega), up to
 /// `horizon` (infinite if none): the arc is followed chord by chord (steps
 /// of `step`), each chord checked exactly against every sensed body
-/// (moving at its velocity) and every wall in `walls`.
+/// (moving at its velocity, and also standing where it is) and every wall
+/// in `walls`.
+#[allow(clippy::too_many_arguments)]
 fn arc_contact(
     obs: &Observation,
+    radius: f64,
+    others: &[Sensed],
     walls: &[&Segment],
     v: f64,
     omega: f64,
@@ -39,15 +43,20 @@ fn arc_contact(
         let (q, th2) = arc(p, th, v, omega, step);
         let vel = (q - p) / step;
         let mut hit = f64::INFINITY;
-        for o in obs.others {
+        for o in others {
             let rel = vel - o.velocity;
             let at = o.position + o.velocity * t;
-            if let Some(h) = time_to_disc(p - at, rel, me.radius + o.radius) {
+            if let Some(h) = time_to_disc(p - at, rel, radius + o.radius) {
+                hit = hit.min(h);
+            }
+            // Also where it stands: a robot need not hold its velocity
+            // (it plans too), and may stop or turn into the arc.
+            if let Some(h) = time_to_disc(p - o.position, vel, radius + o.radius) {
                 hit = hit.min(h);
             }
         }
         for w in walls {
-            if let Some(h) = time_to_segment(p, vel, me.radius, w) {
+            if let Some(h) = time_to_segment(p, vel, radius, w) {
                 hit = hit.min(h);
             }
         }
@@ -60,14 +69,116 @@ fn arc_contact(
     f64::INFINITY
 }
 
+/// Time to the first contact of the disc of radius `r` with any of the
+/// still `points` (robot frame, x along the heading) along the arc of
+/// (v, omega), up to `horizon` (infinite if none): exact, each point
+/// against the circle the centre drives (a line when omega is ~0). A point
+/// already inside the disc counts at 0 only when it is ahead of the motion.
+fn arc_points(points: &[Vec2], r: f64, v: f64, omega: f64, horizon: f64) -> f64 {
+    let speed = v.abs();
+    if speed < 1e-9 {
+        return f64::INFINITY;
+    }
+    // Backwards is forwards in the frame mirrored about the wheel axis,
+    // with the turn mirrored too.
+    let (sx, w) = if v < 0.0 {
+        (-1.0, -omega)
+    } else {
+        (1.0, omega)
+    };
+    let sy = if w < 0.0 { -1.0 } else { 1.0 };
+    let curv = w.abs() / speed;
+    let mut best = f64::INFINITY;
+    for q in points {
+        let q = Vec2::new(sx * q.x, sy * q.y);
+        let s = if q.norm() < r {
+            if q.x > 0.0 { 0.0 } else { continue }
+        } else if curv < 1e-9 {
+            if q.y.abs() >= r || q.x <= 0.0 {
+                continue;
+            }
+            q.x - (r * r - q.y * q.y).sqrt()
+        } else {
+            let big = 1.0 / curv;
+            let d = q - Vec2::new(0.0, big);
+            let rho = d.norm();
+            if (rho - big).abs() >= r {
+                continue;
+            }
+            let cos0 = ((rho * rho + big * big - r * r) / (2.0 * rho * big)).clamp(-1.0, 1.0);
+            let half = cos0.acos();
+            let delta = (d.y.atan2(d.x) + PI / 2.0).rem_euclid(2.0 * PI);
+            big * (delta - half).max(0.0)
+        };
+        best = best.min(s / speed);
+    }
+    if best > horizon { f64::INFINITY } else { best }
+}
+
 /// Angle `a` wrapped to (-pi, pi].
 fn wrap(a: f64) -> f64 {
     let w = a.rem_euclid(2.0 * PI);
     if w > PI { w - 2.0 * PI } else { w }
 }
 
+/// A unicycle's way out of contact or a standstill (module documentation
+/// of `dwa`, "Recovery").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Recovery {
+    /// Since when the robot, facing its goal, has stood still (NaN: not).
+    still_since: f64,
+    /// Backing off: until when, at which (v, omega).
+    backing: Option<(f64, f64, f64)>,
+}
+
+impl Default for Recovery {
+    fn default() -> Self {
+        Self {
+            still_since: f64::NAN,
+            backing: None,
+        }
+    }
+}
+
+/// Seconds facing the goal without moving before the robot backs off.
+pub(crate) const STILL_FOR: f64 = 3.0;
+/// Seconds a back-off lasts at most.
+pub(crate) const BACK_OFF_FOR: f64 = 1.5;
+
+/// The nearest obstacle's surface distance from the disc and its
+/// direction in the robot's frame (a unit vector; zero if none).
+fn nearest(
+    obs: &Observation,
+    points: &[Vec2],
+    walls: &[&Segment],
+    others: &[Sensed],
+) -> (f64, Vec2) {
+    let me = &obs.me;
+    let (s, c) = me.heading.sin_cos();
+    let to_robot = |d: Vec2| Vec2::new(c * d.x + s * d.y, -s * d.x + c * d.y);
+    let mut best = (f64::INFINITY, Vec2::zeros());
+    let mut take = |gap: f64, dir: Vec2| {
+        if gap < best.0 {
+            let n = dir.norm();
+            best = (gap, if n > 0.0 { dir / n } else { Vec2::zeros() });
+        }
+    };
+    for q in points {
+        take(q.norm() - me.radius, *q);
+    }
+    for w in walls {
+        let d = w.closest_point(me.position) - me.position;
+        take(d.norm() - me.radius, to_robot(d));
+    }
+    for o in others {
+        let d = o.position - me.position;
+        take(d.norm() - me.radius - o.radius, to_robot(d));
+    }
+    best
+}
+
 /// One control step of DWA in (v, omega).
-pub(crate) fn plan(dwa: &Dwa, obs: &Observation, w_max: f64, alpha_max: f64) -> Command {
+pub(crate) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64) -> Command {
     let me = &obs.me;
     let dt = if obs.dt > 0.0 { obs.dt } else { 0.1 };
     let (s, c) = me.heading.sin_cos();
@@ -76,15 +187,95 @@ pub(crate) fn plan(dwa: &Dwa, obs: &Observation, w_max: f64, alpha_max: f64) -> 
     let a = me.max_accel;
     let to_goal = obs.goal - me.position;
     let d_goal = to_goal.norm();
-    let v_goal = me.max_speed.min((2.0 * a * d_goal).sqrt()).min(d_goal / dt);
     let at_goal = d_goal <= obs.goal_tolerance;
-    // Only walls the robot can reach within the horizon matter.
-    let reach = me.max_speed * dwa.horizon + me.radius;
-    let walls: Vec<&Segment> = obs
-        .walls
-        .iter()
-        .filter(|w| (w.closest_point(me.position) - me.position).norm() <= reach)
-        .collect();
+    // What is avoided: the scan's returns, or the bodies and the walls the
+    // robot can reach within the horizon.
+    let padded = me.radius + dwa.padding.unwrap_or(me.radius / 4.0);
+    let reach = me.max_speed * dwa.horizon + padded;
+    let scan = dwa.obstacles == Obstacles::Scan;
+    let points: Vec<Vec2> = if scan {
+        scan_points(obs).filter(|q| q.norm() <= reach).collect()
+    } else {
+        Vec::new()
+    };
+    let walls: Vec<&Segment> = if scan {
+        Vec::new()
+    } else {
+        obs.walls
+            .iter()
+            .filter(|w| (w.closest_point(me.position) - me.position).norm() <= reach)
+            .collect()
+    };
+    let others: &[Sensed] = if scan { &[] } else { obs.others };
+    let step = dt / 2.0;
+    let contact_time = |v: f64, w: f64| {
+        let t = arc_points(&points, padded, v, w, dwa.horizon);
+        if walls.is_empty() && others.is_empty() {
+            t
+        } else {
+            t.min(arc_contact(
+                obs,
+                padded,
+                others,
+                &walls,
+                v,
+                w,
+                step,
+                dwa.horizon,
+            ))
+        }
+    };
+
+    // Recovery: go on backing off, or start when touching something or
+    // when standing still facing the goal for STILL_FOR s.
+    let (gap, toward) = nearest(obs, &points, &walls, others);
+    let rec = &mut dwa.recovery;
+    if let Some((until, v, w)) = rec.backing {
+        if obs.time < until && contact_time(v, 0.0) > dt {
+            return Command::Unicycle { v, omega: w };
+        }
+        rec.backing = None;
+        rec.still_since = f64::NAN;
+    }
+    let alpha = wrap(to_goal.y.atan2(to_goal.x) - me.heading);
+    let still = v_c.abs() < 0.05 * me.max_speed && w_c.abs() < 0.05 * w_max;
+    if at_goal || !still || alpha.abs() > PI / 4.0 {
+        rec.still_since = f64::NAN;
+    } else if rec.still_since.is_nan() {
+        rec.still_since = obs.time;
+    }
+    let touching = gap < 0.05 * me.radius.max(1e-3);
+    if !at_goal && (touching || obs.time - rec.still_since >= STILL_FOR) {
+        // Away from the nearest obstacle: backwards if it is ahead, the
+        // nose turned away from it; forwards if it is behind.
+        let back = 0.5 * me.max_speed;
+        let v = if toward.x > 0.0 { -back } else { back };
+        let v = if contact_time(v, 0.0) > dt { v } else { 0.0 };
+        let w = if toward.x > 0.0 {
+            -toward.y.signum() * 0.5 * w_max
+        } else {
+            0.0
+        };
+        rec.backing = Some((obs.time + BACK_OFF_FOR, v, w));
+        rec.still_since = f64::NAN;
+        return Command::Unicycle { v, omega: w };
+    }
+
+    // The speed to aim for: the top speed, less near the goal (a braking
+    // profile), less when the goal is off the heading (the arc through the
+    // goal needs v <= omega_max d / (2 |sin alpha|), or the robot circles
+    // it), none when it is more than a right angle off (turn in place).
+    let v_turn = if alpha.sin().abs() < 1e-9 {
+        f64::INFINITY
+    } else {
+        w_max * d_goal / (2.0 * alpha.sin().abs())
+    };
+    let v_goal = me
+        .max_speed
+        .min((2.0 * a * d_goal).sqrt())
+        .min(d_goal / dt)
+        .min(v_turn)
+        * alpha.cos().max(0.0);
     let (v_lo, v_hi) = (
         (v_c - a * dt).max(0.0),
         (v_c + a * dt).clamp(0.0, me.max_speed),
@@ -95,19 +286,26 @@ pub(crate) fn plan(dwa: &Dwa, obs: &Observation, w_max: f64, alpha_max: f64) -> 
     );
     let n = dwa.samples;
     let at = |k: usize, lo: f64, hi: f64| lo + (hi - lo) * k as f64 / (n - 1) as f64;
-    let step = dt / 2.0;
     let mut best: Option<(f64, f64, f64)> = None;
     let mut least_bad = (f64::NEG_INFINITY, 0.0, w_c.clamp(w_lo, w_hi));
     for i in 0..n {
         for j in 0..n {
             let (v, w) = (at(i, v_lo, v_hi.max(v_lo)), at(j, w_lo, w_hi.max(w_lo)));
-            let t_c = arc_contact(obs, &walls, v, w, step, dwa.horizon);
+            let t_c = contact_time(v, w);
             // Least bad: furthest contact, then slowest.
             if t_c > least_bad.0 || (t_c == least_bad.0 && v < least_bad.1) {
                 least_bad = (t_c, v, w);
             }
             // V_a: can stop before the contact, v <= sqrt(2 (v t_c) a).
-            if t_c.is_finite() && v > 2.0 * a * t_c {
+            // From a scan, whatever is seen may be a robot coming the other
+            // way as fast: both must stop within the gap after a tick's
+            // delay each, v^2 / a <= v (t_c - 2 dt).
+            let brake = if scan {
+                a * (t_c - 2.0 * dt)
+            } else {
+                2.0 * a * t_c
+            };
+            if t_c.is_finite() && v > brake {
                 continue;
             }
             let score = if at_goal {
@@ -193,5 +391,89 @@ mod tests {
         // Gap 0.05 straight ahead: going on at 0.6 or faster cannot stop
         // in time (v <= 2 a t_c fails), so it slows down.
         assert!(v < 0.6, "{v}");
+    }
+
+    #[test]
+    fn a_scan_return_on_the_arc_is_met_where_the_circle_says() {
+        // Straight on at 1 m/s, a return 2 m ahead, 0.05 off the line,
+        // disc radius 0.1: contact after 2 - sqrt(0.1^2 - 0.05^2).
+        let t = arc_points(&[Vec2::new(2.0, 0.05)], 0.1, 1.0, 0.0, 10.0);
+        assert!((t - (2.0 - 0.0075f64.sqrt())).abs() < 1e-12, "{t}");
+        // A quarter turn of radius 1 ends at (1, 1): a return there is met
+        // where the chord to it is 0.1, 2 asin(0.05) short of the quarter.
+        let t = arc_points(&[Vec2::new(1.0, 1.0)], 0.1, 1.0, 1.0, 10.0);
+        let want = PI / 2.0 - 2.0 * 0.05f64.asin();
+        assert!((t - want).abs() < 1e-12, "{t} vs {want}");
+        // The same turn to the right meets its mirror image; backwards,
+        // the return behind.
+        let t = arc_points(&[Vec2::new(1.0, -1.0)], 0.1, 1.0, -1.0, 10.0);
+        assert!((t - want).abs() < 1e-12, "{t}");
+        let t = arc_points(&[Vec2::new(-2.0, 0.0)], 0.1, -1.0, 0.0, 10.0);
+        assert!((t - 1.9).abs() < 1e-12, "{t}");
+        // Turning in place meets nothing.
+        assert!(arc_points(&[Vec2::new(0.15, 0.0)], 0.1, 0.0, 1.0, 10.0).is_infinite());
+    }
+
+    #[test]
+    fn a_robot_touching_another_ahead_backs_off_turning_away() {
+        let other = [crate::Sensed {
+            id: 1,
+            kind: crate::BodyKind::Robot,
+            position: Vec2::new(0.5, 0.1),
+            velocity: Vec2::zeros(),
+            acceleration: Vec2::zeros(),
+            radius: 0.25,
+        }];
+        let mut obs = crate::testkit::observation(me(0.0), Vec2::new(5.0, 0.0), &other);
+        obs.time = 1.0;
+        let Command::Unicycle { v, omega } = crate::Planner::plan(&mut Dwa::default(), &obs) else {
+            panic!("unicycle command expected");
+        };
+        // Ahead and to the left: backwards, the nose turned right.
+        assert!(v < 0.0 && omega < 0.0, "{v} {omega}");
+    }
+
+    #[test]
+    fn from_the_scan_a_robot_brakes_for_a_return_ahead_and_ignores_true_states() {
+        let mut s = me(0.0);
+        s.velocity = Vec2::new(0.6, 0.0);
+        // A wall 0.6 ahead, seen within 60 degrees of the heading.
+        let ranges: Vec<f64> = (0..360)
+            .map(|k| {
+                let a = -PI + 2.0 * PI * k as f64 / 360.0;
+                if a.abs() < PI / 3.0 {
+                    0.6 / a.cos()
+                } else {
+                    f64::INFINITY
+                }
+            })
+            .collect();
+        let scan = crate::lidar::LaserScan {
+            angle_min: -PI,
+            angle_increment: 2.0 * PI / 360.0,
+            range_max: 3.0,
+            ranges,
+        };
+        // A body in the true states right ahead, which the scan does not show.
+        let hidden = [crate::Sensed {
+            id: 1,
+            kind: crate::BodyKind::Robot,
+            position: Vec2::new(0.3, 0.0),
+            velocity: Vec2::zeros(),
+            acceleration: Vec2::zeros(),
+            radius: 0.25,
+        }];
+        let mut obs = crate::testkit::observation(s, Vec2::new(5.0, 0.0), &hidden);
+        obs.scan = Some(&scan);
+        let mut dwa = Dwa {
+            obstacles: crate::dwa::Obstacles::Scan,
+            ..Dwa::default()
+        };
+        let Command::Unicycle { v, .. } = crate::Planner::plan(&mut dwa, &obs) else {
+            panic!("unicycle command expected");
+        };
+        // Free, it would keep 0.6 or speed up; the wall makes it brake
+        // (the hidden body, in contact, would have made it back off).
+        assert!((0.0..0.6).contains(&v), "{v}");
     }
 }

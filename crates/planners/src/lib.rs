@@ -258,4 +258,11 @@ pub trait Planner: Send {
     fn native_unicycle(&self) -> bool {
         false
     }
+
+    /// True for a planner that sees obstacles only through the robot's
+    /// laser scan (dwa with `obstacles = "scan"`): a robot without a
+    /// `sensor` is refused for it. The default, false, suits the rest.
+    fn needs_scan(&self) -> bool {
+        false
+    }
 }

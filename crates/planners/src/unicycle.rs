@@ -22,8 +22,8 @@
 //!
 //! [`LookAhead`] wraps any planner: the planner sees the robot as the point
 //! p (its observation's position is p, its velocity p' = T (v, omega) of
-//! the current forward speed and turn rate; its disc and everything else
-//! unchanged), so the planner's closed loop runs on a point that moves as
+//! the current forward speed and turn rate, its radius r + l (below);
+//! everything else unchanged), so the planner's closed loop runs on a point that moves as
 //! asked. A velocity command u is applied to p through T^-1; a force f
 //! becomes the velocity it would give p in one tick under m r'' + b r' = f
 //! with the acceleration clamp, u = p' + dt clamp((f - b p') / m,
@@ -36,7 +36,16 @@
 //! tolerance `goal_tolerance - l`, and wherever it deems p arrived the
 //! centre is within the world's tolerance ([`LookAhead::tolerance_seen`];
 //! with l >= `goal_tolerance` nothing can guarantee this and the planner
-//! keeps the world's tolerance, so keep `lookahead` below `goal_tolerance`).
+//! keeps the world's tolerance; a scenario refuses such a `lookahead` on a unicycle).
+//!
+//! **The disc.** The planner keeps p clear of everything, but the robot's
+//! disc is centred l behind p: a disc of radius r + l about p covers the
+//! robot's disc whatever its heading, so the planner is told the radius
+//! r + l (the enlarged footprint of ORCA for differential-drive robots:
+//! J. Snape, J. van den Berg, S. J. Guy & D. Manocha, "Smooth and
+//! collision-free navigation for multiple robots under differential-drive
+//! constraints", IROS 2010) and keeping its disc clear keeps the real one
+//! clear.
 //!
 //! **3. The limits.** T^-1 is exact only while (v, omega) is within the
 //! robot's limits; the world clamps v to ±`max_speed`, omega to
@@ -112,6 +121,7 @@ impl Planner for LookAhead {
         let mut seen = *obs;
         seen.me.position += Vec2::new(c, s) * l;
         seen.me.velocity = Vec2::new(c, s) * v_c + Vec2::new(-s, c) * (l * w_c);
+        seen.me.radius += l;
         seen.goal_tolerance = Self::tolerance_seen(obs.goal_tolerance, l);
         let me = &seen.me;
         let cmd = self.inner.plan(&seen);
@@ -137,6 +147,10 @@ impl Planner for LookAhead {
 
     fn native_unicycle(&self) -> bool {
         true
+    }
+
+    fn needs_scan(&self) -> bool {
+        self.inner.needs_scan()
     }
 }
 

@@ -280,6 +280,22 @@ fn draw_map<DB: DrawingBackend>(
             .map_err(err)?;
     }
 
+    // Routes (routes.csv): thin dashed lines in the robot's colour.
+    let names = run.robot_names();
+    for (index, name) in names.iter().enumerate() {
+        if let Some(route) = run.routes.get(name) {
+            let c = rgb(robot_color(index));
+            chart
+                .draw_series(DashedLineSeries::new(
+                    route.iter().map(|p| (p[0], p[1])),
+                    5,
+                    4,
+                    c.stroke_width(1),
+                ))
+                .map_err(err)?;
+        }
+    }
+
     let width = if n_robots > 64 { 1 } else { 2 };
     let every = plot_every(run);
     for (index, body) in &robots {

@@ -178,6 +178,11 @@ fn replay_data(run: &RunData) -> Value {
                 "radius": spec.map_or(0.0, |s| s.radius),
                 "planner": spec.map(|s| s.planner.clone()),
                 "goal": spec.map(|s| [round(s.goal[0], decimals), round(s.goal[1], decimals)]),
+                "route": run.routes.get(name).map(|r| {
+                    r.iter()
+                        .map(|p| [round(p[0], decimals), round(p[1], decimals)])
+                        .collect::<Vec<_>>()
+                }),
                 "x": x,
                 "y": y,
             })

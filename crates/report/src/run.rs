@@ -189,6 +189,9 @@ pub struct RunData {
     /// `diagnostics.csv`, `None` if the file is absent or empty. Values may
     /// be `inf`, `-inf` or `NaN` (the plots leave them out).
     pub diagnostics: Option<Vec<DiagnosticSample>>,
+    /// `routes.csv`: each routed robot's route, start to goal (empty if
+    /// the file is absent).
+    pub routes: BTreeMap<String, Vec<[f64; 2]>>,
 }
 
 impl RunData {
@@ -246,6 +249,11 @@ impl RunData {
             Some(text) => Some(parse_diagnostics(&diagnostics_path, &text)?),
             None => None,
         };
+        let routes_path = dir.join(mrsim_runfolder::ROUTES_FILE);
+        let routes = match read_optional(&routes_path)? {
+            Some(text) => parse_routes(&routes_path, &text)?,
+            None => BTreeMap::new(),
+        };
         Ok(RunData {
             dir: dir.to_path_buf(),
             scenario,
@@ -253,6 +261,7 @@ impl RunData {
             events,
             metrics,
             diagnostics,
+            routes,
         })
     }
 
@@ -646,4 +655,33 @@ impl RunData {
             _ => None,
         }
     }
+}
+
+/// routes.csv (`robot,seq,x,y`): the points of each robot's route, in
+/// file order.
+fn parse_routes(path: &Path, text: &str) -> Result<BTreeMap<String, Vec<[f64; 2]>>, RenderError> {
+    let mut out: BTreeMap<String, Vec<[f64; 2]>> = BTreeMap::new();
+    for (n, line) in text.lines().enumerate().skip(1) {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let bad = |reason: &str| RenderError::Parse {
+            path: path.to_path_buf(),
+            line: n + 1,
+            reason: reason.to_string(),
+        };
+        let cols: Vec<&str> = line.rsplitn(4, ',').collect();
+        let [y, x, _seq, robot] = cols[..] else {
+            return Err(bad("expected robot,seq,x,y"));
+        };
+        let num = |v: &str| {
+            v.trim()
+                .parse::<f64>()
+                .map_err(|_| bad("x and y must be numbers"))
+        };
+        out.entry(robot.to_string())
+            .or_default()
+            .push([num(x)?, num(y)?]);
+    }
+    Ok(out)
 }

@@ -46,6 +46,9 @@ pub const SOURCE_FILE: &str = "source.json";
 pub const METRICS_FILE: &str = "metrics.json";
 /// The planners' per-tick diagnostics (only when some planner reported any).
 pub const DIAGNOSTICS_FILE: &str = "diagnostics.csv";
+/// The routes of the robots with `route = "shortest"`, as planned at the
+/// start: `robot,seq,x,y`, one row a point, start to goal.
+pub const ROUTES_FILE: &str = "routes.csv";
 /// The static plot, vector.
 pub const PLOT_SVG_FILE: &str = "plot.svg";
 /// The static plot, bitmap.

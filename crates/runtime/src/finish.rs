@@ -87,6 +87,15 @@ pub enum FinishError {
     /// metrics.json is not JSON.
     #[error("parsing metrics.json")]
     ParseMetrics(#[source] serde_json::Error),
+    /// routes.csv could not be written.
+    #[error("writing {}", path.display())]
+    Routes {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
 }
 
 /// What [`finish`] is given: how the run's parts ended.
@@ -170,9 +179,42 @@ pub fn finish(end: Ending<'_>) -> Result<Outcome, FinishError> {
             FileError::Json { source, .. } => FinishError::ParseMetrics(source),
         })?,
     );
+    write_routes(&outcome.dir)?;
     let mcap = wants_mcap(&outcome.dir);
     if end.render || mcap {
         outcome.render_error = render(&outcome.dir, end.render, mcap).err();
     }
     Ok(outcome)
+}
+
+/// Writes routes.csv: the route each robot with `route = "shortest"` was
+/// given at the start (the same computation as its agent's, from the run's
+/// scenario.json). Nothing is written when no robot has one, or when the
+/// folder holds no readable scenario.json (the world wrote none).
+fn write_routes(dir: &Path) -> Result<(), FinishError> {
+    let Ok(scenario) =
+        mrsim_runfolder::read_json::<mrsim_scenario::Scenario>(dir, mrsim_runfolder::SCENARIO_FILE)
+    else {
+        return Ok(());
+    };
+    let routed: Vec<_> = scenario
+        .robots
+        .iter()
+        .filter(|r| r.route == mrsim_scenario::Route::Shortest)
+        .collect();
+    if routed.is_empty() {
+        return Ok(());
+    }
+    let scene = mrsim_agents::route::RouteScene::of(&scenario);
+    let mut csv = String::from("robot,seq,x,y\n");
+    for r in routed {
+        // Validation refused every robot without a route.
+        if let Ok((_, path)) = scene.route(r) {
+            for (k, p) in path.points().iter().enumerate() {
+                csv.push_str(&format!("{},{k},{},{}\n", r.name, p[0], p[1]));
+            }
+        }
+    }
+    let path = dir.join(mrsim_runfolder::ROUTES_FILE);
+    std::fs::write(&path, csv).map_err(|source| FinishError::Routes { path, source })
 }

@@ -183,17 +183,21 @@ impl Sim {
         let s = &self.scenario;
         self.walls = mrsim_agents::observe::walls_of(&s.walls, s.world.arena);
         self.builtins.clear();
+        let scene = mrsim_agents::route::RouteScene::of(s);
         for (i, spec) in s.robots.iter().enumerate() {
             if self.learners.contains(&i) {
                 continue;
             }
-            let planner =
-                mrsim_agents::build_planner_in(&self.registry, spec).map_err(|source| {
-                    SimError::Planner {
-                        robot: spec.name.clone(),
-                        source,
-                    }
-                })?;
+            let fail = |source| SimError::Planner {
+                robot: spec.name.clone(),
+                source,
+            };
+            let planner = mrsim_agents::build_planner_in(&self.registry, spec).map_err(fail)?;
+            let planner = mrsim_agents::route::fit_route(planner, spec, &scene).map_err(|e| {
+                fail(mrsim_planners::BuildError::Other(format!(
+                    "route from start to goal: {e}"
+                )))
+            })?;
             self.builtins.push(Builtin {
                 index: i,
                 planner,

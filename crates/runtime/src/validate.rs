@@ -125,7 +125,20 @@ impl Validated {
             if r.planner == EXTERNAL {
                 continue;
             }
-            if let Err(e) = mrsim_agents::build_planner_in(&registry, r) {
+            let built = mrsim_agents::build_planner_in(&registry, r);
+            if let Ok(p) = &built
+                && p.needs_scan()
+                && r.sensor.is_none()
+            {
+                let key = format!("robot.{}.params.obstacles", r.name);
+                let why = format!(
+                    "planner `{}` avoids what the laser scan shows (obstacles = \"scan\"), but \
+                     the robot has no scanner: give it sensor = {{ kind = \"lidar\" }}",
+                    r.planner
+                );
+                return Err(Invalid(loaded.error_at(&key, why).to_string()));
+            }
+            if let Err(e) = built {
                 let key = match &e {
                     BuildError::Param(p) => format!("robot.{}.params.{}", r.name, p.key()),
                     BuildError::UnknownPlanner { .. } | BuildError::External => {
@@ -134,6 +147,19 @@ impl Validated {
                     BuildError::Other(_) => format!("robot.{}.params", r.name),
                 };
                 return Err(Invalid(loaded.error_at(&key, e.to_string()).to_string()));
+            }
+        }
+        let scene = mrsim_agents::route::RouteScene::of(&loaded.scenario);
+        for r in &loaded.scenario.robots {
+            if r.route == mrsim_scenario::Route::Shortest
+                && let Err(e) = scene.route(r)
+            {
+                let key = format!("robot.{}.goal", r.name);
+                let why = format!(
+                    "route = \"shortest\": the goal cannot be reached from the start [{}, {}]: {e}",
+                    r.start[0], r.start[1]
+                );
+                return Err(Invalid(loaded.error_at(&key, why).to_string()));
             }
         }
         let world = match World::new(&loaded.scenario) {

@@ -2,7 +2,7 @@
 //! keys refused. `resolve` turns it into the types of `types.rs`.
 
 use crate::types::{
-    Kinematics, LengthUnit, MissPolicy, Mode, ParamValue, TrajectoryFormat, UnknownCells,
+    Kinematics, LengthUnit, MissPolicy, Mode, ParamValue, Route, TrajectoryFormat, UnknownCells,
     VelocitySource,
 };
 use serde::Deserialize;
@@ -116,6 +116,7 @@ pub(crate) struct RawRobot {
     pub max_angular_speed: Option<S<f64>>,
     pub max_angular_accel: Option<S<f64>>,
     pub lookahead: Option<S<f64>>,
+    pub route: Option<S<Route>>,
     pub sensor: Option<S<RawSensor>>,
     pub timing: Option<S<RawTiming>>,
 }

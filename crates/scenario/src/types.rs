@@ -147,6 +147,26 @@ pub enum Kinematics {
     Unicycle,
 }
 
+/// How a robot's planner is led to its goal (the `route` robot key).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Route {
+    /// The planner is given the goal itself (default).
+    #[default]
+    Direct,
+    /// The planner is given a waypoint ahead on the shortest way its disc
+    /// fits through the walls and static obstacles (`mrsim-route`),
+    /// computed at the start and again when the robot stops making progress.
+    Shortest,
+}
+
+impl Route {
+    /// Is this the default (left out of scenario.json)?
+    pub fn is_direct(&self) -> bool {
+        *self == Route::Direct
+    }
+}
+
 /// A robot's laser scanner (`sensor = { kind = "lidar", ... }`): `beams`
 /// rays spread evenly over `fov_deg` centred on the robot's heading, each
 /// giving the distance to the first surface within `range` (ROS
@@ -218,9 +238,13 @@ pub struct RobotSpec {
     pub max_angular_accel: f64,
     /// Unicycle: distance ahead of the centre of the point a holonomic
     /// planner's velocity is applied to (the look-ahead controller,
-    /// `mrsim_planners::unicycle`), > 0.
+    /// `mrsim_planners::unicycle`), > 0 and below `goal_tolerance` (by
+    /// default [`default_lookahead_for`] the tolerance).
     #[serde(default = "default_lookahead")]
     pub lookahead: f64,
+    /// How the planner is led to the goal (default direct).
+    #[serde(default, skip_serializing_if = "Route::is_direct")]
+    pub route: Route,
     /// The robot's laser scanner, if it has one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sensor: Option<Lidar>,
@@ -238,8 +262,18 @@ pub struct RobotSpec {
 pub const DEFAULT_MAX_ANGULAR_SPEED: f64 = 2.0;
 /// Built-in `max_angular_accel`, rad/s².
 pub const DEFAULT_MAX_ANGULAR_ACCEL: f64 = 4.0;
-/// Built-in `lookahead`, scenario units.
+/// Longest built-in `lookahead`, scenario units.
 pub const DEFAULT_LOOKAHEAD: f64 = 0.2;
+
+/// The `lookahead` of a unicycle robot that sets none:
+/// [`DEFAULT_LOOKAHEAD`], or half of `goal_tolerance` when that is shorter.
+/// The look-ahead point, not the centre, is brought to the goal, and the
+/// planner is told `goal_tolerance - lookahead` so that the centre ends
+/// within `goal_tolerance`: a look-ahead as long as the tolerance leaves
+/// nothing, and half of it leaves the planner half.
+pub fn default_lookahead_for(goal_tolerance: f64) -> f64 {
+    DEFAULT_LOOKAHEAD.min(goal_tolerance / 2.0)
+}
 
 fn default_angular_speed() -> f64 {
     DEFAULT_MAX_ANGULAR_SPEED

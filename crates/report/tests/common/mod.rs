@@ -73,6 +73,7 @@ fn robot(name: &str, start: [f64; 2], goal: [f64; 2]) -> RobotSpec {
         max_angular_speed: mrsim_scenario::DEFAULT_MAX_ANGULAR_SPEED,
         max_angular_accel: mrsim_scenario::DEFAULT_MAX_ANGULAR_ACCEL,
         lookahead: mrsim_scenario::DEFAULT_LOOKAHEAD,
+        route: Default::default(),
         sensor: None,
         timing: None,
         replay: None,
@@ -339,6 +340,7 @@ pub fn big_run(dir: &Path, n: usize, ticks: u64) -> mrsim_report::RunData {
         events: vec![],
         metrics: None,
         diagnostics: None,
+        routes: Default::default(),
     }
 }
 

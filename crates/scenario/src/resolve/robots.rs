@@ -257,23 +257,49 @@ pub(super) fn resolve_robot(
             Rule::Pos,
             DEFAULT_MAX_ANGULAR_ACCEL,
         )?,
-        lookahead: pick_num(
-            layers,
-            |r| &r.lookahead,
-            "lookahead",
-            Rule::Pos,
-            DEFAULT_LOOKAHEAD,
-        )?,
+        lookahead: 0.0,
+        route: pick(layers, |r| &r.route).map_or(Route::Direct, |(v, _)| *v.get_ref()),
         sensor,
         timing,
         replay: None,
     };
+    let mut spec = spec;
+    spec.lookahead = lookahead(layers, &spec)?;
     let spans = RobotSpans {
         table,
         start: start_span,
         goal: goal_span,
     };
     Ok((spec, spans, placed))
+}
+
+/// The robot's `lookahead`: as given, which on a unicycle must be below
+/// `goal_tolerance` (the look-ahead point is what the planner brings to the
+/// goal, and the planner is told `goal_tolerance - lookahead`), or
+/// [`default_lookahead_for`] the tolerance.
+fn lookahead(layers: &[Layer], spec: &RobotSpec) -> Result<f64, Fail> {
+    let given = pick_num(layers, |r| &r.lookahead, "lookahead", Rule::Pos, f64::NAN)?;
+    if given.is_nan() {
+        return Ok(default_lookahead_for(spec.goal_tolerance));
+    }
+    if spec.kinematics == Kinematics::Unicycle
+        && given >= spec.goal_tolerance
+        && let Some((v, what)) = pick(layers, |r| &r.lookahead)
+    {
+        return Err(Fail::new(
+            Some(v.span()),
+            what,
+            format!(
+                "lookahead {given} must be below goal_tolerance {}: a planner on a unicycle \
+                 brings the point `lookahead` ahead of the centre to the goal and is told \
+                 goal_tolerance - lookahead, so that the centre ends within goal_tolerance; \
+                 with nothing left the robot cannot be sure to arrive (leave lookahead out \
+                 for half the tolerance, at most {DEFAULT_LOOKAHEAD})",
+                spec.goal_tolerance
+            ),
+        ));
+    }
+    Ok(given)
 }
 
 /// A `sensor` table: only `kind = "lidar"` is known; each key is checked

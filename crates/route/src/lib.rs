@@ -1,0 +1,87 @@
+//! Routes for robots' discs through walls and static obstacles.
+//!
+//! A [`Clearance`] grid holds, at the centre of each cell, the distance to
+//! the nearest wall segment or static disc; a robot of radius r can stand
+//! where that distance is at least r. [`Clearance::route`] searches the grid
+//! for the shortest way from a start to a goal that the disc fits along,
+//! preferring to keep a margin more than the radius where the map leaves
+//! room, and pulls the grid path taut into straight legs. A [`Path`] is the
+//! result, and [`Follower`] leads a robot along it: a waypoint a fixed
+//! distance ahead of its progress, and a sign when it stops progressing.
+//!
+//! **Why a grid.** The scenes this serves are mostly traced occupancy maps
+//! (thousands of short outline segments from a SLAM map's cells), where a
+//! visibility graph grows with the square of the segments' corners and
+//! needs the obstacles grown by the radius exactly; the grid's cost is its
+//! cell count whatever the walls, its clearance is computed once for every
+//! radius, and it can tell a robot *why* no way exists (the widest way's
+//! narrowest gap). A* on the 8-connected grid is followed by string pulling
+//! (each leg straightened while the straight line keeps as much clearance
+//! as the grid path it replaces), which gives the any-angle paths of
+//! Theta* (A. Nash, K. Daniel, S. Koenig & A. Felner, "Theta*: Any-Angle
+//! Path Planning on Grids", AAAI 2007) by a second pass instead of during
+//! the search.
+//!
+//! **The clearance.** Every segment is sampled at half a cell's spacing and
+//! every disc's rim likewise; each sample seeds the cell it falls in, and
+//! two sweeps of the grid hand each cell its neighbours' nearest sample
+//! when that is nearer (the vector propagation of P.-E. Danielsson,
+//! "Euclidean distance mapping", CGIP 14, 1980, with 8 neighbours). The
+//! distance from a cell's centre to its sample is the clearance, exact to
+//! about a tenth of a cell. A cell outside the grid is a wall.
+//!
+//! **The margin.** A route keeps the robot's centre at least `radius +
+//! margin` from walls wherever it can: cells with less clearance cost
+//! more to cross (up to [`NARROW_COST`] times their length at the bare
+//! radius), so a way through a door the disc fits only tightly is taken
+//! only when no roomier way is much longer, and cells with less than the
+//! radius are not crossed at all (but near the start and the goal, which
+//! the scenario has already checked).
+
+#![warn(missing_docs)]
+
+mod follow;
+mod grid;
+mod search;
+
+pub use follow::{Follower, Path};
+pub use grid::{Clearance, Scene};
+
+/// A point, in the scenario's units.
+pub type P = [f64; 2];
+
+/// How much more a step costs where the clearance is the bare radius than
+/// where it is `radius + margin` or more (linear in between).
+pub const NARROW_COST: f64 = 4.0;
+
+/// Why no route was found.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RouteError {
+    /// The start or the goal lies outside the grid (the scene's extent).
+    #[error("{which} [{}, {}] is outside the area the walls span", at[0], at[1])]
+    Outside {
+        /// `start` or `goal`.
+        which: &'static str,
+        /// The point.
+        at: P,
+    },
+    /// Every way from the start to the goal has a gap narrower than the
+    /// robot's disc; `widest` is the clearance at the narrowest point of
+    /// the widest way (the largest radius that could pass).
+    #[error(
+        "no way from the start to the goal is wide enough for a disc of radius {radius}: \
+         the widest way narrows to a clearance of {widest:.3} (a disc of at most that radius \
+         passes)"
+    )]
+    TooNarrow {
+        /// The robot's radius.
+        radius: f64,
+        /// Clearance at the narrowest point of the widest way.
+        widest: f64,
+    },
+}
+
+/// Euclidean distance.
+pub(crate) fn dist(a: P, b: P) -> f64 {
+    (a[0] - b[0]).hypot(a[1] - b[1])
+}
