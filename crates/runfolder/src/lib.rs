@@ -37,6 +37,9 @@ pub const TRAJECTORY_FILE: &str = "trajectory.csv";
 pub const TRAJECTORY_PARQUET_FILE: &str = "trajectory.parquet";
 /// One JSON object per line: joins, losses, contacts, goals, rejections.
 pub const EVENTS_FILE: &str = "events.jsonl";
+/// Every time two bodies came within `[output] encounter_gap` of each
+/// other: one row each ([`metrics::ENCOUNTERS_HEADER`]).
+pub const ENCOUNTERS_FILE: &str = "encounters.csv";
 /// The run's metrics ([`metrics::RunMetrics`]).
 pub const METRICS_FILE: &str = "metrics.json";
 /// The planners' per-tick diagnostics (only when some planner reported any).

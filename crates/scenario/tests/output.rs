@@ -88,6 +88,7 @@ fn every_kth_tick_is_recorded() {
     let o = OutputConfig {
         trajectory: TrajectoryFormat::Csv,
         every: 3,
+        ..OutputConfig::default()
     };
     let recorded: Vec<u64> = (0..10).filter(|&t| o.records(t)).collect();
     assert_eq!(recorded, [0, 3, 6, 9]);

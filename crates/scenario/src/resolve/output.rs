@@ -1,8 +1,10 @@
-//! The `[output]` table: the trajectory's format and how often it records.
+//! The `[output]` table: the trajectory's format, how often it records,
+//! and the gap at which two bodies meet (encounters.csv).
 
+use super::checks::{Rule, opt};
 use crate::error::Fail;
 use crate::raw::{RawOutput, S};
-use crate::types::{OutputConfig, TrajectoryFormat};
+use crate::types::{DEFAULT_ENCOUNTER_GAP, OutputConfig, TrajectoryFormat};
 
 /// Checks `[output]`: `every` is a whole number of ticks, at least 1.
 pub(super) fn resolve_output(o: Option<&S<RawOutput>>) -> Result<OutputConfig, Fail> {
@@ -23,11 +25,19 @@ pub(super) fn resolve_output(o: Option<&S<RawOutput>>) -> Result<OutputConfig, F
         }
         None => 1,
     };
+    let encounter_gap = opt(
+        &raw.encounter_gap,
+        "encounter_gap",
+        Rule::Pos,
+        "output",
+        DEFAULT_ENCOUNTER_GAP,
+    )?;
     Ok(OutputConfig {
         trajectory: raw
             .trajectory
             .as_ref()
             .map_or(TrajectoryFormat::Csv, |t| *t.get_ref()),
         every,
+        encounter_gap,
     })
 }
