@@ -106,8 +106,9 @@ pub struct RobotMetrics {
     /// Sum of the changes of the direction of motion, rad.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub heading_change: Option<f64>,
-    /// Seconds it was stuck (no progress towards its goal for
-    /// `[world] stuck_after`), counted from each time it was declared so.
+    /// Seconds it was stuck (its distance to its goal fell by less than 5 %
+    /// of `max_speed` x `[world] stuck_after` in `stuck_after` seconds),
+    /// counted from each time it was declared so.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stuck_time: Option<f64>,
 }

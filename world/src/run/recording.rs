@@ -78,9 +78,12 @@ pub struct Recording {
     pub ended_stuck: bool,
 }
 
-/// A robot makes progress when its distance to its goal falls this far
-/// (scenario length units) below its distance at its last progress.
-pub const PROGRESS: f64 = 0.1;
+/// A robot makes progress when its distance to its goal falls below its
+/// distance at its last progress by this fraction of the way its
+/// `max_speed` covers in `[world] stuck_after`: slower than 5 % of its top
+/// speed on average towards its goal, it is stuck (the speed below which
+/// it counts as not moving, `crate::interaction::NOT_MOVING`).
+pub const PROGRESS: f64 = crate::interaction::NOT_MOVING;
 
 impl Recording {
     /// Recording for `robots` robots among the bodies called `names`.
@@ -269,9 +272,9 @@ impl Recording {
     }
 
     /// The stuck test after a step, for robots at `positions`: a robot not
-    /// at its goal whose distance to its goal has not fallen [`PROGRESS`]
-    /// below its distance at its last progress for `[world] stuck_after`
-    /// seconds is stuck (event `stuck`) until it makes progress again
+    /// at its goal whose distance to its goal has not fallen [`PROGRESS`] x
+    /// `max_speed` x `stuck_after` below its distance at its last progress
+    /// for `[world] stuck_after` seconds is stuck (event `stuck`) until it makes progress again
     /// (event `unstuck`). Robots stuck within each other's sensing range
     /// (surface gap at most the smaller range), linked in a chain, are a
     /// deadlock (event `deadlock` naming them) when one of them has just
@@ -290,7 +293,8 @@ impl Recording {
             }
             let Some(p) = positions.get(i) else { continue };
             let d = (spec.goal[0] - p[0]).hypot(spec.goal[1] - p[1]);
-            if d <= spec.goal_tolerance || d < acc.progress_distance - PROGRESS {
+            let progress = PROGRESS * spec.max_speed * after;
+            if d <= spec.goal_tolerance || d < acc.progress_distance - progress {
                 acc.progress_distance = d;
                 acc.progress_time = at.time;
                 if let Some(since) = acc.stuck_since.take() {
