@@ -272,7 +272,8 @@ impl Interaction {
                 }
                 let q = &states[j];
                 let g = gap(s, q);
-                if !(g < reach) {
+                // Farther than the social distance, or not a number.
+                if g.partial_cmp(&reach) != Some(std::cmp::Ordering::Less) {
                     continue;
                 }
                 smallest = smallest.min(g);

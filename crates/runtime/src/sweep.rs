@@ -197,8 +197,14 @@ pub struct RunMetrics {
     pub robot_means: [Option<f64>; ROBOT_MEANS.len()],
 }
 
+/// How a per-robot metric is read from a robot's entry of metrics.json.
+pub type RobotColumn = (
+    &'static str,
+    fn(&mrsim_runfolder::RobotMetrics) -> Option<f64>,
+);
+
 /// The per-robot metrics sweep.csv reports as a mean over the run's robots.
-pub const ROBOT_MEANS: [(&str, fn(&mrsim_runfolder::RobotMetrics) -> Option<f64>); 9] = [
+pub const ROBOT_MEANS: [RobotColumn; 9] = [
     ("time_not_moving", |r| r.time_not_moving),
     ("ttc_min", |r| r.ttc_min.flatten()),
     ("time_intimate", |r| r.time_intimate),
