@@ -98,6 +98,13 @@ pub fn main(args: &SweepArgs) -> Result<i32> {
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
+    if mrsim_runtime::sweep::seeds_change_nothing(jobs, &results) {
+        eprintln!(
+            "warning: {}: every seed gave the same run: seeds change nothing here; \
+             add `jitter` or noise",
+            args.scenario.display()
+        );
+    }
 
     // sweep.csv
     let mut csv = String::new();

@@ -78,7 +78,53 @@ pub fn summary(m: &RunMetrics) -> String {
         m.agents_lost,
         m.commands_rejected,
     );
+    for line in what_happened(m) {
+        let _ = writeln!(out, "{line}");
+    }
     out
+}
+
+/// Lines naming what a run shows beyond its numbers: its deadlocks, an
+/// early end with everyone stuck, and the collisions of planners that do
+/// not avoid, so that a scene made to show a failure is not read as a bug.
+fn what_happened(m: &RunMetrics) -> Vec<String> {
+    let mut lines = Vec::new();
+    for d in &m.deadlocks {
+        lines.push(format!(
+            "deadlock at t = {:.1} s: {} stuck within each other's sensing range",
+            d.time,
+            d.robots.join(", ")
+        ));
+    }
+    let stuck: Vec<&str> = m
+        .robots
+        .iter()
+        .filter(|(_, r)| !r.reached_goal && r.stuck_time.is_some_and(|t| t > 0.0))
+        .map(|(n, _)| n.as_str())
+        .collect();
+    if !stuck.is_empty() && m.deadlocks.is_empty() {
+        lines.push(format!(
+            "stuck (no progress towards the goal): {}",
+            stuck.join(", ")
+        ));
+    }
+    if m.ended_stuck {
+        lines.push("ended early: every robot not at its goal was stuck".into());
+    }
+    let blind: Vec<&str> = m
+        .robots
+        .iter()
+        .filter(|(_, r)| r.planner == "homing" && r.collisions > 0)
+        .map(|(n, _)| n.as_str())
+        .collect();
+    if !blind.is_empty() {
+        lines.push(format!(
+            "homing steers straight at the goal and avoids nothing: the collisions of {} are \
+             what it does",
+            blind.join(", ")
+        ));
+    }
+    lines
 }
 
 #[cfg(test)]
@@ -97,8 +143,28 @@ mod tests {
         let m: RunMetrics = serde_json::from_value(m).expect("metrics.json's schema");
         let t = summary(&m);
         assert_eq!(t.lines().count(), 4, "{t}");
+        assert!(!t.contains("deadlock"), "{t}");
         assert!(
             t.contains("homing") && t.contains("NO") && t.contains("success 50%"),
+            "{t}"
+        );
+    }
+
+    #[test]
+    fn a_deadlock_and_a_blind_planner_s_collisions_are_named() {
+        let m = serde_json::json!({
+            "robots": {"l0": {"planner": "homing", "reached_goal": false, "collisions": 2,
+                              "stuck_time": 30.0},
+                       "r0": {"planner": "homing", "reached_goal": false, "collisions": 2,
+                              "stuck_time": 30.0}},
+            "deadlocks": [{"tick": 80, "time": 8.0, "robots": ["l0", "r0"]}],
+            "ended_stuck": true});
+        let m: RunMetrics = serde_json::from_value(m).expect("metrics.json's schema");
+        let t = summary(&m);
+        assert!(t.contains("deadlock at t = 8.0 s: l0, r0"), "{t}");
+        assert!(t.contains("ended early"), "{t}");
+        assert!(
+            t.contains("avoids nothing: the collisions of l0, r0"),
             "{t}"
         );
     }

@@ -23,7 +23,8 @@
 //! - Off the tick loop, on their own threads: [`record`] (trajectory.csv,
 //!   events.jsonl, fed in [`batch`]es), [`tracking`] (the motion metrics
 //!   from the recorded states, with [`clearance`] on the grids of
-//!   `mrsim-spatial` and [`path_metrics`]), [`timings`] (the commands'
+//!   `mrsim-spatial` and [`path_metrics`], and [`interaction`]: proxemics,
+//!   time to collision, encounters), [`timings`] (the commands'
 //!   [`histogram`]s), and [`live`] statistics for observers.
 //! - [`metrics`]: what the loop accumulates per robot; the schema of
 //!   metrics.json is `mrsim-runfolder`'s, which every reader shares.
@@ -32,6 +33,7 @@
 pub mod batch;
 pub mod clearance;
 pub mod histogram;
+pub mod interaction;
 pub mod live;
 pub mod metrics;
 pub mod motion;

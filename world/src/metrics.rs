@@ -5,7 +5,7 @@
 
 pub use crate::histogram::DurationHistogram;
 pub use mrsim_runfolder::metrics::{
-    PathDeviation, Percentiles, RobotMetrics, RunMetrics, TimingMetrics,
+    Deadlock, PathDeviation, Percentiles, RobotMetrics, RunMetrics, TimingMetrics,
 };
 
 /// Everything measured about one robot.
@@ -35,4 +35,13 @@ pub struct RobotAccumulator {
     pub rejected: u64,
     /// Commands that came after their tick's deadline.
     pub late: u64,
+    /// Distance to its goal at its last progress (infinity before the
+    /// first tick).
+    pub progress_distance: f64,
+    /// Time of its last progress, s.
+    pub progress_time: f64,
+    /// Time it was declared stuck, while it is.
+    pub stuck_since: Option<f64>,
+    /// Seconds stuck, the current spell excluded.
+    pub stuck_time: f64,
 }

@@ -10,11 +10,14 @@
 //! of the thread each tick. Batch buffers are returned to the loop for reuse.
 //!
 //! The trajectory is trajectory.csv, trajectory.parquet or nothing, of
-//! every tick or every K-th (`[output]`); the same thread
+//! every tick or every K-th (`[output]`); encounters.csv gets each
+//! encounter once it has ended (and those still going on at the end); the
+//! same thread
 //! computes the robots' motion metrics from every tick's states whatever
 //! it writes ([`crate::tracking`]) and hands them back at the end.
 
 use crate::batch::{Batch, Batcher};
+use crate::interaction::encounter_rows;
 use crate::tracking::Tracker;
 use crossbeam::channel::{RecvTimeoutError, bounded, unbounded};
 use mrsim_proto::{BodyState, body_kind};
@@ -242,6 +245,13 @@ impl Recorder {
         let Extras { theta, mut scans } = extras;
         let mut sink = Sink::create(dir, output, theta)?;
         let mut events = BufWriter::new(File::create(dir.join(mrsim_runfolder::EVENTS_FILE))?);
+        let mut encounters =
+            BufWriter::new(File::create(dir.join(mrsim_runfolder::ENCOUNTERS_FILE))?);
+        writeln!(
+            encounters,
+            "{}",
+            mrsim_runfolder::metrics::ENCOUNTERS_HEADER
+        )?;
         let (tx, rx) = bounded::<Msg>(256);
         let (back_tx, recycled) = unbounded();
         let thread = std::thread::Builder::new()
@@ -266,7 +276,7 @@ impl Recorder {
                             for &(tick, time, count) in &batch.ticks {
                                 let bodies = &batch.bodies[from..from + count];
                                 from += count;
-                                tracker.track(bodies);
+                                tracker.track(tick, time, bodies);
                                 if output.records(tick) {
                                     skipped = None;
                                     sink.write_tick(
@@ -286,6 +296,8 @@ impl Recorder {
                                 }
                             }
                             let _ = back_tx.send(batch);
+                            let ended = tracker.interaction_mut().take_closed(&names);
+                            encounters.write_all(encounter_rows(&ended).as_bytes())?;
                         }
                         Ok(Msg::Event(mut line)) => {
                             line.push('\n');
@@ -300,6 +312,7 @@ impl Recorder {
                             s.flush()?;
                         }
                         events.flush()?;
+                        encounters.flush()?;
                         last_flush = Instant::now();
                     }
                 }
@@ -308,6 +321,10 @@ impl Recorder {
                 }
                 sink.finish()?;
                 events.flush()?;
+                tracker.interaction_mut().close_all();
+                let ended = tracker.interaction_mut().take_closed(&names);
+                encounters.write_all(encounter_rows(&ended).as_bytes())?;
+                encounters.flush()?;
                 if let Some(s) = &mut scans {
                     s.flush()?;
                 }

@@ -14,6 +14,7 @@
 //! as they happen) and deadline misses.
 
 use crate::clearance::{ClearanceGrid, clearly_beyond, segment_distance, segment_distance_sq};
+use crate::interaction::Interaction;
 use crate::path_metrics::PathAccumulator;
 use mrsim_proto::BodyState;
 use mrsim_scenario::Scenario;
@@ -41,6 +42,7 @@ pub struct Tracker {
     prev: Option<Vec<[f64; 2]>>,
     grid: ClearanceGrid,
     clearance: Vec<f64>,
+    interaction: Interaction,
 }
 
 impl Tracker {
@@ -62,12 +64,15 @@ impl Tracker {
             prev: None,
             grid: ClearanceGrid::default(),
             clearance: Vec::new(),
+            interaction: Interaction::new(scenario),
         }
     }
 
-    /// Takes in the next tick's states. The first tick's only says where
-    /// the robots start: the metrics count from the first step on.
-    pub fn track(&mut self, states: &[BodyState]) {
+    /// Takes in the next tick's states (tick `tick`, simulated time
+    /// `time`). The first tick's only says where the robots start: the
+    /// metrics count from the first step on.
+    pub fn track(&mut self, tick: u64, time: f64, states: &[BodyState]) {
+        self.interaction.track(tick, time, states);
         let n = self.robots.len().min(states.len());
         let Some(prev) = &mut self.prev else {
             self.prev = Some(states[..n].iter().map(|s| s.position).collect());
@@ -108,6 +113,16 @@ impl Tracker {
     /// Every robot's metrics, in scenario order.
     pub fn robots(&self) -> &[RobotMotion] {
         &self.robots
+    }
+
+    /// The interaction metrics and encounters.
+    pub fn interaction(&self) -> &Interaction {
+        &self.interaction
+    }
+
+    /// The interaction metrics and encounters, to take the encounters from.
+    pub fn interaction_mut(&mut self) -> &mut Interaction {
+        &mut self.interaction
     }
 }
 
@@ -150,12 +165,12 @@ mod tests {
     #[test]
     fn the_first_tick_sets_the_start_and_later_ones_add_up() {
         let mut t = Tracker::new(&two_robots(), &[]);
-        t.track(&[disc(1.0, 5.0, 0.0), disc(4.0, 5.0, 0.0)]);
+        t.track(0, 0.0, &[disc(1.0, 5.0, 0.0), disc(4.0, 5.0, 0.0)]);
         // Before any step: nothing travelled, nothing measured.
         assert_eq!(t.robots()[0].path_length, 0.0);
         assert!(t.robots()[0].min_clearance.is_infinite());
-        t.track(&[disc(2.0, 5.0, 1.0), disc(4.0, 5.0, 0.0)]);
-        t.track(&[disc(2.5, 5.0, 3.0), disc(4.0, 5.0, 0.0)]);
+        t.track(0, 0.0, &[disc(2.0, 5.0, 1.0), disc(4.0, 5.0, 0.0)]);
+        t.track(0, 0.0, &[disc(2.5, 5.0, 3.0), disc(4.0, 5.0, 0.0)]);
         let a = &t.robots()[0];
         assert!((a.path_length - 1.5).abs() < 1e-12);
         assert_eq!(a.max_speed, 3.0);
@@ -167,8 +182,8 @@ mod tests {
     #[test]
     fn a_wall_nearer_than_any_body_sets_the_clearance() {
         let mut t = Tracker::new(&two_robots(), &[[[0.0, 5.7], [10.0, 5.7]]]);
-        t.track(&[disc(1.0, 5.0, 0.0), disc(4.0, 5.0, 0.0)]);
-        t.track(&[disc(1.0, 5.0, 0.0), disc(4.0, 5.0, 0.0)]);
+        t.track(0, 0.0, &[disc(1.0, 5.0, 0.0), disc(4.0, 5.0, 0.0)]);
+        t.track(0, 0.0, &[disc(1.0, 5.0, 0.0), disc(4.0, 5.0, 0.0)]);
         for r in t.robots() {
             assert!((r.min_clearance - 0.2).abs() < 1e-12, "{}", r.min_clearance);
         }

@@ -42,6 +42,9 @@ pub const EVENTS_FILE: &str = "events.jsonl";
 /// How the run's scenario was given ([`SourceDoc`]): what `mrsim rerun`
 /// loads it from again.
 pub const SOURCE_FILE: &str = "source.json";
+/// Every time two bodies came within `[output] encounter_gap` of each
+/// other: one row each ([`metrics::ENCOUNTERS_HEADER`]).
+pub const ENCOUNTERS_FILE: &str = "encounters.csv";
 /// The run's metrics ([`metrics::RunMetrics`]).
 pub const METRICS_FILE: &str = "metrics.json";
 /// The planners' per-tick diagnostics (only when some planner reported any).

@@ -73,6 +73,118 @@ pub struct RobotMetrics {
     /// Ticks with the centre farther than `boundary` from the path (null
     /// without a path or a boundary).
     pub boundary_violations: Option<u64>,
+    /// Success weighted by path length (Anderson et al. 2018): S l /
+    /// max(p, l), S 1 if it reached its goal, l the straight start-goal
+    /// distance, p the path length. Absent in older files.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub spl: Option<f64>,
+    /// Seconds before arrival (or the end) at ticks where its speed was
+    /// below 5 % of its `max_speed`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_not_moving: Option<f64>,
+    /// Smallest time to collision with a body whose surface was within the
+    /// social distance, both at their velocities of the tick, s (0 when
+    /// overlapping); null if never finite.
+    #[serde(skip_serializing_if = "Option::is_none", with = "present")]
+    pub ttc_min: Option<Option<f64>>,
+    /// Seconds with the smallest surface gap to another body below 0.45 m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_intimate: Option<f64>,
+    /// ... below 1.2 m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_personal: Option<f64>,
+    /// ... below 3.6 m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_social: Option<f64>,
+    /// Mean of |a_k - a_(k-1)| / dt over ticks, a_k = (v_k - v_(k-1)) / dt.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub jerk_mean: Option<f64>,
+    /// Mean angle between the direction of motion and the straight line to
+    /// the goal over the ticks it moved, rad (SocNavBench).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub path_irregularity: Option<f64>,
+    /// Sum of the changes of the direction of motion, rad.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub heading_change: Option<f64>,
+    /// Seconds it was stuck (its distance to its goal fell by less than 5 %
+    /// of `max_speed` x `[world] stuck_after` in `stuck_after` seconds),
+    /// counted from each time it was declared so.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stuck_time: Option<f64>,
+}
+
+/// A key that may be absent (an older file: `None`) or present and null
+/// (`Some(None)`): serde reads a present null as absent unless told.
+mod present {
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    pub fn serialize<S: Serializer>(v: &Option<Option<f64>>, s: S) -> Result<S::Ok, S::Error> {
+        v.flatten().serialize(s)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Option<f64>>, D::Error> {
+        Option::<f64>::deserialize(d).map(Some)
+    }
+}
+
+/// A group of stuck robots within each other's sensing range.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Deadlock {
+    /// Tick it was detected at.
+    pub tick: u64,
+    /// Simulated time it was detected at, s.
+    pub time: f64,
+    /// Its members, by name.
+    pub robots: Vec<String>,
+}
+
+/// encounters.csv's header.
+pub const ENCOUNTERS_HEADER: &str = "a,b,start_tick,end_tick,min_gap,min_ttc,kind,gave_way";
+
+/// One row of encounters.csv: two bodies within `[output] encounter_gap`
+/// of each other from `start_tick` to `end_tick`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Encounter {
+    /// The body of lower index (a robot), by name.
+    pub a: String,
+    /// The other body, by name.
+    pub b: String,
+    /// First tick within the gap.
+    pub start_tick: u64,
+    /// Last tick within the gap.
+    pub end_tick: u64,
+    /// Smallest surface gap (negative: overlap).
+    pub min_gap: f64,
+    /// Smallest time to collision, s; empty if never finite.
+    pub min_ttc: Option<f64>,
+    /// `head-on`, `crossing`, `overtaking` or `standing`.
+    pub kind: String,
+    /// `a`, `b`, `both` or `none`.
+    pub gave_way: String,
+}
+
+/// Reads encounters.csv's rows (as [`Encounter`]s) from `text`.
+pub fn parse_encounters(text: &str) -> Vec<Encounter> {
+    text.lines()
+        .skip(1)
+        .filter_map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            let [a, b, s, e, g, t, k, w] = c.as_slice() else {
+                return None;
+            };
+            Some(Encounter {
+                a: (*a).to_string(),
+                b: (*b).to_string(),
+                start_tick: s.parse().ok()?,
+                end_tick: e.parse().ok()?,
+                min_gap: g.parse().ok()?,
+                min_ttc: t.parse().ok(),
+                kind: (*k).to_string(),
+                gave_way: (*w).to_string(),
+            })
+        })
+        .collect()
 }
 
 /// `metrics.json`.
@@ -125,6 +237,27 @@ pub struct RunMetrics {
     pub interrupted: bool,
     /// How the run kept time and what the world process used.
     pub timing: TimingMetrics,
+    /// Mean of the robots' `spl` (absent in older files).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub spl: Option<f64>,
+    /// Time the last robot arrived, s; null unless every robot arrived.
+    #[serde(skip_serializing_if = "Option::is_none", with = "present")]
+    pub makespan: Option<Option<f64>>,
+    /// Sum of the robots' times to goal, s; null unless every robot
+    /// arrived.
+    #[serde(skip_serializing_if = "Option::is_none", with = "present")]
+    pub flowtime: Option<Option<f64>>,
+    /// Contacts per thousand length units travelled by all robots; null
+    /// when nothing moved.
+    #[serde(skip_serializing_if = "Option::is_none", with = "present")]
+    pub collisions_per_robot_km: Option<Option<f64>>,
+    /// The deadlocks detected, in order.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub deadlocks: Vec<Deadlock>,
+    /// True if the run ended early because every robot not at its goal was
+    /// stuck (`[world] end_when_stuck`).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub ended_stuck: bool,
 }
 
 /// `metrics.json`'s `timing`: the run as a real-time system.

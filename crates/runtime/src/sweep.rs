@@ -223,13 +223,43 @@ pub struct RunMetrics {
     pub agents_lost: f64,
     /// Ticks run.
     pub ticks: f64,
+    /// The run's `spl` (mean over robots).
+    pub spl: Option<f64>,
+    /// Sum of the robots' times to goal, if every robot arrived.
+    pub flowtime: Option<f64>,
+    /// Contacts per robot-kilometre.
+    pub collisions_per_robot_km: Option<f64>,
+    /// Deadlocks detected.
+    pub deadlocks: f64,
+    /// Means over robots of the interaction metrics, in the order of
+    /// [`ROBOT_MEANS`].
+    pub robot_means: [Option<f64>; ROBOT_MEANS.len()],
 }
+
+/// How a per-robot metric is read from a robot's entry of metrics.json.
+pub type RobotColumn = (
+    &'static str,
+    fn(&mrsim_runfolder::RobotMetrics) -> Option<f64>,
+);
+
+/// The per-robot metrics sweep.csv reports as a mean over the run's robots.
+pub const ROBOT_MEANS: [RobotColumn; 9] = [
+    ("time_not_moving", |r| r.time_not_moving),
+    ("ttc_min", |r| r.ttc_min.flatten()),
+    ("time_intimate", |r| r.time_intimate),
+    ("time_personal", |r| r.time_personal),
+    ("time_social", |r| r.time_social),
+    ("jerk_mean", |r| r.jerk_mean),
+    ("path_irregularity", |r| r.path_irregularity),
+    ("heading_change", |r| r.heading_change),
+    ("stuck_time", |r| r.stuck_time),
+];
 
 /// How a metric column is read from a run's metrics.
 pub type Column = (&'static str, fn(&RunMetrics) -> Option<f64>);
 
 /// The metric columns of sweep.csv, in order, with how to get each.
-pub const METRICS: [Column; 9] = [
+pub const METRICS: [Column; 22] = [
     ("success_rate", |m| Some(m.success_rate)),
     ("collisions_total", |m| Some(m.collisions_total)),
     // 1 if the run had any collision: its mean is the collision rate.
@@ -242,6 +272,19 @@ pub const METRICS: [Column; 9] = [
     ("time_to_goal", |m| m.time_to_goal),
     ("agents_lost", |m| Some(m.agents_lost)),
     ("ticks", |m| Some(m.ticks)),
+    ("spl", |m| m.spl),
+    ("flowtime", |m| m.flowtime),
+    ("collisions_per_robot_km", |m| m.collisions_per_robot_km),
+    ("deadlocks", |m| Some(m.deadlocks)),
+    ("time_not_moving", |m| m.robot_means[0]),
+    ("ttc_min", |m| m.robot_means[1]),
+    ("time_intimate", |m| m.robot_means[2]),
+    ("time_personal", |m| m.robot_means[3]),
+    ("time_social", |m| m.robot_means[4]),
+    ("jerk_mean", |m| m.robot_means[5]),
+    ("path_irregularity", |m| m.robot_means[6]),
+    ("heading_change", |m| m.robot_means[7]),
+    ("stuck_time", |m| m.robot_means[8]),
 ];
 
 /// A run folder's file that could not be read, in words.
@@ -288,7 +331,16 @@ fn read_run(dir: &Path) -> Result<RunMetrics, String> {
     } else {
         ticks * sc.world.dt
     };
+    let robot_means = ROBOT_MEANS.map(|(_, get)| {
+        let xs: Vec<f64> = m.robots.values().filter_map(get).collect();
+        mean(&xs)
+    });
     Ok(RunMetrics {
+        spl: m.spl,
+        flowtime: m.flowtime.flatten(),
+        collisions_per_robot_km: m.collisions_per_robot_km.flatten(),
+        deadlocks: m.deadlocks.len() as f64,
+        robot_means,
         success_rate: m.success_rate,
         collisions_total: m.collisions_total as f64,
         makespan,
@@ -298,6 +350,25 @@ fn read_run(dir: &Path) -> Result<RunMetrics, String> {
         agents_lost: m.agents_lost as f64,
         ticks,
     })
+}
+
+/// True when a sweep ran more than one seed and every combination's seeds
+/// gave the same metrics: the scene has nothing random (no `jitter`, no
+/// noise, no random obstacles), so its intervals say nothing.
+pub fn seeds_change_nothing(jobs: &[Job], results: &[JobResult]) -> bool {
+    let mut first: std::collections::BTreeMap<usize, &RunMetrics> = Default::default();
+    let mut repeated = false;
+    for (job, r) in jobs.iter().zip(results) {
+        let Ok(m) = r else { continue };
+        match first.get(&job.combo) {
+            None => {
+                first.insert(job.combo, m);
+            }
+            Some(f) if *f == m => repeated = true,
+            Some(_) => return false,
+        }
+    }
+    repeated
 }
 
 /// The 0.975 quantile of Student's t with `df` degrees of freedom (exact
@@ -859,6 +930,28 @@ mod tests {
             Some("deg")
         );
         assert_eq!(key_unit("generate.count", "m"), None);
+    }
+
+    #[test]
+    fn seeds_that_give_the_same_runs_are_told_from_seeds_that_do_not() {
+        let job = |combo, seed| Job {
+            combo,
+            seed,
+            folder: String::new(),
+        };
+        let jobs = [job(0, 1), job(0, 2), job(1, 1), job(1, 2)];
+        let run = |s: f64| -> JobResult {
+            Ok(RunMetrics {
+                success_rate: s,
+                ..Default::default()
+            })
+        };
+        let same = [run(1.0), run(1.0), run(0.5), run(0.5)];
+        assert!(seeds_change_nothing(&jobs, &same));
+        let differ = [run(1.0), run(1.0), run(0.5), run(0.25)];
+        assert!(!seeds_change_nothing(&jobs, &differ));
+        // One seed: nothing to compare.
+        assert!(!seeds_change_nothing(&jobs[..1], &same[..1]));
     }
 
     #[test]

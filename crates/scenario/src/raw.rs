@@ -55,6 +55,7 @@ pub(crate) struct RawOutput {
     pub trajectory: Option<S<TrajectoryFormat>>,
     pub every: Option<S<i64>>,
     pub mcap: Option<S<bool>>,
+    pub encounter_gap: Option<S<f64>>,
 }
 
 /// `[map]`.
@@ -79,6 +80,8 @@ pub(crate) struct RawWorld {
     pub deadline: Option<S<f64>>,
     pub stall_timeout: Option<S<f64>>,
     pub robots_per_agent: Option<S<u32>>,
+    pub stuck_after: Option<S<f64>>,
+    pub end_when_stuck: Option<S<bool>>,
 }
 
 /// `arena = { min, max }`.

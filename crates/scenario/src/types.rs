@@ -98,6 +98,29 @@ pub struct WorldConfig {
     /// when 1, so files written before it existed read the same.
     #[serde(default = "one", skip_serializing_if = "is_one")]
     pub robots_per_agent: u32,
+    /// Seconds without progress towards its goal after which a robot not
+    /// at its goal is stuck (default [`DEFAULT_STUCK_AFTER`]; left out of
+    /// the resolved scenario at the default).
+    #[serde(
+        default = "default_stuck_after",
+        skip_serializing_if = "is_default_stuck_after"
+    )]
+    pub stuck_after: f64,
+    /// End the run once every robot not at its goal is stuck (default
+    /// false; left out of the resolved scenario when false).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub end_when_stuck: bool,
+}
+
+/// `[world] stuck_after` when the file does not say, s.
+pub const DEFAULT_STUCK_AFTER: f64 = 10.0;
+
+fn default_stuck_after() -> f64 {
+    DEFAULT_STUCK_AFTER
+}
+
+fn is_default_stuck_after(s: &f64) -> bool {
+    *s == DEFAULT_STUCK_AFTER
 }
 
 fn one() -> u32 {
@@ -434,7 +457,7 @@ pub enum TrajectoryFormat {
 
 /// The `[output]` table: what the world writes of the trajectory. The
 /// metrics (metrics.json) see every tick and every robot whatever it says.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct OutputConfig {
     /// The trajectory's file format (default csv).
@@ -446,7 +469,13 @@ pub struct OutputConfig {
     /// end of the run (default false).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub mcap: bool,
+    /// Two bodies whose surfaces come nearer than this meet: one row of
+    /// encounters.csv (default [`DEFAULT_ENCOUNTER_GAP`]).
+    pub encounter_gap: f64,
 }
+
+/// `[output] encounter_gap` when the file does not say.
+pub const DEFAULT_ENCOUNTER_GAP: f64 = 1.0;
 
 impl Default for OutputConfig {
     fn default() -> Self {
@@ -454,6 +483,7 @@ impl Default for OutputConfig {
             trajectory: TrajectoryFormat::Csv,
             every: 1,
             mcap: false,
+            encounter_gap: DEFAULT_ENCOUNTER_GAP,
         }
     }
 }

@@ -122,6 +122,8 @@ impl Timed {
     fn recorded(&self) -> bool {
         !self.lockstep || self.models.iter().any(Option::is_some)
     }
+    /// The robots' positions after the step, reused from tick to tick.
+    positions: Vec<[f64; 2]>,
 }
 
 impl<'a> Loop<'a> {
@@ -158,6 +160,7 @@ impl<'a> Loop<'a> {
             opts,
             last_in_ns: 0,
             inbox: Vec::with_capacity(n),
+            positions: Vec::with_capacity(n),
             last_pid_check: clock.now(),
             pid_checks: 0,
             clock_start: None,
@@ -647,6 +650,13 @@ impl<'a> Loop<'a> {
             let flags = self.world.states()[i].flags | flags::AT_GOAL;
             self.world.set_flags(i, flags);
         }
+        self.positions.clear();
+        let robots = self.world.scenario.robots.len();
+        self.positions
+            .extend(self.world.states().iter().take(robots).map(|s| s.position));
+        let all_stuck = self
+            .recording
+            .stuck(at, &self.world.scenario, &self.positions);
         own += self.clock.now().saturating_duration_since(work_start);
         self.recording
             .costs
@@ -654,7 +664,7 @@ impl<'a> Loop<'a> {
             .record_ns(own.as_nanos() as u64);
         self.publish_stats(run_phase::RUNNING, false);
         let acc = &self.recording.acc;
-        Ok(self.admission.done(|i| acc[i].reached_goal))
+        Ok(all_stuck || self.admission.done(|i| acc[i].reached_goal))
     }
 }
 
@@ -836,6 +846,8 @@ fn finish(
         mut rec,
         acc,
         counts,
+        deadlocks,
+        ended_stuck,
         ..
     } = lp.recording;
     let tracker = rec.finish().map_err(out_err(TRAJECTORY_FILE))?;
@@ -848,6 +860,8 @@ fn finish(
         transport: lp.opts.transport.clone(),
         interrupted,
         timing,
+        deadlocks,
+        ended_stuck,
     }
     .metrics(counts, &acc, &mut timings.robots, &tracker);
     if let Some(c) = lp.link.network_counts() {

@@ -9,7 +9,7 @@
 use super::admission::{Agent, Event};
 use crate::histogram::DurationHistogram;
 use crate::live::LiveStats;
-use crate::metrics::{RobotAccumulator, RobotMetrics, RunMetrics, TimingMetrics};
+use crate::metrics::{Deadlock, RobotAccumulator, RobotMetrics, RunMetrics, TimingMetrics};
 use crate::physics::{Contact, Owner};
 use crate::record::Recorder;
 use crate::timings::TimingRecorder;
@@ -72,7 +72,18 @@ pub struct Recording {
     pub counts: Counts,
     /// The loop's own costs.
     pub costs: LoopCosts,
+    /// The deadlocks detected so far.
+    pub deadlocks: Vec<Deadlock>,
+    /// The run ended because every robot not at its goal was stuck.
+    pub ended_stuck: bool,
 }
+
+/// A robot makes progress when its distance to its goal falls below its
+/// distance at its last progress by this fraction of the way its
+/// `max_speed` covers in `[world] stuck_after`: slower than 5 % of its top
+/// speed on average towards its goal, it is stuck (the speed below which
+/// it counts as not moving, `crate::interaction::NOT_MOVING`).
+pub const PROGRESS: f64 = crate::interaction::NOT_MOVING;
 
 impl Recording {
     /// Recording for `robots` robots among the bodies called `names`.
@@ -84,10 +95,13 @@ impl Recording {
             acc: vec![
                 RobotAccumulator {
                     min_contact_gap: f64::INFINITY,
+                    progress_distance: f64::INFINITY,
                     ..Default::default()
                 };
                 robots
             ],
+            deadlocks: Vec::new(),
+            ended_stuck: false,
             names,
             counts: Counts::default(),
             costs: LoopCosts::default(),
@@ -260,6 +274,111 @@ impl Recording {
         reached
     }
 
+    /// The stuck test after a step, for robots at `positions`: a robot not
+    /// at its goal whose distance to its goal has not fallen [`PROGRESS`] x
+    /// `max_speed` x `stuck_after` below its distance at its last progress
+    /// for `[world] stuck_after` seconds is stuck (event `stuck`) until it makes progress again
+    /// (event `unstuck`). Robots stuck within each other's sensing range
+    /// (surface gap at most the smaller range), linked in a chain, are a
+    /// deadlock (event `deadlock` naming them) when one of them has just
+    /// become stuck. True when the run should end: `[world]
+    /// end_when_stuck` and every robot not at its goal is stuck.
+    pub fn stuck(&mut self, at: Stamp, scenario: &Scenario, positions: &[[f64; 2]]) -> bool {
+        let after = scenario.world.stuck_after;
+        let mut fresh = Vec::new();
+        let mut freed = Vec::new();
+        for (i, (spec, acc)) in scenario.robots.iter().zip(&mut self.acc).enumerate() {
+            if acc.reached_goal {
+                if let Some(since) = acc.stuck_since.take() {
+                    acc.stuck_time += at.time - since;
+                }
+                continue;
+            }
+            let Some(p) = positions.get(i) else { continue };
+            let d = (spec.goal[0] - p[0]).hypot(spec.goal[1] - p[1]);
+            let progress = PROGRESS * spec.max_speed * after;
+            if d <= spec.goal_tolerance || d < acc.progress_distance - progress {
+                acc.progress_distance = d;
+                acc.progress_time = at.time;
+                if let Some(since) = acc.stuck_since.take() {
+                    acc.stuck_time += at.time - since;
+                    freed.push(i);
+                }
+            } else if acc.stuck_since.is_none() && at.time - acc.progress_time >= after - 1e-9 {
+                acc.stuck_since = Some(at.time);
+                fresh.push(i);
+            }
+        }
+        for &i in &freed {
+            let name = self.names[i].clone();
+            self.event(at, json!({"type": "unstuck", "robot": name}));
+        }
+        for &i in &fresh {
+            let name = self.names[i].clone();
+            self.event(at, json!({"type": "stuck", "robot": name}));
+        }
+        self.deadlocks_of(at, scenario, positions, &fresh);
+        let mut waiting = self.acc.iter().filter(|a| !a.reached_goal).peekable();
+        let all = waiting.peek().is_some() && waiting.all(|a| a.stuck_since.is_some());
+        if all && scenario.world.end_when_stuck && !self.ended_stuck {
+            self.ended_stuck = true;
+            self.event(at, json!({"type": "all_stuck"}));
+        }
+        self.ended_stuck
+    }
+
+    /// Writes the deadlocks that the robots `fresh`, just stuck, belong to.
+    fn deadlocks_of(
+        &mut self,
+        at: Stamp,
+        scenario: &Scenario,
+        positions: &[[f64; 2]],
+        fresh: &[usize],
+    ) {
+        if fresh.is_empty() {
+            return;
+        }
+        let stuck: Vec<usize> = (0..self.acc.len())
+            .filter(|&i| self.acc[i].stuck_since.is_some() && i < positions.len())
+            .collect();
+        let linked = |i: usize, j: usize| {
+            let (a, b) = (&scenario.robots[i], &scenario.robots[j]);
+            let (p, q) = (positions[i], positions[j]);
+            let gap = (p[0] - q[0]).hypot(p[1] - q[1]) - a.radius - b.radius;
+            gap <= a.sensing_range.min(b.sensing_range)
+        };
+        let mut grouped = vec![false; self.acc.len()];
+        for &start in fresh {
+            if grouped[start] {
+                continue;
+            }
+            grouped[start] = true;
+            let mut group = vec![start];
+            let mut k = 0;
+            while k < group.len() {
+                let i = group[k];
+                for &j in &stuck {
+                    if !grouped[j] && linked(i, j) {
+                        grouped[j] = true;
+                        group.push(j);
+                    }
+                }
+                k += 1;
+            }
+            if group.len() < 2 {
+                continue;
+            }
+            group.sort_unstable();
+            let robots: Vec<String> = group.iter().map(|&i| self.names[i].clone()).collect();
+            self.event(at, json!({"type": "deadlock", "robots": robots}));
+            self.deadlocks.push(Deadlock {
+                tick: at.tick,
+                time: at.time,
+                robots,
+            });
+        }
+    }
+
     /// Publishes the live statistics for observers when due (or now, with
     /// `force`): no allocation, and a failure never stops the run.
     /// `header` gives everything but the counts, which this fills in; it
@@ -324,6 +443,10 @@ pub struct Summary<'a> {
     pub interrupted: bool,
     /// The run as a real-time system.
     pub timing: TimingMetrics,
+    /// The deadlocks detected.
+    pub deadlocks: Vec<Deadlock>,
+    /// Ended because every robot not at its goal was stuck.
+    pub ended_stuck: bool,
 }
 
 impl Summary<'_> {
@@ -343,9 +466,22 @@ impl Summary<'_> {
             .zip(acc)
             .zip(robot_timings)
             .zip(tracker.robots())
-            .map(|(((spec, a), t), m)| {
+            .zip(tracker.interaction().robots())
+            .map(|((((spec, a), t), m), x)| {
                 let [latency, wake, compute] = t.histograms();
                 let min_clearance = m.min_clearance.min(a.min_contact_gap);
+                let straight = (spec.goal[0] - spec.start[0]).hypot(spec.goal[1] - spec.start[1]);
+                let spl = if a.reached_goal {
+                    let longest = m.path_length.max(straight);
+                    if longest > 0.0 {
+                        straight / longest
+                    } else {
+                        1.0
+                    }
+                } else {
+                    0.0
+                };
+                let stuck_time = a.stuck_time + a.stuck_since.map_or(0.0, |s| self.sim_time - s);
                 (
                     spec.name.clone(),
                     RobotMetrics {
@@ -366,11 +502,25 @@ impl Summary<'_> {
                         commands_late: a.late,
                         path_deviation: m.path.as_ref().map(|p| p.deviation()),
                         boundary_violations: m.path.as_ref().and_then(|p| p.boundary_violations()),
+                        spl: Some(spl),
+                        time_not_moving: Some(x.time_not_moving),
+                        ttc_min: Some(x.ttc_min.is_finite().then_some(x.ttc_min)),
+                        time_intimate: Some(x.time_intimate),
+                        time_personal: Some(x.time_personal),
+                        time_social: Some(x.time_social),
+                        jerk_mean: Some(x.jerk_mean()),
+                        path_irregularity: Some(x.path_irregularity()),
+                        heading_change: Some(x.heading_change),
+                        stuck_time: Some(stuck_time),
                     },
                 )
             })
-            .collect();
+            .collect::<std::collections::BTreeMap<String, RobotMetrics>>();
         let reached = acc.iter().filter(|a| a.reached_goal).count();
+        let times: Option<Vec<f64>> = acc.iter().map(|a| a.time_to_goal).collect();
+        let times = times.filter(|t| !t.is_empty());
+        let travelled: f64 = tracker.robots().iter().map(|m| m.path_length).sum();
+        let spl = (n > 0).then(|| robots.values().filter_map(|r| r.spl).sum::<f64>() / n as f64);
         RunMetrics {
             scenario: self.scenario.name.clone(),
             robots,
@@ -397,6 +547,18 @@ impl Summary<'_> {
             transport: self.transport,
             interrupted: self.interrupted,
             timing: self.timing,
+            spl,
+            makespan: Some(
+                times
+                    .as_ref()
+                    .map(|t| t.iter().copied().fold(0.0, f64::max)),
+            ),
+            flowtime: Some(times.as_ref().map(|t| t.iter().sum())),
+            collisions_per_robot_km: Some(
+                (travelled > 0.0).then(|| counts.collisions_total as f64 / (travelled / 1000.0)),
+            ),
+            deadlocks: self.deadlocks,
+            ended_stuck: self.ended_stuck,
             ..RunMetrics::default()
         }
     }

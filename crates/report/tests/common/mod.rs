@@ -129,6 +129,8 @@ pub fn scenario(n: usize) -> Scenario {
             deadline: 1.0,
             stall_timeout: 2.0,
             robots_per_agent: 1,
+            stuck_after: mrsim_scenario::DEFAULT_STUCK_AFTER,
+            end_when_stuck: false,
         },
         robots: (0..n)
             .map(|i| {

@@ -1,9 +1,11 @@
-//! The `[output]` table: the trajectory's format, how often it records, and
-//! whether the run also writes run.mcap.
+//! The `[output]` table: the trajectory's format, how often it records,
+//! whether the run also writes run.mcap, and the gap at which two bodies
+//! meet (encounters.csv).
 
+use super::checks::{Rule, opt};
 use crate::error::Fail;
 use crate::raw::{RawOutput, S};
-use crate::types::{OutputConfig, TrajectoryFormat};
+use crate::types::{DEFAULT_ENCOUNTER_GAP, OutputConfig, TrajectoryFormat};
 
 /// Checks `[output]`: `every` is a whole number of ticks, at least 1.
 pub(super) fn resolve_output(o: Option<&S<RawOutput>>) -> Result<OutputConfig, Fail> {
@@ -24,6 +26,13 @@ pub(super) fn resolve_output(o: Option<&S<RawOutput>>) -> Result<OutputConfig, F
         }
         None => 1,
     };
+    let encounter_gap = opt(
+        &raw.encounter_gap,
+        "encounter_gap",
+        Rule::Pos,
+        "output",
+        DEFAULT_ENCOUNTER_GAP,
+    )?;
     Ok(OutputConfig {
         trajectory: raw
             .trajectory
@@ -31,5 +40,6 @@ pub(super) fn resolve_output(o: Option<&S<RawOutput>>) -> Result<OutputConfig, F
             .map_or(TrajectoryFormat::Csv, |t| *t.get_ref()),
         every,
         mcap: raw.mcap.as_ref().is_some_and(|m| *m.get_ref()),
+        encounter_gap,
     })
 }

@@ -61,6 +61,14 @@ pub(super) fn resolve_world(w: Option<&S<RawWorld>>) -> Result<WorldConfig, Fail
             Some(k) => *k.get_ref(),
             None => 1,
         },
+        stuck_after: opt(
+            &raw.stuck_after,
+            "stuck_after",
+            Rule::Pos,
+            what,
+            DEFAULT_STUCK_AFTER,
+        )?,
+        end_when_stuck: raw.end_when_stuck.as_ref().is_some_and(|b| *b.get_ref()),
     })
 }
 
