@@ -470,12 +470,18 @@ pub struct OutputConfig {
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub mcap: bool,
     /// Two bodies whose surfaces come nearer than this meet: one row of
-    /// encounters.csv (default [`DEFAULT_ENCOUNTER_GAP`]).
+    /// encounters.csv (default [`DEFAULT_ENCOUNTER_GAP`]; left out of the
+    /// resolved scenario at the default).
+    #[serde(skip_serializing_if = "is_default_encounter_gap")]
     pub encounter_gap: f64,
 }
 
 /// `[output] encounter_gap` when the file does not say.
 pub const DEFAULT_ENCOUNTER_GAP: f64 = 1.0;
+
+fn is_default_encounter_gap(g: &f64) -> bool {
+    *g == DEFAULT_ENCOUNTER_GAP
+}
 
 impl Default for OutputConfig {
     fn default() -> Self {
