@@ -74,6 +74,8 @@ struct Loop<'a> {
     /// Every planner call's command as the world heard of it (timing.csv):
     /// realtime runs and runs with a timing model.
     calls: Option<TimingWriter>,
+    /// The robots' positions after the step, reused from tick to tick.
+    positions: Vec<[f64; 2]>,
 }
 
 /// The world's side of the robots' timing models
@@ -122,8 +124,6 @@ impl Timed {
     fn recorded(&self) -> bool {
         !self.lockstep || self.models.iter().any(Option::is_some)
     }
-    /// The robots' positions after the step, reused from tick to tick.
-    positions: Vec<[f64; 2]>,
 }
 
 impl<'a> Loop<'a> {
