@@ -356,13 +356,14 @@ fn read_run(dir: &Path) -> Result<RunMetrics, String> {
 /// gave the same metrics: the scene has nothing random (no `jitter`, no
 /// noise, no random obstacles), so its intervals say nothing.
 pub fn seeds_change_nothing(jobs: &[Job], results: &[JobResult]) -> bool {
-    let mut first: std::collections::BTreeMap<usize, &RunMetrics> = Default::default();
+    let mut first: std::collections::BTreeMap<(usize, bool), &RunMetrics> = Default::default();
     let mut repeated = false;
     for (job, r) in jobs.iter().zip(results) {
         let Ok(m) = r else { continue };
-        match first.get(&job.combo) {
+        let key = (job.combo, job.mode == Mode::Realtime);
+        match first.get(&key) {
             None => {
-                first.insert(job.combo, m);
+                first.insert(key, m);
             }
             Some(f) if *f == m => repeated = true,
             Some(_) => return false,
@@ -937,6 +938,7 @@ mod tests {
         let job = |combo, seed| Job {
             combo,
             seed,
+            mode: Mode::Lockstep,
             folder: String::new(),
         };
         let jobs = [job(0, 1), job(0, 2), job(1, 1), job(1, 2)];
