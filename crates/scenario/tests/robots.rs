@@ -20,7 +20,7 @@ fn unicycle_keys_and_a_lidar_are_read_with_their_defaults() {
         BASE,
         "radius = 0.3",
         "radius = 0.3\nkinematics = \"unicycle\"\nmax_angular_speed = 1.5\n\
-         max_angular_accel = 3.0\nlookahead = 0.1\nsensor = { kind = \"lidar\", beams = 90, noise = 0.02 }",
+         max_angular_accel = 3.0\nlookahead = 0.05\nsensor = { kind = \"lidar\", beams = 90, noise = 0.02 }",
     );
     let l = accept(&src);
     let r = l
@@ -31,7 +31,7 @@ fn unicycle_keys_and_a_lidar_are_read_with_their_defaults() {
         .expect("a unicycle");
     assert_eq!(
         (r.max_angular_speed, r.max_angular_accel, r.lookahead),
-        (1.5, 3.0, 0.1)
+        (1.5, 3.0, 0.05)
     );
     assert_eq!(
         r.sensor,
