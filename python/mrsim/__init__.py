@@ -66,3 +66,7 @@ def run(scenario=None, planners=None, out=None, set=(), render=False, plan_timeo
     folder = Path(folder)
     metrics = json.loads((folder / "metrics.json").read_text())
     return Run(metrics, folder)
+
+# Last: the Gymnasium module uses the names above; importing it registers
+# the id mrsim/Nav-v0 (``gymnasium.make("mrsim/Nav-v0")``).
+from . import gym as _gym  # noqa: E402, F401

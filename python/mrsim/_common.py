@@ -32,12 +32,14 @@ def observation_space(sim, k):
     With walls, every body and goal stays within their box (and the goals'
     and starts'), so an offset is at most its diagonal; a neighbour's radius
     is at most the largest body's; its presence flag is 0 or 1. Velocities
-    are not bounded (a contact may push a body past its top speed)."""
+    have no bound of their own (a contact may push a body past its top
+    speed): theirs is float32's largest value, what the vector can hold."""
     n = 4 + 6 * k
-    low = np.full(n, -np.inf, dtype=np.float32)
-    high = np.full(n, np.inf, dtype=np.float32)
+    largest_f32 = float(np.finfo(np.float32).max)
+    low = np.full(n, -largest_f32, dtype=np.float32)
+    high = np.full(n, largest_f32, dtype=np.float32)
     walls = np.asarray(sim.walls())
-    offset = np.inf
+    offset = largest_f32
     if len(walls):
         points = np.concatenate([walls[:, :2], walls[:, 2:], sim.goals(), sim.positions()])
         offset = float(np.hypot(*(points.max(axis=0) - points.min(axis=0)))) * (1 + 1e-6)

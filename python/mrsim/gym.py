@@ -109,3 +109,9 @@ class NavEnv(gymnasium.Env):
     def sim(self):
         """The underlying :class:`mrsim.Sim` (positions, velocities, walls)."""
         return self._sim
+
+
+# Registered on import (``import mrsim`` imports this module):
+# ``gymnasium.make("mrsim/Nav-v0", **kwargs)`` builds a NavEnv with the
+# constructor's keyword arguments.
+gymnasium.register(id="mrsim/Nav-v0", entry_point="mrsim.gym:NavEnv")
