@@ -366,6 +366,34 @@ pub struct RerunArgs {
     pub no_report: bool,
 }
 
+/// Which running world to watch and how to reach it (`top`, `view`).
+#[derive(Debug, Clone, Args)]
+pub struct WatchArgs {
+    /// The run id of the world.
+    #[arg(long, default_value = "default")]
+    pub run: String,
+    /// Seconds to wait for the world.
+    #[arg(long, default_value_t = 10.0)]
+    pub timeout: f64,
+    /// shm (the world on this machine) or zenoh (the world at --connect).
+    #[arg(long, value_enum, default_value = "shm")]
+    pub transport: LinkArg,
+    /// With --transport zenoh: the world's address (default
+    /// tcp/127.0.0.1:7447).
+    #[arg(long, value_name = "ENDPOINT")]
+    pub connect: Option<String>,
+    /// With --transport zenoh: the config file.
+    #[command(flatten)]
+    pub zenoh: ZenohArgs,
+}
+
+impl WatchArgs {
+    /// The Zenoh options when the world is reached over Zenoh.
+    pub fn zenoh(&self) -> Option<mrsim_transport::zenoh::ZenohOptions> {
+        (self.transport == LinkArg::Zenoh).then(|| self.zenoh.options(self.connect.clone()))
+    }
+}
+
 /// The subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
@@ -381,43 +409,13 @@ pub enum Command {
     Agent(AgentArgs),
     /// Watch a running world: a live dashboard of its bodies and agents
     /// (read-only; never slows the world or counts as an agent).
-    Top {
-        /// The run id of the world.
-        #[arg(long, default_value = "default")]
-        run: String,
-        /// Seconds to wait for the world.
-        #[arg(long, default_value_t = 10.0)]
-        timeout: f64,
-        /// shm (the world on this machine) or zenoh (the world at --connect).
-        #[arg(long, value_enum, default_value = "shm")]
-        transport: LinkArg,
-        /// With --transport zenoh: the world's address (default
-        /// tcp/127.0.0.1:7447).
-        #[arg(long, value_name = "ENDPOINT")]
-        connect: Option<String>,
-        /// With --transport zenoh: the config file.
-        #[command(flatten)]
-        zenoh: ZenohArgs,
-    },
+    Top(WatchArgs),
     /// Watch a running world in a browser: the live page, served on
     /// loopback (read-only; never slows the world or counts as an agent).
     View {
-        /// The run id of the world.
-        #[arg(long, default_value = "default")]
-        run: String,
-        /// Seconds to wait for the world.
-        #[arg(long, default_value_t = 10.0)]
-        timeout: f64,
-        /// shm (the world on this machine) or zenoh (the world at --connect).
-        #[arg(long, value_enum, default_value = "shm")]
-        transport: LinkArg,
-        /// With --transport zenoh: the world's address (default
-        /// tcp/127.0.0.1:7447).
-        #[arg(long, value_name = "ENDPOINT")]
-        connect: Option<String>,
-        /// With --transport zenoh: the config file.
+        /// The run and how to reach its world.
         #[command(flatten)]
-        zenoh: ZenohArgs,
+        watch: WatchArgs,
         /// Where the page is served (default 127.0.0.1 on a free port).
         /// Another address than loopback exposes the page, which has no
         /// authentication, to the network.

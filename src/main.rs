@@ -11,30 +11,10 @@ fn main() {
         Command::Bench(args) => mrsim::bench::main(&args),
         Command::World(args) => mrsim::world::main(&args),
         Command::Agent(args) => mrsim::agent::main(&args),
-        Command::Top {
-            run,
-            timeout,
-            transport,
-            connect,
-            zenoh,
-        } => mrsim::top::run(
-            &run,
-            timeout,
-            (transport == mrsim::cli::LinkArg::Zenoh).then(|| zenoh.options(connect)),
-        ),
-        Command::View {
-            run,
-            timeout,
-            transport,
-            connect,
-            zenoh,
-            live,
-        } => mrsim::view::run(
-            &run,
-            timeout,
-            (transport == mrsim::cli::LinkArg::Zenoh).then(|| zenoh.options(connect)),
-            &live,
-        ),
+        Command::Top(w) => mrsim::top::run(&w.run, w.timeout, w.zenoh()),
+        Command::View { watch, live } => {
+            mrsim::view::run(&watch.run, watch.timeout, watch.zenoh(), &live)
+        }
         Command::Report { dir } => mrsim::report::main(&dir),
         Command::Export { dir, mcap } => mrsim::export::main(&dir, mcap),
         Command::Planners => mrsim::planners::main(),

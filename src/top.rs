@@ -406,6 +406,26 @@ pub fn wait_for_setup(obs: &mut dyn ObserverTransport, timeout: Duration) -> Res
     }
 }
 
+/// A read-only observer of run `ns` (snapshots included) over iceoryx2, or
+/// over Zenoh with `zenoh`, for the watcher `who` (`top`, `view`); waits
+/// up to `timeout` for the world.
+pub fn connect_observer(
+    ns: &Namespace,
+    who: &str,
+    zenoh: Option<&ZenohOptions>,
+    timeout: Duration,
+) -> Result<Box<dyn ObserverTransport>> {
+    let node = format!("mrsim-{who}-{}", std::process::id());
+    let obs: Result<Box<dyn ObserverTransport>, _> = match zenoh {
+        None => ShmObserver::connect(ns, &node, true, timeout).map(|o| Box::new(o) as _),
+        Some(z) => ZenohObserver::connect(ns, z, true, timeout).map(|o| Box::new(o) as _),
+    };
+    let run_id = ns.run_id();
+    obs.map_err(|e| {
+        anyhow!("no world is running with run id `{run_id}` (start one with `mrsim world --run {run_id}` or `mrsim run --run {run_id}`): {e}")
+    })
+}
+
 /// `mrsim top`: attaches to run `run_id` (over Zenoh with `zenoh`) and
 /// shows the dashboard until `q`, Ctrl-C, or the end of the run. Returns
 /// the exit status.
@@ -417,14 +437,7 @@ pub fn run(run_id: &str, timeout: f64, zenoh: Option<ZenohOptions>) -> Result<i3
         ));
     }
     let timeout = Duration::from_secs_f64(timeout.max(0.0));
-    let node = format!("mrsim-top-{}", std::process::id());
-    let obs: Result<Box<dyn ObserverTransport>, _> = match &zenoh {
-        None => ShmObserver::connect(&ns, &node, true, timeout).map(|o| Box::new(o) as _),
-        Some(z) => ZenohObserver::connect(&ns, z, true, timeout).map(|o| Box::new(o) as _),
-    };
-    let mut obs = obs.map_err(|e| {
-        anyhow!("no world is running with run id `{run_id}` (start one with `mrsim world --run {run_id}` or `mrsim run --run {run_id}`): {e}")
-    })?;
+    let mut obs = connect_observer(&ns, "top", zenoh.as_ref(), timeout)?;
     let mut model =
         wait_for_setup(obs.as_mut(), timeout).with_context(|| format!("run `{run_id}`"))?;
 

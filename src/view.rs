@@ -7,9 +7,8 @@
 
 use anyhow::{Result, anyhow};
 use mrsim_live::{Feed, LiveServer, Pump};
-use mrsim_transport::shm::ShmObserver;
-use mrsim_transport::zenoh::{ZenohObserver, ZenohOptions};
-use mrsim_transport::{Namespace, ObserverTransport};
+use mrsim_transport::Namespace;
+use mrsim_transport::zenoh::ZenohOptions;
 use std::net::SocketAddr;
 use std::time::{Duration, Instant};
 
@@ -46,14 +45,7 @@ pub fn run(run_id: &str, timeout: f64, zenoh: Option<ZenohOptions>, addr: &str) 
     let feed = Feed::new();
     let server = serve(addr, feed.clone())?;
     let timeout = Duration::from_secs_f64(timeout.max(0.0));
-    let node = format!("mrsim-view-{}", std::process::id());
-    let obs: Result<Box<dyn ObserverTransport>, _> = match &zenoh {
-        None => ShmObserver::connect(&ns, &node, true, timeout).map(|o| Box::new(o) as _),
-        Some(z) => ZenohObserver::connect(&ns, z, true, timeout).map(|o| Box::new(o) as _),
-    };
-    let mut obs = obs.map_err(|e| {
-        anyhow!("no world is running with run id `{run_id}` (start one with `mrsim world --run {run_id}` or `mrsim run --run {run_id}`): {e}")
-    })?;
+    let mut obs = crate::top::connect_observer(&ns, "view", zenoh.as_ref(), timeout)?;
     mrsim_sys::signal::catch_termination();
     let mut pump = Pump::new(feed.clone());
     let started = Instant::now();
