@@ -97,6 +97,40 @@ fn turtlebots_with_dwa_from_the_scan_reach_their_goals_across_the_office_by_thei
     assert!(routes.lines().any(|l| l.starts_with("tb-a,0,-7.5,5.5")));
     let page = std::fs::read_to_string(out.join("replay.html")).expect("replay.html");
     assert!(page.contains("\"route\":[["));
+    // spl measures each robot's path against its route, not against the
+    // straight line through the walls: l / max(p, l), l the route's length.
+    let mut length: std::collections::BTreeMap<&str, (f64, Option<[f64; 2]>)> = Default::default();
+    for line in routes.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        let p = [
+            f[2].parse::<f64>().expect("x"),
+            f[3].parse::<f64>().expect("y"),
+        ];
+        let e = length.entry(f[0]).or_insert((0.0, None));
+        if let Some(q) = e.1 {
+            e.0 += (p[0] - q[0]).hypot(p[1] - q[1]);
+        }
+        e.1 = Some(p);
+    }
+    let m = metrics(&out);
+    let mut mean = 0.0;
+    for (name, (l, _)) in &length {
+        let r = &m["robots"][*name];
+        let p = r["path_length"].as_f64().expect("path_length");
+        let want = if r["reached_goal"] == true {
+            l / l.max(p)
+        } else {
+            0.0
+        };
+        let spl = r["spl"].as_f64().expect("spl");
+        assert!((spl - want).abs() < 1e-9, "{name}: spl {spl}, l {l}, p {p}");
+        mean += spl / length.len() as f64;
+    }
+    let run_spl = m["spl"].as_f64().expect("spl");
+    assert!(
+        (run_spl - mean).abs() < 1e-9,
+        "run spl {run_spl}, mean {mean}"
+    );
 }
 
 #[test]

@@ -326,6 +326,39 @@ fn a_realtime_run_with_misses_rerun_in_lockstep_gives_the_same_trajectory_byte_f
 }
 
 #[test]
+fn a_realtime_run_recorded_as_parquet_writes_timing_parquet_and_reruns_byte_for_byte() {
+    let dir = fresh_dir("timing-rerun-parquet");
+    let text = crossing(
+        "compute = { model = \"uniform\", min_ms = 30.0, max_ms = 180.0 }\ncommand_loss = 0.05",
+        "realtime",
+        2.0,
+    );
+    let rec = go(
+        &dir,
+        &text,
+        "realtime",
+        &["--set", "output.trajectory=parquet"],
+    );
+    assert!(rec.join("timing.parquet").is_file(), "no timing.parquet");
+    assert!(
+        !rec.join("timing.csv").exists(),
+        "timing.csv beside the Parquet file"
+    );
+    assert!(
+        misses(&rec).iter().any(|&(m, _)| m > 0),
+        "no misses to replay"
+    );
+    let again = dir.join("again");
+    assert_ok(&rerun(&rec, &again, &[]));
+    assert!(again.join("timing.parquet").is_file());
+    assert_eq!(
+        bytes(&rec, "trajectory.parquet"),
+        bytes(&again, "trajectory.parquet")
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn rerun_refuses_a_folder_that_is_not_a_recorded_run() {
     let dir = fresh_dir("timing-rerun-bad");
     let out = rerun(&dir, &dir.join("x"), &[]);

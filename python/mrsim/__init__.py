@@ -17,9 +17,19 @@ from importlib import resources as _resources
 from pathlib import Path
 from typing import NamedTuple
 
-from ._mrsim import Agent, Observation, PlannerError, Sim, run_inproc
+from ._mrsim import Agent, Observation, PlannerError, Sim, rerun_inproc, run_inproc
 
-__all__ = ["Agent", "Observation", "PlannerError", "Run", "Sim", "run", "scenario_path"]
+__all__ = [
+    "Agent",
+    "Observation",
+    "PlannerError",
+    "Rerun",
+    "Run",
+    "Sim",
+    "rerun",
+    "run",
+    "scenario_path",
+]
 
 
 def scenario_path(name: str = "circle-16") -> str:
@@ -66,6 +76,44 @@ def run(scenario=None, planners=None, out=None, set=(), render=False, plan_timeo
     folder = Path(folder)
     metrics = json.loads((folder / "metrics.json").read_text())
     return Run(metrics, folder)
+
+class Rerun(NamedTuple):
+    """What :func:`rerun` gives back."""
+
+    metrics: dict
+    """metrics.json of the rerun, as a dict."""
+    dir: Path
+    """The rerun's folder."""
+    not_deterministic: list
+    """``(robot, planner)`` pairs whose planner is not built in (a Python
+    planner, say): not known to be deterministic, the reason the rerun may
+    differ from the recorded run."""
+
+
+def rerun(run_dir, out=None, set=(), planners=None, render=False) -> Rerun:
+    """Runs the recorded run in folder ``run_dir`` again, in this process
+    and in lockstep, with the timing it recorded (``mrsim rerun``): every
+    planner reads the snapshots it read and every command is sent when it
+    was sent, so a realtime run's trajectory comes out byte for byte.
+
+    ``set`` takes ``KEY=VALUE`` overrides on top of the recorded run's, a
+    counterfactual under the same timing (another planner for one robot,
+    say); ``planners`` names Python planners as :func:`run` does; ``out``
+    the rerun's folder (default: a new one under ``runs/``). A folder that
+    is not a recorded run, or whose scenario file no longer gives the
+    scenario it recorded, raises ``ValueError``.
+    """
+    folder, unsure = rerun_inproc(
+        str(run_dir),
+        None if out is None else str(out),
+        list(set),
+        dict(planners or {}),
+        render,
+    )
+    folder = Path(folder)
+    metrics = json.loads((folder / "metrics.json").read_text())
+    return Rerun(metrics, folder, [tuple(p) for p in unsure])
+
 
 # Last: the Gymnasium module uses the names above; importing it registers
 # the id mrsim/Nav-v0 (``gymnasium.make("mrsim/Nav-v0")``).

@@ -270,6 +270,7 @@ fn _mrsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<planner::PyObservation>()?;
     m.add_class::<live::Agent>()?;
     m.add_function(wrap_pyfunction!(run::run_inproc, m)?)?;
+    m.add_function(wrap_pyfunction!(run::rerun_inproc, m)?)?;
     m.add("PlannerError", m.py().get_type::<run::PlannerError>())?;
     Ok(())
 }

@@ -127,6 +127,39 @@ pub fn run_inproc(
     Ok(result.dir.to_string_lossy().into_owned())
 }
 
+/// Reruns the recorded run folder `run` in this process in lockstep with
+/// the timing it recorded (`mrsim rerun`); returns the rerun's folder and
+/// the robots (name, planner) whose planner is not built in: not known to
+/// be deterministic, the reason a replay may differ.
+#[pyfunction]
+#[pyo3(signature = (run, out=None, set=Vec::new(), planners=None, render=false))]
+pub fn rerun_inproc(
+    py: Python<'_>,
+    run: PathBuf,
+    out: Option<PathBuf>,
+    set: Vec<String>,
+    planners: Option<Bound<'_, PyDict>>,
+    render: bool,
+) -> PyResult<(String, Vec<(String, String)>)> {
+    let req = mrsim_runtime::rerun::Rerun {
+        run,
+        out,
+        set,
+        registry: Arc::new(registry(planners.as_ref())?),
+        render,
+    };
+    let done = py
+        .detach(|| mrsim_runtime::rerun::rerun(&req))
+        .map_err(|e| match e {
+            mrsim_runtime::rerun::RerunError::Invalid(i) => PyValueError::new_err(i.to_string()),
+            mrsim_runtime::rerun::RerunError::Run(e) => run_error(py, e),
+        })?;
+    Ok((
+        done.result.dir.to_string_lossy().into_owned(),
+        done.not_deterministic,
+    ))
+}
+
 /// The Python exception for a failed run.
 fn run_error(py: Python<'_>, e: RunError) -> PyErr {
     match e {

@@ -21,6 +21,7 @@ use crate::interaction::encounter_rows;
 use crate::tracking::Tracker;
 use crossbeam::channel::{RecvTimeoutError, bounded, unbounded};
 use mrsim_proto::{BodyState, body_kind};
+use mrsim_runfolder::timing::{Status, TimingSink};
 use mrsim_runfolder::trajectory::{BodyCells, ParquetTrajectoryWriter};
 use mrsim_runfolder::{TRAJECTORY_FILE, TRAJECTORY_PARQUET_FILE};
 use mrsim_scenario::{OutputConfig, TrajectoryFormat};
@@ -36,27 +37,46 @@ pub const BATCH_TICKS: usize = 16;
 /// Longest a recorded tick waits in the loop before it is sent.
 pub const BATCH_AGE: Duration = Duration::from_millis(100);
 
-/// Consecutive ticks' bodies, concatenated.
+/// Consecutive ticks' bodies, concatenated, with the events and planner
+/// calls recorded meanwhile.
 #[derive(Default)]
 struct Ticks {
     /// (tick, time, bodies in it), in order.
     ticks: Vec<(u64, f64, usize)>,
     bodies: Vec<BodyState>,
+    /// events.jsonl's lines, each ended by a newline.
+    events: Vec<u8>,
+    /// timing.csv's rows.
+    calls: Vec<Call>,
 }
 
 impl Batch for Ticks {
     fn is_empty(&self) -> bool {
-        self.ticks.is_empty()
+        self.ticks.is_empty() && self.events.is_empty() && self.calls.is_empty()
     }
     fn clear(&mut self) {
         self.ticks.clear();
         self.bodies.clear();
+        self.events.clear();
+        self.calls.clear();
     }
+}
+
+/// One planner call's row of the timing file ([`mrsim_runfolder::timing`]).
+#[derive(Debug, Clone, Copy)]
+pub struct Call {
+    /// The tick of the snapshot the planner read.
+    pub tick: u64,
+    /// The robot (its index).
+    pub robot: u32,
+    /// When its command was sent, ns after that snapshot's publication.
+    pub sent_ns: u64,
+    /// What became of it.
+    pub status: Status,
 }
 
 enum Msg {
     Ticks(Ticks),
-    Event(String),
 }
 
 /// What trajectory.csv holds besides its usual columns, and scan.csv.
@@ -67,6 +87,9 @@ pub struct Extras {
     pub theta: bool,
     /// The scans to record, if any robot asks.
     pub scans: Option<crate::scan::ScanWriter>,
+    /// Where the planner calls go (timing.csv or timing.parquet), if the
+    /// run records them.
+    pub calls: Option<TimingSink>,
 }
 
 impl Extras {
@@ -78,6 +101,7 @@ impl Extras {
                 .iter()
                 .any(|r| r.kinematics == mrsim_scenario::Kinematics::Unicycle),
             scans: crate::scan::ScanWriter::create(dir, scenario)?,
+            calls: None,
         })
     }
 }
@@ -242,7 +266,11 @@ impl Recorder {
         output: OutputConfig,
         extras: Extras,
     ) -> std::io::Result<Self> {
-        let Extras { theta, mut scans } = extras;
+        let Extras {
+            theta,
+            mut scans,
+            mut calls,
+        } = extras;
         let mut sink = Sink::create(dir, output, theta)?;
         let mut events = BufWriter::new(File::create(dir.join(mrsim_runfolder::EVENTS_FILE))?);
         let mut encounters =
@@ -295,13 +323,11 @@ impl Recorder {
                                     skipped_bodies.extend_from_slice(bodies);
                                 }
                             }
+                            events.write_all(&batch.events)?;
+                            write_calls(&mut calls, &names, &batch.calls);
                             let _ = back_tx.send(batch);
                             let ended = tracker.interaction_mut().take_closed(&names);
                             encounters.write_all(encounter_rows(&ended).as_bytes())?;
-                        }
-                        Ok(Msg::Event(mut line)) => {
-                            line.push('\n');
-                            events.write_all(line.as_bytes())?;
                         }
                         Err(RecvTimeoutError::Timeout) => {}
                         Err(RecvTimeoutError::Disconnected) => break,
@@ -321,6 +347,11 @@ impl Recorder {
                 }
                 sink.finish()?;
                 events.flush()?;
+                if let Some(w) = calls.take()
+                    && let Err(e) = w.finish()
+                {
+                    eprintln!("world: {e}");
+                }
                 tracker.interaction_mut().close_all();
                 let ended = tracker.interaction_mut().take_closed(&names);
                 encounters.write_all(encounter_rows(&ended).as_bytes())?;
@@ -354,11 +385,22 @@ impl Recorder {
         self.batches.send_if_older(BATCH_AGE);
     }
 
-    /// Queues one event (a JSON object).
-    pub fn event(&self, value: serde_json::Value) {
-        if let Some(tx) = self.batches.sender() {
-            let _ = tx.send(Msg::Event(value.to_string()));
+    /// Queues one event: `value` as one line of events.jsonl (a JSON
+    /// object). It goes to the thread with the ticks' batch, so the loop
+    /// pays no wake-up of the thread per event.
+    pub fn event<T: serde::Serialize>(&mut self, value: &T) {
+        let events = &mut self.batches.pending().events;
+        let before = events.len();
+        if serde_json::to_writer(&mut *events, value).is_ok() {
+            events.push(b'\n');
+        } else {
+            events.truncate(before);
         }
+    }
+
+    /// Queues one planner call's row of the timing file.
+    pub fn call(&mut self, call: Call) {
+        self.batches.pending().calls.push(call);
     }
 
     /// Flushes and stops the thread; the tracker has taken in every tick
@@ -374,6 +416,20 @@ impl Recorder {
             Some(Ok(r)) => r.map(Some),
             Some(Err(_)) => Err(std::io::Error::other("recorder thread panicked")),
             None => Ok(None),
+        }
+    }
+}
+
+/// Writes planner calls to the timing file; a failure to write ends the
+/// file (said once), never the run.
+fn write_calls(sink: &mut Option<TimingSink>, names: &[String], calls: &[Call]) {
+    let Some(w) = sink else { return };
+    for c in calls {
+        let name = names.get(c.robot as usize).map_or("", String::as_str);
+        if let Err(e) = w.row(c.tick, name, c.sent_ns, c.status) {
+            eprintln!("world: {e}; {} stops here", w.file_name());
+            *sink = None;
+            return;
         }
     }
 }

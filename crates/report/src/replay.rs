@@ -29,6 +29,9 @@ pub const MAP_HEIGHT: u32 = 600;
 pub const STRIP_HEIGHT: u32 = 120;
 /// Margin inside the map canvas around [`RunData::extent`], px.
 const MARGIN: f64 = 12.0;
+/// The page lists at most this many encounters.
+const MAX_LISTED_ENCOUNTERS: usize = 2000;
+
 /// The event list shows at most this many events.
 const MAX_LISTED_EVENTS: usize = 500;
 /// At most this many positions (bodies x frames) go into the page: a
@@ -212,7 +215,9 @@ fn replay_data(run: &RunData) -> Value {
         .collect();
     let robot_of = |name: &str| index.get(name).copied();
     let mut collisions = Vec::new();
-    let mut misses = Vec::new();
+    // Columns, not an object per miss: a run that misses every tick has a
+    // miss per robot and tick.
+    let (mut miss_frames, mut miss_robots) = (Vec::new(), Vec::new());
     let mut goals = Vec::new();
     let mut lost: Vec<Value> = Vec::new();
     let mut open_lost: BTreeMap<usize, usize> = BTreeMap::new();
@@ -241,7 +246,8 @@ fn replay_data(run: &RunData) -> Value {
             }
             EventKind::DeadlineMiss { robot, late_us } => {
                 if let Some(i) = robot_of(robot) {
-                    misses.push(json!({ "frame": frame, "robot": i, "late_us": late_us }));
+                    miss_frames.push(frame);
+                    miss_robots.push(i);
                 }
                 match late_us {
                     Some(us) => format!("{robot} missed the deadline by {us:.0} us"),
@@ -271,6 +277,24 @@ fn replay_data(run: &RunData) -> Value {
             listed.push(json!({ "frame": frame, "tick": e.tick, "time": e.time, "text": text }));
         }
     }
+    // Encounters (encounters.csv), in the order they began: the page lists
+    // them and highlights the two bodies of the one picked.
+    let mut met: Vec<&mrsim_runfolder::metrics::Encounter> = run.encounters.iter().collect();
+    met.sort_by_key(|e| (e.start_tick, e.end_tick));
+    let encounters: Vec<Value> = met
+        .iter()
+        .take(MAX_LISTED_ENCOUNTERS)
+        .map(|e| {
+            json!({
+                "a": e.a, "b": e.b,
+                "from": frame_of(e.start_tick), "to": frame_of(e.end_tick),
+                "startTick": e.start_tick, "endTick": e.end_tick,
+                "minGap": round(e.min_gap, 3),
+                "minTtc": e.min_ttc.map(|t| round(t, 3)),
+                "kind": e.kind, "gaveWay": e.gave_way,
+            })
+        })
+        .collect();
     for (i, from) in open_lost {
         lost.push(json!({ "robot": i, "from": from, "to": last_frame }));
     }
@@ -298,10 +322,12 @@ fn replay_data(run: &RunData) -> Value {
         "robots": robots,
         "obstacles": obstacles,
         "collisions": collisions,
-        "misses": misses,
+        "misses": { "frame": miss_frames, "robot": miss_robots },
         "goals": goals,
         "lost": lost,
         "events": listed,
+        "encounters": encounters,
+        "encountersTotal": run.encounters.len(),
         "eventsTotal": run.events.len(),
         "metrics": run.metrics,
     })

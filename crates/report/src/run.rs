@@ -192,6 +192,8 @@ pub struct RunData {
     /// `routes.csv`: each routed robot's route, start to goal (empty if
     /// the file is absent).
     pub routes: BTreeMap<String, Vec<[f64; 2]>>,
+    /// `encounters.csv`'s rows (empty if the file is absent).
+    pub encounters: Vec<mrsim_runfolder::metrics::Encounter>,
 }
 
 impl RunData {
@@ -254,6 +256,10 @@ impl RunData {
             Some(text) => parse_routes(&routes_path, &text)?,
             None => BTreeMap::new(),
         };
+        let encounters_path = dir.join(mrsim_runfolder::ENCOUNTERS_FILE);
+        let encounters = read_optional(&encounters_path)?
+            .map(|text| mrsim_runfolder::metrics::parse_encounters(&text))
+            .unwrap_or_default();
         Ok(RunData {
             dir: dir.to_path_buf(),
             scenario,
@@ -262,6 +268,7 @@ impl RunData {
             metrics,
             diagnostics,
             routes,
+            encounters,
         })
     }
 

@@ -10,12 +10,28 @@
 //! of a robot with no row had no answer (a miss, or not a tick of its
 //! `period_ticks`). Written by every realtime run and by every lockstep run
 //! with a timing model; `mrsim rerun` reads it back.
+//!
+//! A run whose `[output] trajectory = "parquet"` writes the same rows as
+//! `timing.parquet` instead (columns `tick` INT64, `robot` UTF8 string,
+//! `sent_ns` INT64, `status` UTF8 string): [`TimingSink`] writes either,
+//! [`read_timing`] reads whichever the folder holds.
 
+use parquet::basic::Compression;
+use parquet::data_type::{ByteArray, ByteArrayType, Int64Type};
+use parquet::file::properties::WriterProperties;
+use parquet::file::reader::{FileReader, SerializedFileReader};
+use parquet::file::writer::SerializedFileWriter;
+use parquet::schema::parser::parse_message_type;
 use std::io::{BufRead, Write};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// The file's name in the run folder.
 pub const TIMING_FILE: &str = "timing.csv";
+/// The file's name when the run writes Parquet.
+pub const TIMING_PARQUET_FILE: &str = "timing.parquet";
+/// Rows per Parquet row group.
+const ROW_GROUP_ROWS: usize = 1 << 16;
 /// Its header line.
 pub const HEADER: &str = "tick,robot,sent_ns,status";
 
@@ -31,6 +47,16 @@ pub enum Status {
 }
 
 impl Status {
+    /// The status a word of the file names, if any.
+    pub fn parse(word: &str) -> Option<Self> {
+        match word {
+            "accepted" => Some(Status::Accepted),
+            "late" => Some(Status::Late),
+            "lost" => Some(Status::Lost),
+            _ => None,
+        }
+    }
+
     /// The word written in the file.
     pub fn as_str(self) -> &'static str {
         match self {
@@ -64,6 +90,14 @@ pub enum TimingFileError {
         path: PathBuf,
         /// The I/O error.
         source: std::io::Error,
+    },
+    /// The Parquet file could not be written or decoded.
+    #[error("{}: {source}", path.display())]
+    Parquet {
+        /// The file.
+        path: PathBuf,
+        /// The Parquet error.
+        source: parquet::errors::ParquetError,
     },
     /// A line is not a row of this schema.
     #[error("{}:{line}: {reason}", path.display())]
@@ -122,8 +156,285 @@ impl TimingWriter {
     }
 }
 
-/// Reads `dir/timing.csv`.
+/// Writes `timing.parquet` a row group at a time.
+pub struct ParquetTimingWriter {
+    path: PathBuf,
+    writer: SerializedFileWriter<std::fs::File>,
+    tick: Vec<i64>,
+    robot: Vec<ByteArray>,
+    sent_ns: Vec<i64>,
+    status: Vec<ByteArray>,
+}
+
+/// The Parquet file's schema.
+const PARQUET_SCHEMA: &str = "message timing {
+    REQUIRED INT64 tick;
+    REQUIRED BYTE_ARRAY robot (UTF8);
+    REQUIRED INT64 sent_ns;
+    REQUIRED BYTE_ARRAY status (UTF8);
+}";
+
+impl ParquetTimingWriter {
+    /// Creates `dir/timing.parquet`.
+    pub fn create(dir: &Path) -> Result<Self, TimingFileError> {
+        let path = dir.join(TIMING_PARQUET_FILE);
+        let file = std::fs::File::create(&path).map_err(|source| TimingFileError::Io {
+            path: path.clone(),
+            source,
+        })?;
+        let pq = |source| TimingFileError::Parquet {
+            path: path.clone(),
+            source,
+        };
+        let schema = Arc::new(parse_message_type(PARQUET_SCHEMA).map_err(pq)?);
+        let props = WriterProperties::builder()
+            .set_compression(Compression::SNAPPY)
+            .set_created_by("mrsim".into())
+            .build();
+        let writer = SerializedFileWriter::new(file, schema, Arc::new(props)).map_err(pq)?;
+        Ok(Self {
+            path,
+            writer,
+            tick: Vec::new(),
+            robot: Vec::new(),
+            sent_ns: Vec::new(),
+            status: Vec::new(),
+        })
+    }
+
+    /// Appends one row; a full row group goes to the file.
+    pub fn row(
+        &mut self,
+        tick: u64,
+        robot: &str,
+        sent_ns: u64,
+        status: Status,
+    ) -> Result<(), TimingFileError> {
+        self.tick.push(tick as i64);
+        self.robot.push(ByteArray::from(robot));
+        self.sent_ns.push(sent_ns as i64);
+        self.status.push(ByteArray::from(status.as_str()));
+        if self.tick.len() >= ROW_GROUP_ROWS {
+            self.write_group()?;
+        }
+        Ok(())
+    }
+
+    fn write_group(&mut self) -> Result<(), TimingFileError> {
+        if self.tick.is_empty() {
+            return Ok(());
+        }
+        let path = self.path.clone();
+        let pq = |source| TimingFileError::Parquet {
+            path: path.clone(),
+            source,
+        };
+        let mut group = self.writer.next_row_group().map_err(pq)?;
+        let mut index = 0;
+        while let Some(mut column) = group.next_column().map_err(pq)? {
+            match index {
+                0 | 2 => column
+                    .typed::<Int64Type>()
+                    .write_batch(
+                        if index == 0 {
+                            &self.tick
+                        } else {
+                            &self.sent_ns
+                        },
+                        None,
+                        None,
+                    )
+                    .map(drop),
+                _ => column
+                    .typed::<ByteArrayType>()
+                    .write_batch(
+                        if index == 1 {
+                            &self.robot
+                        } else {
+                            &self.status
+                        },
+                        None,
+                        None,
+                    )
+                    .map(drop),
+            }
+            .map_err(pq)?;
+            column.close().map_err(pq)?;
+            index += 1;
+        }
+        group.close().map_err(pq)?;
+        self.tick.clear();
+        self.robot.clear();
+        self.sent_ns.clear();
+        self.status.clear();
+        Ok(())
+    }
+
+    /// Writes the last row group and the footer.
+    pub fn finish(mut self) -> Result<(), TimingFileError> {
+        self.write_group()?;
+        let path = self.path.clone();
+        self.writer
+            .close()
+            .map(drop)
+            .map_err(|source| TimingFileError::Parquet { path, source })
+    }
+}
+
+/// Where a run's timing rows go: timing.csv or timing.parquet.
+pub enum TimingSink {
+    /// `timing.csv`.
+    Csv(TimingWriter),
+    /// `timing.parquet`.
+    Parquet(Box<ParquetTimingWriter>),
+}
+
+impl TimingSink {
+    /// Creates the file in `dir`, Parquet if `parquet`, and removes one of
+    /// the other format a previous run left there.
+    pub fn create(dir: &Path, parquet: bool) -> Result<Self, TimingFileError> {
+        let other = dir.join(if parquet {
+            TIMING_FILE
+        } else {
+            TIMING_PARQUET_FILE
+        });
+        if other.exists() {
+            std::fs::remove_file(&other).map_err(|source| TimingFileError::Io {
+                path: other.clone(),
+                source,
+            })?;
+        }
+        Ok(if parquet {
+            TimingSink::Parquet(Box::new(ParquetTimingWriter::create(dir)?))
+        } else {
+            TimingSink::Csv(TimingWriter::create(dir)?)
+        })
+    }
+
+    /// The file's name in the run folder.
+    pub fn file_name(&self) -> &'static str {
+        match self {
+            TimingSink::Csv(_) => TIMING_FILE,
+            TimingSink::Parquet(_) => TIMING_PARQUET_FILE,
+        }
+    }
+
+    /// Appends one row.
+    pub fn row(
+        &mut self,
+        tick: u64,
+        robot: &str,
+        sent_ns: u64,
+        status: Status,
+    ) -> Result<(), TimingFileError> {
+        match self {
+            TimingSink::Csv(w) => w.row(tick, robot, sent_ns, status),
+            TimingSink::Parquet(w) => w.row(tick, robot, sent_ns, status),
+        }
+    }
+
+    /// Writes what is held and closes the file.
+    pub fn finish(self) -> Result<(), TimingFileError> {
+        match self {
+            TimingSink::Csv(w) => w.finish(),
+            TimingSink::Parquet(w) => w.finish(),
+        }
+    }
+}
+
+/// Reads the run folder `dir`'s timing rows: `timing.parquet` if it has
+/// one, else `timing.csv`.
 pub fn read_timing(dir: &Path) -> Result<Vec<Row>, TimingFileError> {
+    let parquet = dir.join(TIMING_PARQUET_FILE);
+    if parquet.exists() {
+        return read_parquet_timing(&parquet);
+    }
+    read_csv_timing(dir)
+}
+
+/// Reads a `timing.parquet` at `path`.
+fn read_parquet_timing(path: &Path) -> Result<Vec<Row>, TimingFileError> {
+    use parquet::column::reader::ColumnReader as C;
+    let file = std::fs::File::open(path).map_err(|source| TimingFileError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let pq = |source| TimingFileError::Parquet {
+        path: path.to_path_buf(),
+        source,
+    };
+    let bad = |line: usize, reason: String| TimingFileError::Malformed {
+        path: path.to_path_buf(),
+        line,
+        reason,
+    };
+    let reader = SerializedFileReader::new(file).map_err(pq)?;
+    let meta = reader.metadata();
+    let descr = meta.file_metadata().schema_descr();
+    let find = |name: &str| {
+        (0..descr.num_columns())
+            .find(|&i| descr.column(i).name() == name)
+            .ok_or_else(|| bad(0, format!("no column `{name}`")))
+    };
+    let at = [
+        find("tick")?,
+        find("robot")?,
+        find("sent_ns")?,
+        find("status")?,
+    ];
+    let mut rows = Vec::new();
+    for g in 0..meta.num_row_groups() {
+        let group = reader.get_row_group(g).map_err(pq)?;
+        let n = group.metadata().num_rows() as usize;
+        let (mut ints, mut texts): ([Vec<i64>; 2], [Vec<ByteArray>; 2]) = Default::default();
+        for (k, &i) in at.iter().enumerate() {
+            match (k, group.get_column_reader(i).map_err(pq)?) {
+                (0 | 2, C::Int64ColumnReader(mut r)) => {
+                    r.read_records(n, None, None, &mut ints[k / 2])
+                        .map_err(pq)?;
+                }
+                (1 | 3, C::ByteArrayColumnReader(mut r)) => {
+                    r.read_records(n, None, None, &mut texts[k / 2])
+                        .map_err(pq)?;
+                }
+                _ => return Err(bad(0, format!("column {k} has the wrong type"))),
+            }
+        }
+        if ints.iter().any(|c| c.len() != n) || texts.iter().any(|c| c.len() != n) {
+            return Err(bad(
+                0,
+                format!("row group {g}: columns of different lengths"),
+            ));
+        }
+        for j in 0..n {
+            let line = rows.len() + 1;
+            let text = |c: &ByteArray| {
+                c.as_utf8()
+                    .map(str::to_string)
+                    .map_err(|_| bad(line, "a cell is not UTF-8".into()))
+            };
+            let status = text(&texts[1][j])?;
+            let whole = |v: i64, what: &str| {
+                u64::try_from(v).map_err(|_| bad(line, format!("{what} {v} is negative")))
+            };
+            rows.push(Row {
+                tick: whole(ints[0][j], "tick")?,
+                robot: text(&texts[0][j])?,
+                sent_ns: whole(ints[1][j], "sent_ns")?,
+                status: Status::parse(&status).ok_or_else(|| {
+                    bad(
+                        line,
+                        format!("unknown status `{status}` (accepted, late, lost)"),
+                    )
+                })?,
+            });
+        }
+    }
+    Ok(rows)
+}
+
+/// Reads `dir/timing.csv`.
+fn read_csv_timing(dir: &Path) -> Result<Vec<Row>, TimingFileError> {
     let path = dir.join(TIMING_FILE);
     let file = std::fs::File::open(&path).map_err(|source| TimingFileError::Io {
         path: path.clone(),
@@ -157,16 +468,8 @@ pub fn read_timing(dir: &Path) -> Result<Vec<Row>, TimingFileError> {
             s.parse::<u64>()
                 .map_err(|_| bad(format!("{what} `{s}` is not a whole number")))
         };
-        let status = match *status {
-            "accepted" => Status::Accepted,
-            "late" => Status::Late,
-            "lost" => Status::Lost,
-            other => {
-                return Err(bad(format!(
-                    "unknown status `{other}` (accepted, late, lost)"
-                )));
-            }
-        };
+        let status = Status::parse(status)
+            .ok_or_else(|| bad(format!("unknown status `{status}` (accepted, late, lost)")))?;
         rows.push(Row {
             tick: num(tick, "tick")?,
             robot: robot.to_string(),
@@ -207,6 +510,35 @@ mod tests {
             e.ends_with("timing.csv:2: sent_ns `x` is not a whole number"),
             "{e}"
         );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn parquet_rows_written_are_the_rows_read_and_replace_the_csv() {
+        let dir = std::env::temp_dir().join(format!("mrsim-timing-pq-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut csv = TimingSink::create(&dir, false).unwrap();
+        csv.row(7, "old", 1, Status::Accepted).unwrap();
+        csv.finish().unwrap();
+        let mut w = TimingSink::create(&dir, true).unwrap();
+        assert_eq!(w.file_name(), TIMING_PARQUET_FILE);
+        let written: Vec<Row> = (0..(ROW_GROUP_ROWS as u64 + 5))
+            .map(|t| Row {
+                tick: t / 3,
+                robot: format!("r{}", t % 3),
+                sent_ns: t * 1_000_003,
+                status: [Status::Accepted, Status::Late, Status::Lost][(t % 3) as usize],
+            })
+            .collect();
+        for r in &written {
+            w.row(r.tick, &r.robot, r.sent_ns, r.status).unwrap();
+        }
+        w.finish().unwrap();
+        assert!(
+            !dir.join(TIMING_FILE).exists(),
+            "the csv of a previous run stays"
+        );
+        assert_eq!(read_timing(&dir).unwrap(), written);
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

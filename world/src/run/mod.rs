@@ -33,7 +33,7 @@ use admission::{Admission, Agent, Event, TickWindow, Verdict};
 use mrsim_proto::{
     CommandMsg, JoinRequest, SnapshotHeader, StatsHeader, command_kind, flags, now_ns, run_phase,
 };
-use mrsim_runfolder::timing::{Status, TIMING_FILE, TimingWriter};
+use mrsim_runfolder::timing::{Status, TIMING_FILE, TIMING_PARQUET_FILE, TimingSink};
 use mrsim_runfolder::{FileError, METRICS_FILE, SCENARIO_FILE, TRAJECTORY_FILE};
 use mrsim_scenario::timing::{Timing, s_to_ns};
 use mrsim_scenario::{MissPolicy, Mode};
@@ -71,9 +71,6 @@ struct Loop<'a> {
     /// What timing decides per robot: its model, and how the world judges
     /// and applies its commands (see [`Timed`]).
     timed: Timed,
-    /// Every planner call's command as the world heard of it (timing.csv):
-    /// realtime runs and runs with a timing model.
-    calls: Option<TimingWriter>,
     /// The robots' positions after the step, reused from tick to tick.
     positions: Vec<[f64; 2]>,
 }
@@ -165,7 +162,6 @@ impl<'a> Loop<'a> {
             pid_checks: 0,
             clock_start: None,
             timed,
-            calls: None,
         }
     }
 
@@ -246,16 +242,18 @@ impl<'a> Loop<'a> {
         self.link.reply_join(&reply)
     }
 
-    /// Writes one planner call's row of timing.csv; a failure to write
-    /// ends the file (said once), never the run.
+    /// Records one planner call's row of the timing file (realtime runs
+    /// and runs with a timing model), written by the recording thread.
     fn call(&mut self, robot: usize, cmd: &CommandMsg, status: Status) {
-        let Some(w) = &mut self.calls else { return };
-        let sent = cmd.sent_ns.saturating_sub(self.window.published_ns);
-        let name = self.recording.name(robot);
-        if let Err(e) = w.row(cmd.tick, name, sent, status) {
-            eprintln!("world: {e}; timing.csv stops here");
-            self.calls = None;
+        if !self.timed.recorded() {
+            return;
         }
+        self.recording.rec.call(crate::record::Call {
+            tick: cmd.tick,
+            robot: robot as u32,
+            sent_ns: cmd.sent_ns.saturating_sub(self.window.published_ns),
+            status,
+        });
     }
 
     fn handle_command(&mut self, cmd: CommandMsg, received_ns: u64) {
@@ -708,7 +706,20 @@ fn run_with_clock(
     )
     .map_err(|e| out_err("setup")(e.into()))?;
     let tracker = Tracker::new(&scenario, world.walls());
-    let extras = crate::record::Extras::of(&dir, &scenario).map_err(out_err(TRAJECTORY_FILE))?;
+    let mut extras =
+        crate::record::Extras::of(&dir, &scenario).map_err(out_err(TRAJECTORY_FILE))?;
+    if Timed::new(&scenario).recorded() {
+        let parquet = scenario.output.trajectory == mrsim_scenario::TrajectoryFormat::Parquet;
+        let name = if parquet {
+            TIMING_PARQUET_FILE
+        } else {
+            TIMING_FILE
+        };
+        extras.calls = Some(TimingSink::create(&dir, parquet).map_err(|e| match e {
+            mrsim_runfolder::timing::TimingFileError::Io { source, .. } => out_err(name)(source),
+            other => out_err(name)(std::io::Error::other(other.to_string())),
+        })?);
+    }
     let rec = Recorder::start_with(
         &dir,
         body_names(&scenario),
@@ -720,14 +731,6 @@ fn run_with_clock(
     link.publish_setup(&setup)?;
     let timings = TimingRecorder::start(n).map_err(out_err(METRICS_FILE))?;
     let mut lp = Loop::new(world, link, clock, opts, rec, timings);
-    if lp.timed.recorded() {
-        lp.calls = Some(TimingWriter::create(&dir).map_err(|e| match e {
-            mrsim_runfolder::timing::TimingFileError::Io { source, .. } => {
-                out_err(TIMING_FILE)(source)
-            }
-            other => out_err(TIMING_FILE)(std::io::Error::other(other.to_string())),
-        })?);
-    }
 
     // Join: every robot's agent must be there, then ready (setup read,
     // planner built), before the clock starts, so that the first ticks are
@@ -836,11 +839,6 @@ fn finish(
             .event(lp.stamp(), json!({"type": "interrupted"}));
     }
 
-    if let Some(w) = lp.calls.take()
-        && let Err(e) = w.finish()
-    {
-        eprintln!("world: {e}");
-    }
     // Every tick's states taken in: the motion metrics are complete.
     let Recording {
         mut rec,

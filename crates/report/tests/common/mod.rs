@@ -343,6 +343,7 @@ pub fn big_run(dir: &Path, n: usize, ticks: u64) -> mrsim_report::RunData {
         metrics: None,
         diagnostics: None,
         routes: Default::default(),
+        encounters: Vec::new(),
     }
 }
 
