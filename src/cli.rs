@@ -324,6 +324,10 @@ pub struct SweepArgs {
     /// whose values are all numbers).
     #[arg(long, value_name = "KEY")]
     pub x: Option<String>,
+    /// The metrics sweep.svg draws, in this order (default: every one of
+    /// sweep.csv's)
+    #[arg(long, value_name = "METRIC,...", value_delimiter = ',')]
+    pub metrics: Vec<String>,
 }
 
 /// How a sweep's runs keep time.

@@ -49,6 +49,7 @@ pub fn main(args: &SweepArgs) -> Result<i32> {
         allowable: args.allowable.clone(),
         mode: args.mode.into(),
         x: args.x.clone(),
+        metrics: args.metrics.clone(),
     })
     .map_err(fail)?;
     let (axes, combos, jobs, dir) = (&sweep.axes, &sweep.combos, &sweep.jobs, &sweep.dir);

@@ -379,3 +379,80 @@ fn realtime_runs_in_parallel_are_refused() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("one at a time"));
     assert!(!o.exists());
 }
+
+#[test]
+fn a_timing_sweep_reports_the_miss_rate_and_draws_only_the_metrics_asked_for() {
+    // No timing in the file: `compute.ms` alone names the fixed model.
+    // At dt 0.1 s, 20 ms of compute meets every deadline, 150 ms none.
+    let (o, out) = sweep_tiny(
+        "sweep-misses",
+        &[
+            "--set",
+            "defaults.timing.compute.ms=20,150",
+            "--metrics",
+            "miss_rate,success_rate",
+        ],
+    );
+    assert_ok(&out);
+    let csv = std::fs::read_to_string(o.join("sweep.csv")).expect("sweep.csv");
+    let rows: Vec<Vec<&str>> = csv.lines().map(|l| l.split(',').collect()).collect();
+    let (key, rate) = (
+        column(&rows[0], "defaults.timing.compute.ms"),
+        column(&rows[0], "miss_rate"),
+    );
+    let rate_at = |ms: &str| -> f64 {
+        let r = rows[1..].iter().find(|r| r[key] == ms).expect("row");
+        r[rate].parse().expect("miss_rate")
+    };
+    assert_eq!(rate_at("20"), 0.0, "{csv}");
+    assert_eq!(rate_at("150"), 1.0, "{csv}");
+    let texts = svg_texts(&std::fs::read_to_string(o.join("sweep.svg")).expect("sweep.svg"));
+    let panels: Vec<&String> = texts
+        .iter()
+        .filter(|t| METRIC_NAMES.contains(&t.as_str()))
+        .collect();
+    assert_eq!(panels, ["miss_rate", "success_rate"], "{texts:?}");
+
+    let (_, out) = sweep_tiny(
+        "sweep-bad-metric",
+        &[
+            "--set",
+            "defaults.timing.compute.ms=20",
+            "--metrics",
+            "misses",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--metrics misses: no such metric (known: success_rate"),
+        "{err}"
+    );
+}
+
+/// The names of sweep.csv's metrics.
+const METRIC_NAMES: [&str; 23] = [
+    "success_rate",
+    "collisions_total",
+    "collided",
+    "makespan",
+    "path_length_ratio",
+    "min_clearance",
+    "time_to_goal",
+    "agents_lost",
+    "ticks",
+    "spl",
+    "flowtime",
+    "collisions_per_robot_km",
+    "deadlocks",
+    "time_not_moving",
+    "ttc_min",
+    "time_intimate",
+    "time_personal",
+    "time_social",
+    "jerk_mean",
+    "path_irregularity",
+    "heading_change",
+    "stuck_time",
+    "miss_rate",
+];

@@ -52,6 +52,9 @@ pub struct SweepPlan {
     /// The swept key on the figure's x axis (`None`: the first swept key
     /// whose values are all numbers).
     pub x: Option<String>,
+    /// The metrics the figure draws, in this order (empty: every one of
+    /// [`METRICS`]).
+    pub metrics: Vec<String>,
 }
 
 /// How a sweep's runs keep time.
@@ -234,6 +237,9 @@ pub struct RunMetrics {
     /// Means over robots of the interaction metrics, in the order of
     /// [`ROBOT_MEANS`].
     pub robot_means: [Option<f64>; ROBOT_MEANS.len()],
+    /// Deadline misses per robot and tick (lockstep: those its timing
+    /// model decides; realtime: those measured).
+    pub miss_rate: Option<f64>,
 }
 
 /// How a per-robot metric is read from a robot's entry of metrics.json.
@@ -259,7 +265,7 @@ pub const ROBOT_MEANS: [RobotColumn; 9] = [
 pub type Column = (&'static str, fn(&RunMetrics) -> Option<f64>);
 
 /// The metric columns of sweep.csv, in order, with how to get each.
-pub const METRICS: [Column; 22] = [
+pub const METRICS: [Column; 23] = [
     ("success_rate", |m| Some(m.success_rate)),
     ("collisions_total", |m| Some(m.collisions_total)),
     // 1 if the run had any collision: its mean is the collision rate.
@@ -285,6 +291,7 @@ pub const METRICS: [Column; 22] = [
     ("path_irregularity", |m| m.robot_means[6]),
     ("heading_change", |m| m.robot_means[7]),
     ("stuck_time", |m| m.robot_means[8]),
+    ("miss_rate", |m| m.miss_rate),
 ];
 
 /// A run folder's file that could not be read, in words.
@@ -335,7 +342,16 @@ fn read_run(dir: &Path) -> Result<RunMetrics, String> {
         let xs: Vec<f64> = m.robots.values().filter_map(get).collect();
         mean(&xs)
     });
+    let slots = m.robots.len() as f64 * ticks;
+    let miss_rate = (slots > 0.0).then(|| {
+        m.robots
+            .values()
+            .map(|r| r.deadline_misses as f64)
+            .sum::<f64>()
+            / slots
+    });
     Ok(RunMetrics {
+        miss_rate,
         spl: m.spl,
         flowtime: m.flowtime.flatten(),
         collisions_per_robot_km: m.collisions_per_robot_km.flatten(),
@@ -498,6 +514,16 @@ pub fn prepare(plan: &SweepPlan) -> Result<Sweep, SweepError> {
     }
     if let Some(x) = &plan.x {
         numeric_axis(&axes, x)?;
+    }
+    for m in &plan.metrics {
+        if !METRICS.iter().any(|(name, _)| name == m) {
+            let known: Vec<&str> = METRICS.iter().map(|(name, _)| *name).collect();
+            return Err(Invalid(format!(
+                "--metrics {m}: no such metric (known: {})",
+                known.join(", ")
+            ))
+            .into());
+        }
     }
     let combos = combinations(&axes);
     // Validate every combination before anything runs.
@@ -717,6 +743,13 @@ fn metric_axis(name: &str, length: &str) -> (String, bool) {
         "time_to_goal" => ("mean time to goal [s]".into(), false),
         "agents_lost" => ("agents lost per run".into(), false),
         "ticks" => ("ticks per run".into(), false),
+        "miss_rate" => ("deadline misses per robot and tick".into(), true),
+        "spl" => ("success weighted by path length".into(), true),
+        "deadlocks" => ("deadlocks per run".into(), false),
+        "time_not_moving" | "time_intimate" | "time_personal" | "time_social" | "stuck_time" => {
+            (format!("{other} [s]", other = name), false)
+        }
+        "ttc_min" => ("smallest time to collision [s]".into(), false),
         other => (other.to_string(), false),
     }
 }
@@ -848,10 +881,20 @@ impl Sweep {
                 }
             })
             .collect();
-        let panels = METRICS
-            .iter()
-            .enumerate()
-            .map(|(m, (name, _))| {
+        // The metrics asked for, in the order asked (all by default).
+        let drawn: Vec<usize> = if self.plan.metrics.is_empty() {
+            (0..METRICS.len()).collect()
+        } else {
+            self.plan
+                .metrics
+                .iter()
+                .filter_map(|want| METRICS.iter().position(|(name, _)| name == want))
+                .collect()
+        };
+        let panels = drawn
+            .into_iter()
+            .map(|m| {
+                let name = METRICS[m].0;
                 let (y_label, fraction) = metric_axis(name, self.length_unit);
                 let lines = lines
                     .iter()

@@ -146,8 +146,32 @@ fn a_compute_model_missing_or_given_a_foreign_number_is_refused() {
     refused_at(&src, "fixed", "takes no `sigma`");
     let src = timed("compute = { model = \"uniform\", min_ms = 9, max_ms = 3 }");
     refused_at(&src, "uniform", "max_ms (3) must be >= min_ms (9)");
-    let src = timed("compute = { ms = 3 }");
+    let src = timed("compute = { ms = 3, sigma = 1 }");
     refused_at(&src, "compute", "needs `model`");
+}
+
+#[test]
+fn the_numbers_of_one_model_name_it_so_a_sweep_needs_no_model_in_the_file() {
+    let src = timed("compute = { ms = 3 }");
+    let t = accept(&src).scenario.robots[0].timing.clone().unwrap();
+    assert_eq!(t.compute, Compute::Fixed { ms: 3.0 });
+    let src = timed("compute = { min_ms = 1, max_ms = 4 }");
+    let t = accept(&src).scenario.robots[0].timing.clone().unwrap();
+    assert_eq!(
+        t.compute,
+        Compute::Uniform {
+            min_ms: 1.0,
+            max_ms: 4.0
+        }
+    );
+    // `mrsim sweep --set defaults.timing.compute.ms=0,20,40` on a file
+    // without timing.
+    let sets = vec![("defaults.timing.compute.ms".to_string(), "40".to_string())];
+    let l = parse_with_overrides(BASE, "t.toml", &sets).unwrap();
+    assert_eq!(
+        l.scenario.robots[0].timing.as_ref().unwrap().compute,
+        Compute::Fixed { ms: 40.0 }
+    );
 }
 
 #[test]

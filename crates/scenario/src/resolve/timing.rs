@@ -102,8 +102,36 @@ pub(super) fn resolve_timing(layers: &[Layer]) -> Result<Option<Timing>, Fail> {
     Ok(Some(t))
 }
 
-/// `compute`: the model from the highest layer that names one, each of
-/// its numbers from the highest layer that has it.
+/// The model no layer names, from the numbers given: each number belongs
+/// to one model (`ms` to fixed, `min_ms` and `max_ms` to uniform, ...), so
+/// `--set defaults.timing.compute.ms=40` alone means fixed 40 ms. `None`
+/// if no number is given or numbers of two models are.
+fn inferred<'a>(
+    computes: &[(&'a S<RawCompute>, &'a str)],
+) -> Option<(S<String>, &'a str, &'a RawCompute)> {
+    let mut found: Option<(S<String>, &str, &RawCompute)> = None;
+    for (c, what) in computes {
+        for (model, keys) in MODELS {
+            for key in *keys {
+                let Some(v) = number(c.get_ref(), key) else {
+                    continue;
+                };
+                match &found {
+                    Some((m, ..)) if m.get_ref() != model => return None,
+                    Some(_) => {}
+                    None => {
+                        found = Some((S::new(v.span(), model.to_string()), *what, c.get_ref()));
+                    }
+                }
+            }
+        }
+    }
+    found
+}
+
+/// `compute`: the model from the highest layer that names one (or the one
+/// its numbers belong to), each of its numbers from the highest layer that
+/// has it.
 fn compute(tables: &[(&S<RawTiming>, &str)]) -> Result<Compute, Fail> {
     let computes: Vec<(&S<RawCompute>, &str)> = tables
         .iter()
@@ -112,16 +140,18 @@ fn compute(tables: &[(&S<RawTiming>, &str)]) -> Result<Compute, Fail> {
     let Some((top, top_what)) = computes.first().copied() else {
         return Ok(Compute::None);
     };
-    let Some((model, model_what, model_table)) = computes
+    let named = computes
         .iter()
-        .find_map(|(c, what)| c.get_ref().model.as_ref().map(|m| (m, *what, c.get_ref())))
-    else {
+        .find_map(|(c, what)| c.get_ref().model.clone().map(|m| (m, *what, c.get_ref())));
+    let Some((model, model_what, model_table)) = named.or_else(|| inferred(&computes)) else {
         return Err(Fail::new(
             Some(top.span()),
             top_what,
-            "timing.compute needs `model` (none, fixed, uniform, lognormal, per-body)",
+            "timing.compute needs `model` (none, fixed, uniform, lognormal, per-body), or \
+             the numbers of one model (`ms` alone is fixed)",
         ));
     };
+    let model = &model;
     let Some((_, keys)) = MODELS.iter().find(|(m, _)| m == model.get_ref()) else {
         return Err(Fail::new(
             Some(model.span()),
