@@ -147,3 +147,55 @@ fn lidar_noise_has_the_configured_sigma_and_repeats_with_the_seed_only() {
     let other = first_scan(0.05, 4, "noise5-seed4");
     assert_ne!(noisy, other);
 }
+
+/// The office's TurtleBots, driven by dwa from their scans alone, for 15 s
+/// in lockstep over `transport`, every scan recorded; the run folder.
+fn office_scans_over(transport: &str) -> std::path::PathBuf {
+    let out = fresh_dir(&format!("lidar-over-{transport}"));
+    let o = run(
+        &root().join("scenarios/maps/office-turtlebots.toml"),
+        &out,
+        &run_id(&format!("lidar-{transport}")),
+        &[
+            "--quiet",
+            "--no-report",
+            "--transport",
+            transport,
+            "--set",
+            "world.duration=15",
+            "--set",
+            "defaults.sensor.record=true",
+        ],
+    );
+    assert_ok(&o);
+    out
+}
+
+#[test]
+fn agents_over_shared_memory_and_zenoh_get_the_scans_of_an_in_process_run() {
+    // Every planner here sees the world only through its scan: one range
+    // off anywhere and the trajectories part. The world records the scan
+    // it computes (scan.csv); the agents, in their own processes over
+    // iceoryx2 or Zenoh, compute theirs from the snapshots they receive.
+    let inproc = office_scans_over("inproc");
+    let scans = std::fs::read(inproc.join("scan.csv")).expect("scan.csv");
+    assert!(
+        scans.len() > 100_000,
+        "scans recorded: {} bytes",
+        scans.len()
+    );
+    let trajectory = std::fs::read(inproc.join("trajectory.csv")).expect("trajectory.csv");
+    for transport in ["shm", "zenoh"] {
+        let out = office_scans_over(transport);
+        assert!(
+            std::fs::read(out.join("trajectory.csv")).expect("trajectory.csv") == trajectory,
+            "{transport}: the trajectory differs from the in-process run's"
+        );
+        assert!(
+            std::fs::read(out.join("scan.csv")).expect("scan.csv") == scans,
+            "{transport}: scan.csv differs from the in-process run's"
+        );
+        let _ = std::fs::remove_dir_all(&out);
+    }
+    let _ = std::fs::remove_dir_all(&inproc);
+}

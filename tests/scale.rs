@@ -179,18 +179,27 @@ fn stderr_of(c: &mut Child) -> String {
 
 #[test]
 fn a_killed_group_process_loses_all_its_robots_and_its_restart_rejoins_them_together() {
-    let dir = fresh_dir("groupkill");
+    group_killed_and_restarted("gk", &[]);
+}
+
+#[test]
+fn over_zenoh_a_killed_group_process_is_restarted_and_its_robots_rejoin_together() {
+    group_killed_and_restarted("gkz", &["--transport", "zenoh"]);
+}
+
+/// Four robots in two groups of two (`mrsim run` with `link`, its
+/// transport's arguments, and `--restart-agents`): the first group's
+/// process is killed, both its robots are lost and rejoin from its restart
+/// together, the other group's never leave.
+fn group_killed_and_restarted(tag: &str, link: &[&str]) {
+    let dir = fresh_dir(&format!("groupkill-{tag}"));
     let file = dir.join("s.toml");
     std::fs::write(&file, FOUR).expect("scenario");
     let out = dir.join("out");
-    let id = run_id("gk");
-    let mut l = launcher(
-        &file,
-        &out,
-        &id,
-        &["--robots-per-agent", "2", "--restart-agents"],
-        Stdio::null(),
-    );
+    let id = run_id(tag);
+    let mut flags = vec!["--robots-per-agent", "2", "--restart-agents"];
+    flags.extend(link);
+    let mut l = launcher(&file, &out, &id, &flags, Stdio::null());
     let first = wait_for_process(&["agent", "--robots", "a,b", "--run", &id], &[], 30);
     let other = wait_for_process(&["agent", "--robots", "c,d", "--run", &id], &[], 30);
     wait_for_events(&out, 60, |ev| {
@@ -323,6 +332,28 @@ fn robots_per_agent_in_the_scenario_groups_eight_robots_as_three_three_and_two_m
     assert_ok(&run(&file, &together, &run_id("uneven3"), &lockstep));
     let read = |d: &Path| std::fs::read(d.join("trajectory.csv")).expect("trajectory");
     assert!(read(&alone) == read(&together), "the trajectories differ");
+    // The same groups over Zenoh: one connection per group, the same run.
+    let zenoh = dir.join("zenoh");
+    let mut over_zenoh = lockstep.to_vec();
+    over_zenoh.extend(["--transport", "zenoh"]);
+    assert_ok(&run(&file, &zenoh, &run_id("uneven3z"), &over_zenoh));
+    assert!(
+        read(&alone) == read(&zenoh),
+        "over Zenoh the trajectory differs"
+    );
+    let mz = metrics(&zenoh);
+    assert_eq!(mz["transport"], "zenoh");
+    let zpid = |r: &str| mz["robots"][r]["agent_pid"].as_u64().expect("pid");
+    for g in [
+        &["a0", "a1", "a2"][..],
+        &["a3", "b0", "b1"][..],
+        &["b2", "b3"][..],
+    ] {
+        assert!(
+            g.iter().all(|r| zpid(r) == zpid(g[0])),
+            "{g:?} over Zenoh: {mz:#}"
+        );
+    }
     // Three processes: a0 a1 a2 | a3 b0 b1 | b2 b3, in scenario order.
     let m = metrics(&together);
     let pid = |r: &str| m["robots"][r]["agent_pid"].as_u64().expect("pid");

@@ -11,7 +11,6 @@ mod common;
 
 use common::*;
 use mrsim::top::{TopModel, draw, wait_for_setup};
-use mrsim_transport::shm::ShmObserver;
 use mrsim_transport::{Namespace, ObserverTransport};
 use ratatui::Terminal;
 use ratatui::backend::TestBackend;
@@ -57,12 +56,15 @@ goal = [-4.0, -5.0]
     path
 }
 
-fn start_agents(run_id: &str) -> Vec<Child> {
+/// One agent per robot of run `run_id`, with `link` (the transport's
+/// arguments) after the rest.
+fn start_agents(run_id: &str, link: &[&str]) -> Vec<Child> {
     ROBOTS
         .iter()
         .map(|r| {
             mrsim()
                 .args(["agent", "--robot", r, "--run", run_id])
+                .args(link)
                 .stdin(Stdio::null())
                 .stdout(Stdio::null())
                 .stderr(Stdio::null())
@@ -125,18 +127,65 @@ fn poll_until(
 
 #[test]
 fn the_dashboard_shows_every_robot_of_a_real_world_waiting_then_at_goal() {
-    let dir = fresh_dir("top-backend");
+    dashboard_of_a_real_world(None);
+}
+
+#[test]
+fn the_dashboard_shows_a_world_reached_over_zenoh_as_one_over_shared_memory() {
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .expect("a free port")
+        .port();
+    dashboard_of_a_real_world(Some(&format!("tcp/127.0.0.1:{port}")));
+}
+
+/// A hand-started world of three robots (over Zenoh listening at `zenoh`,
+/// else over shared memory), watched by `mrsim top`'s observer and drawn
+/// on ratatui's TestBackend: every robot waiting, then every robot at its
+/// goal and the run finished.
+fn dashboard_of_a_real_world(zenoh: Option<&str>) {
+    let tag = if zenoh.is_some() { "topz" } else { "topb" };
+    let dir = fresh_dir(&format!("top-backend-{tag}"));
     let scen = scenario(&dir);
-    let id = run_id("topb");
+    let id = run_id(tag);
     let out = dir.join("run");
-    let mut world = hand_started_world(&scen, &out, &id, 60);
+    let mut world = match zenoh {
+        None => hand_started_world(&scen, &out, &id, 60),
+        Some(ep) => mrsim()
+            .arg("world")
+            .arg(&scen)
+            .args([
+                "--run",
+                &id,
+                "--start-timeout",
+                "60",
+                "--transport",
+                "zenoh",
+                "--listen",
+                ep,
+                "--out",
+            ])
+            .arg(&out)
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("start world"),
+    };
 
     let ns = Namespace::new(&id).expect("run id");
-    let mut obs = ShmObserver::connect(&ns, "mrsim-test-observer", true, Duration::from_secs(30))
-        .expect("observer attaches");
-    let mut model = wait_for_setup(&mut obs, Duration::from_secs(30)).expect("setup");
+    let options = zenoh.map(|ep| mrsim_transport::zenoh::ZenohOptions {
+        endpoint: Some(ep.to_string()),
+        config_file: None,
+    });
+    let mut obs =
+        mrsim::top::connect_observer(&ns, "test", options.as_ref(), Duration::from_secs(30))
+            .expect("observer attaches");
+    let mut model = wait_for_setup(obs.as_mut(), Duration::from_secs(30)).expect("setup");
     assert_eq!(model.run_id, id);
-    poll_until(&mut model, &mut obs, "statistics", |m| m.stats.is_some());
+    poll_until(&mut model, obs.as_mut(), "statistics", |m| {
+        m.stats.is_some()
+    });
 
     let mut terminal = Terminal::new(TestBackend::new(130, 24)).expect("terminal");
     terminal.draw(|f| draw(f, &model)).expect("draw");
@@ -152,8 +201,12 @@ fn the_dashboard_shows_every_robot_of_a_real_world_waiting_then_at_goal() {
         assert!(line.contains("waiting"), "{line}");
     }
 
-    let mut agents = start_agents(&id);
-    poll_until(&mut model, &mut obs, "end of the run", |m| {
+    let link: Vec<&str> = match zenoh {
+        None => vec![],
+        Some(ep) => vec!["--transport", "zenoh", "--connect", ep],
+    };
+    let mut agents = start_agents(&id, &link);
+    poll_until(&mut model, obs.as_mut(), "end of the run", |m| {
         m.finished() && m.robots.len() == 3
     });
     terminal.draw(|f| draw(f, &model)).expect("draw");
@@ -266,7 +319,7 @@ fn mrsim_top_in_tmux_shows_every_robot_and_ends_with_the_run() {
     );
 
     // The agents run it to the end; top leaves on its own and says so.
-    let mut agents = start_agents(&id);
+    let mut agents = start_agents(&id, &[]);
     let screen = wait_for("exit of top", &|s| s.contains("top-exit-status="));
     tmux(&socket, &["kill-server"]);
     assert!(screen.contains("top-exit-status=0"), "{screen}");
