@@ -150,8 +150,11 @@ def clone(tmp_path):
     shim = bin_dir / "cargo"
     shim.write_text(CARGO_SHIM.replace("{target}", shlex.quote(os.path.dirname(exe))))
     shim.chmod(0o755)
+    # A script, not a link: a link outside the virtualenv's bin/ would start
+    # the interpreter without the virtualenv's packages.
     py = bin_dir / "python"
-    py.symlink_to(sys.executable)
+    py.write_text(f"#!/bin/sh\nexec {shlex.quote(sys.executable)} \"$@\"\n")
+    py.chmod(0o755)
     env = dict(os.environ, PATH=f"{bin_dir}{os.pathsep}{os.environ['PATH']}")
     env.setdefault("MRSIM_PROGRESS", "off")
     return tmp_path, env
