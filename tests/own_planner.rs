@@ -1,8 +1,9 @@
-//! A user's own planner, both ways the README shows: the example agent
+//! A user's own planner, both ways the guide shows: the example agent
 //! (`examples/my_agent.rs`) joins a live run as the scenario's `external`
 //! robot, and a planner registered by name runs in-process through the
-//! library (`mrsim::run_in_process`). The README's Rust block is the
-//! example file, byte for byte, and its commands are the ones run here.
+//! library (`mrsim::run_in_process`). The Rust block of the guide's chapter
+//! (docs/own-planner.md) is the example file, byte for byte, and its
+//! commands are the ones run here.
 
 mod common;
 use common::*;
@@ -11,13 +12,9 @@ use std::path::{Path, PathBuf};
 use std::process::Stdio;
 use std::sync::Arc;
 
-/// The README's "Your own planner" section.
-fn readme_section() -> String {
-    let readme = std::fs::read_to_string(root().join("README.md")).expect("README.md");
-    let start = readme.find("\n## Your own planner").expect("the section");
-    let rest = &readme[start + 1..];
-    let end = rest[3..].find("\n## ").map_or(rest.len(), |e| e + 3);
-    rest[..end].to_string()
+/// The guide's chapter "Your own planner".
+fn guide_chapter() -> String {
+    std::fs::read_to_string(root().join("docs/own-planner.md")).expect("docs/own-planner.md")
 }
 
 /// The first fenced block of `lang` after `heading` in `text`.
@@ -46,17 +43,17 @@ fn example_binary() -> PathBuf {
 }
 
 #[test]
-fn the_readme_shows_the_example_agent_byte_for_byte() {
+fn the_guide_shows_the_example_agent_byte_for_byte() {
     let example =
         std::fs::read_to_string(root().join("examples/my_agent.rs")).expect("the example");
-    assert_eq!(block(&readme_section(), "### Rust", "rust"), example);
+    assert_eq!(block(&guide_chapter(), "\n## Rust\n", "rust"), example);
 }
 
 #[test]
 fn the_example_agent_drives_the_external_robot_to_its_goal_in_a_live_run() {
-    // The README's two commands, as printed, but with a run id and an
+    // The guide's two commands, as printed, but with a run id and an
     // output folder of this test's own.
-    let commands = block(&readme_section(), "### Rust", "sh");
+    let commands = block(&guide_chapter(), "\n## Rust\n", "sh");
     let lines: Vec<Vec<&str>> = commands
         .lines()
         .map(|l| {

@@ -69,7 +69,7 @@ fn outcome(scenario: &Path, out: &Path) -> Outcome {
     }
 }
 
-/// The bar for robots swapping places in a map: 90 % of the goals,
+/// The bar for robots swapping places in a map: 90 % of the goals,
 /// never more than 1 mm into a wall, at most one contact per ten robots.
 fn assert_arrived(o: &Outcome, what: &str) {
     assert!(o.success >= 0.9, "{what}: success {}", o.success);

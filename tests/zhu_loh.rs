@@ -15,7 +15,7 @@
 mod common;
 use common::*;
 
-/// Every obstacle's motion for one model at a time (README, "Zhu & Loh").
+/// Every obstacle's motion for one model at a time (docs/planners.md, "Zhu & Loh").
 const PURSUE: &str = "{ model = \"intentional\", behavior = \"pursue\", target = \"r0\", max_speed = 0.3, max_accel = 1.0 }";
 const RANDOM: &str =
     "{ model = \"random\", accel_sigma = 0.8, alpha1 = 0.8, beta1 = 0.5, max_speed = 0.6 }";

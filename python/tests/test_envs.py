@@ -1,5 +1,5 @@
 """The Gymnasium and PettingZoo environments against their libraries'
-checkers, and what the README promises of them."""
+checkers, and what the guide (docs/learning.md) promises of them."""
 
 import numpy as np
 import gymnasium

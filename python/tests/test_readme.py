@@ -1,4 +1,5 @@
-"""The README's Python examples, run exactly as printed."""
+"""The guide's Python examples (docs/own-planner.md, docs/learning.md), run
+exactly as printed."""
 
 import os
 import re
@@ -9,12 +10,16 @@ import pytest
 from test_live import finish, mrsim_binary
 
 
-def python_blocks(repo):
-    text = (repo / "README.md").read_text()
-    start = text.index("\n### Python\n")
-    end = text.find("\n## ", start)
-    section = text[start:end]
-    return re.findall(r"```python\n(.*?)```", section, re.S)
+def python_blocks(repo, chapter, heading=None):
+    """The ```python blocks of a guide chapter (after `heading`, up to the
+    next heading of its level, when given)."""
+    text = (repo / "docs" / chapter).read_text()
+    if heading is not None:
+        start = text.index(f"\n{heading}\n")
+        level = heading.split()[0]
+        end = text.find(f"\n{level} ", start + 1)
+        text = text[start : end if end >= 0 else len(text)]
+    return re.findall(r"```python\n(.*?)```", text, re.S)
 
 
 @pytest.fixture
@@ -25,18 +30,19 @@ def in_scratch(repo, tmp_path, monkeypatch):
     return tmp_path
 
 
-def test_the_readme_shows_three_python_examples(repo):
-    assert len(python_blocks(repo)) == 3
+def test_the_guide_shows_two_python_planner_examples_and_one_learning_example(repo):
+    assert len(python_blocks(repo, "own-planner.md", "## Python")) == 2
+    assert len(python_blocks(repo, "learning.md")) == 1
 
 
-def test_the_readmes_python_planner_and_live_agent_examples_run(repo, in_scratch, capsys):
-    run_block, agent_block, _ = python_blocks(repo)
+def test_the_guides_python_planner_and_live_agent_examples_run(repo, in_scratch, capsys):
+    run_block, agent_block = python_blocks(repo, "own-planner.md", "## Python")
     scope = {}
     exec(run_block, scope)
     printed = capsys.readouterr().out.split()
     assert printed[0] == "True"
     assert os.path.isfile(os.path.join(printed[1], "metrics.json"))
-    # The live agent, against the run the README starts in another terminal.
+    # The live agent, against the run the guide starts in another terminal.
     cmd = [
         mrsim_binary(repo), "run", "scenarios/crossing.toml",
         "--set", "robot.a0.planner=external", "--run", "mine", "--quiet",
@@ -52,6 +58,6 @@ def test_the_readmes_python_planner_and_live_agent_examples_run(repo, in_scratch
         proc.kill()
 
 
-def test_the_readmes_learning_example_runs(repo):
-    *_, env_block = python_blocks(repo)
+def test_the_guides_learning_example_runs(repo):
+    (env_block,) = python_blocks(repo, "learning.md")
     exec(env_block, {})

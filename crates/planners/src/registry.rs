@@ -1,5 +1,5 @@
 //! The planners by scenario name: one table of the built-in ones,
-//! [`PLANNERS`], from which both the listing (`mrsim planners`, the README,
+//! [`PLANNERS`], from which both the listing (`mrsim planners`, the guide,
 //! error messages) and [`build`] come, so a planner is added or renamed in
 //! one place; and a [`Registry`]: the built-in planners, the name
 //! [`EXTERNAL`], and planners a program registers under names of its own
@@ -32,7 +32,7 @@ fn boxed<P: Planner + 'static>(
     Ok(Box::new(planner?))
 }
 
-/// Every planner [`build`] knows, in the order the README lists them.
+/// Every planner [`build`] knows, in the order the guide (docs/planners.md) lists them.
 pub const PLANNERS: &[PlannerInfo] = &[
     PlannerInfo {
         name: "homing",

@@ -1,4 +1,4 @@
-//! mrsim scenario files: load a TOML scenario (the format README.md documents),
+//! mrsim scenario files: load a TOML scenario (the format docs/scenarios.md documents),
 //! apply command-line overrides, resolve defaults and `[generate]`, and
 //! check everything, with errors that name the file, the line and the reason.
 //!
