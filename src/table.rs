@@ -90,8 +90,25 @@ pub fn summary(m: &RunMetrics) -> String {
 fn what_happened(m: &RunMetrics) -> Vec<String> {
     let mut lines = Vec::new();
     for d in &m.deadlocks {
+        // A deadlock its members got out of is said to be one, so that a
+        // run where everyone arrived does not read as a failure.
+        let arrived: Vec<&str> = d
+            .robots
+            .iter()
+            .filter(|r| m.robots.get(*r).is_some_and(|x| x.reached_goal))
+            .map(String::as_str)
+            .collect();
+        let after = if arrived.len() == d.robots.len() {
+            ", resolved: all reached their goals".to_string()
+        } else if let [one] = arrived[..] {
+            format!(", {one} later reached its goal")
+        } else if !arrived.is_empty() {
+            format!(", {} later reached their goals", arrived.join(", "))
+        } else {
+            String::new()
+        };
         lines.push(format!(
-            "deadlock at t = {:.1} s: {} stuck within each other's sensing range",
+            "deadlock at t = {:.1} s: {} stuck within each other's sensing range{after}",
             d.time,
             d.robots.join(", ")
         ));
@@ -165,6 +182,26 @@ mod tests {
         assert!(t.contains("ended early"), "{t}");
         assert!(
             t.contains("avoids nothing: the collisions of l0, r0"),
+            "{t}"
+        );
+    }
+
+    #[test]
+    fn a_deadlock_its_robots_got_out_of_is_said_to_be_resolved() {
+        let m = serde_json::json!({
+            "robots": {"a": {"planner": "orca", "reached_goal": true},
+                       "b": {"planner": "orca", "reached_goal": true},
+                       "c": {"planner": "orca", "reached_goal": false}},
+            "deadlocks": [{"tick": 50, "time": 5.0, "robots": ["a", "b"]},
+                          {"tick": 90, "time": 9.0, "robots": ["b", "c"]}]});
+        let m: RunMetrics = serde_json::from_value(m).expect("metrics.json's schema");
+        let t = summary(&m);
+        assert!(
+            t.contains("deadlock at t = 5.0 s: a, b stuck within each other's sensing range, resolved: all reached their goals"),
+            "{t}"
+        );
+        assert!(
+            t.contains("deadlock at t = 9.0 s: b, c stuck within each other's sensing range, b later reached its goal"),
             "{t}"
         );
     }
