@@ -5,8 +5,11 @@ navigation environments.
   robots may be driven by planners written in Python.
 - :class:`mrsim.Agent`: drive a robot (``planner = "external"``) of a
   running world from Python, over shared memory.
+- :func:`mrsim.sweep`: the runs of ``mrsim sweep`` on any
+  ``concurrent.futures`` executor (a Dask cluster's), one row per run.
 - :class:`mrsim.gym.NavEnv`: one learning robot among robots driven by
-  mrsim's built-in planners (Gymnasium).
+  mrsim's built-in planners (Gymnasium); :class:`mrsim.gym.NavVectorEnv`
+  a batch of them stepped in one call.
 - :class:`mrsim.pettingzoo.ParallelNavEnv`: every robot a learning agent
   (PettingZoo parallel API).
 - :class:`mrsim.Sim`: the stepping engine the environments are built on.
@@ -19,7 +22,7 @@ from typing import NamedTuple
 
 from ._mrsim import Agent, Observation, PlannerError, Sim, run_inproc
 
-__all__ = ["Agent", "Observation", "PlannerError", "Run", "Sim", "run", "scenario_path"]
+__all__ = ["Agent", "Observation", "PlannerError", "Run", "Sim", "run", "scenario_path", "sweep"]
 
 
 def scenario_path(name: str = "circle-16") -> str:
@@ -66,6 +69,8 @@ def run(scenario=None, planners=None, out=None, set=(), render=False, plan_timeo
     folder = Path(folder)
     metrics = json.loads((folder / "metrics.json").read_text())
     return Run(metrics, folder)
+
+from ._sweep import sweep  # noqa: E402
 
 # Last: the Gymnasium module uses the names above; importing it registers
 # the id mrsim/Nav-v0 (``gymnasium.make("mrsim/Nav-v0")``).
