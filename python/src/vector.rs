@@ -165,6 +165,10 @@ fn check_len(what: &str, len: usize, expected: usize) -> PyResult<()> {
     }
 }
 
+/// What [`for_each_env`] does to one environment: its action, its seed,
+/// its observation row.
+type PerEnv<'a> = dyn Fn(&mut Env, [f64; 2], u64, &mut [f32]) -> Result<(), String> + Sync + 'a;
+
 /// Runs `f` on every environment with its observation row, its action and
 /// its seed, the environments split over `threads` threads (the calling
 /// one included). Returns the first error, naming the environment.
@@ -175,7 +179,7 @@ fn for_each_env(
     seeds: &[u64],
     size: usize,
     threads: usize,
-    f: &(dyn Fn(&mut Env, [f64; 2], u64, &mut [f32]) -> Result<(), String> + Sync),
+    f: &PerEnv<'_>,
 ) -> Result<(), String> {
     let n = envs.len();
     if n == 0 {
