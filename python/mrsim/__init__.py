@@ -5,8 +5,11 @@ navigation environments.
   robots may be driven by planners written in Python.
 - :class:`mrsim.Agent`: drive a robot (``planner = "external"``) of a
   running world from Python, over shared memory.
+- :func:`mrsim.sweep`: the runs of ``mrsim sweep`` on any
+  ``concurrent.futures`` executor (a Dask cluster's), one row per run.
 - :class:`mrsim.gym.NavEnv`: one learning robot among robots driven by
-  mrsim's built-in planners (Gymnasium).
+  mrsim's built-in planners (Gymnasium); :class:`mrsim.gym.NavVectorEnv`
+  a batch of them stepped in one call.
 - :class:`mrsim.pettingzoo.ParallelNavEnv`: every robot a learning agent
   (PettingZoo parallel API).
 - :class:`mrsim.Sim`: the stepping engine the environments are built on.
@@ -29,6 +32,7 @@ __all__ = [
     "rerun",
     "run",
     "scenario_path",
+    "sweep",
 ]
 
 
@@ -77,6 +81,7 @@ def run(scenario=None, planners=None, out=None, set=(), render=False, plan_timeo
     metrics = json.loads((folder / "metrics.json").read_text())
     return Run(metrics, folder)
 
+
 class Rerun(NamedTuple):
     """What :func:`rerun` gives back."""
 
@@ -114,6 +119,8 @@ def rerun(run_dir, out=None, set=(), planners=None, render=False) -> Rerun:
     metrics = json.loads((folder / "metrics.json").read_text())
     return Rerun(metrics, folder, [tuple(p) for p in unsure])
 
+
+from ._sweep import sweep  # noqa: E402
 
 # Last: the Gymnasium module uses the names above; importing it registers
 # the id mrsim/Nav-v0 (``gymnasium.make("mrsim/Nav-v0")``).

@@ -13,11 +13,17 @@ max_speed), as the constructor's ``action`` says; the world applies it
 through the robot's actuator limits as it would an agent's command.
 """
 
+import os
+
 import gymnasium
 import numpy as np
 from gymnasium import spaces
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
 
 from . import _common
+from ._mrsim import VecSim
 from ._render import Canvas
 
 
@@ -111,7 +117,222 @@ class NavEnv(gymnasium.Env):
         return self._sim
 
 
+class _EnvView:
+    """One environment of a :class:`NavVectorEnv`, as :class:`Canvas` reads
+    a :class:`mrsim.Sim`."""
+
+    def __init__(self, vec, i):
+        self._vec, self._i = vec, i
+
+    def positions(self):
+        return self._vec.positions(self._i)
+
+    def goals(self):
+        return self._vec.goals(self._i)
+
+    def walls(self):
+        return self._vec.walls(self._i)
+
+    def radii(self):
+        return self._vec.radii(self._i)
+
+    def kinds(self):
+        return self._vec.kinds(self._i)
+
+    @property
+    def learner_indices(self):
+        return self._vec.learner_indices
+
+
+class NavVectorEnv(VectorEnv):
+    """``num_envs`` :class:`NavEnv` environments stepped together: one call
+    into mrsim's Rust engine steps all of them with Python's GIL released,
+    spread over ``num_threads`` threads (default: the cores this process
+    may use), writing straight into numpy arrays. The other keyword
+    arguments are :class:`NavEnv`'s, and environment ``i`` gives the very
+    episodes a NavEnv gives for the same seed.
+
+    Autoreset is Gymnasium 1.x's default, next-step
+    (``metadata["autoreset_mode"]``): the step after an environment's
+    episode ended resets it (its action ignored) and returns its first
+    observation with reward 0. ``reset(seed=s)`` seeds environment ``i``
+    with ``s + i`` (or ``seed[i]`` for a list), as Gymnasium's
+    SyncVectorEnv does; later episodes draw their seeds from each
+    environment's generator, as NavEnv does. ``reset(options={"reset_mask":
+    mask})`` resets only the environments marked.
+
+    Info: arrays ``collisions``, ``distance_to_goal``, ``at_goal``,
+    ``reached``, ``tick``, ``time`` (NavEnv's keys), each with its
+    ``_key`` mask (always all true: every environment reports every key).
+    ``gymnasium.make_vec("mrsim/Nav-v0", num_envs=N, ...)`` builds one.
+    """
+
+    metadata = {
+        "render_modes": ["rgb_array"],
+        "render_fps": 10,
+        "autoreset_mode": AutoresetMode.NEXT_STEP,
+    }
+
+    _INFO = ("collisions", "distance_to_goal", "at_goal", "reached", "tick", "time")
+    _INFO_TYPES = (np.int64, np.float64, np.bool_, np.bool_, np.uint64, np.float64)
+
+    def __init__(
+        self,
+        num_envs=1,
+        scenario=None,
+        learner=None,
+        set=(),
+        k=8,
+        action="velocity",
+        reward_progress=1.0,
+        reward_collision=-10.0,
+        reward_arrival=10.0,
+        render_mode=None,
+        render_size=256,
+        num_threads=None,
+    ):
+        if render_mode not in (None, "rgb_array"):
+            raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
+            raise ValueError(f"num_envs must be a whole number of at least 1, got {num_envs!r}")
+        if num_threads is None:
+            try:
+                num_threads = len(os.sched_getaffinity(0))
+            except AttributeError:
+                num_threads = os.cpu_count() or 1
+        if learner is None:
+            learner = _common.robot_names(scenario, set)[0]
+        probe = _common.make_sim(scenario, [learner], set, k)
+        bound = float(_common.action_bounds(probe, action)[0])
+        rewards = _common.Rewards(reward_progress, reward_collision, reward_arrival)
+        self.num_envs = int(num_envs)
+        self.learner = learner
+        self._vec = VecSim(
+            _common.scenario_path() if scenario is None else str(scenario),
+            learner,
+            list(set),
+            k,
+            self.num_envs,
+            action == "force",
+            bound,
+            _common.horizon(probe),
+            rewards.progress,
+            rewards.collision,
+            rewards.arrival,
+            int(num_threads),
+        )
+        self.rewards = rewards
+        self.single_action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
+        self.single_observation_space = _common.observation_space(probe, k)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.render_mode = render_mode
+        self._render_size = render_size
+        self._canvases = [None] * self.num_envs
+        self._obs_size = probe.obs_size
+        self._rngs = [None] * self.num_envs
+        self._seeds = np.zeros(self.num_envs, dtype=np.uint64)
+        self._ended = np.zeros(self.num_envs, dtype=bool)
+        self._started = False
+
+    def _outputs(self):
+        n = self.num_envs
+        obs = np.empty((n, self._obs_size), dtype=np.float32)
+        rewards = np.zeros(n, dtype=np.float64)
+        terminated = np.zeros(n, dtype=bool)
+        truncated = np.zeros(n, dtype=bool)
+        info = [np.zeros(n, dtype=t) for t in self._INFO_TYPES]
+        return obs, rewards, terminated, truncated, info
+
+    def _infos(self, arrays):
+        infos = {}
+        everyone = np.ones(self.num_envs, dtype=bool)
+        for key, a in zip(self._INFO, arrays):
+            infos[key] = a
+            infos[f"_{key}"] = everyone.copy()
+        return infos
+
+    def _draw_seed(self, i):
+        """Environment ``i``'s next episode seed, from its generator, as
+        NavEnv.reset draws one without a seed."""
+        if self._rngs[i] is None:
+            self._rngs[i], _ = seeding.np_random(None)
+        return int(self._rngs[i].integers(0, 2**62))
+
+    def reset(self, *, seed=None, options=None):
+        n = self.num_envs
+        if seed is None:
+            seeds = [None] * n
+        elif isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
+            seeds = [int(seed) + i for i in range(n)]
+        else:
+            seeds = list(seed)
+            if len(seeds) != n:
+                raise ValueError(f"{len(seeds)} seeds for {n} environments: give one per environment, an int or None")
+        mask = np.ones(n, dtype=bool)
+        if options is not None and "reset_mask" in options:
+            mask = np.asarray(options["reset_mask"])
+            if mask.shape != (n,) or mask.dtype != np.bool_:
+                raise ValueError(f"options['reset_mask'] must be a bool array of shape ({n},), got {mask.dtype} {mask.shape}")
+            if not mask.any():
+                raise ValueError("options['reset_mask'] marks no environment")
+            if not self._started and not mask.all():
+                raise ValueError("the first reset must reset every environment")
+        for i in np.flatnonzero(mask):
+            if seeds[i] is not None:
+                if isinstance(seeds[i], bool) or not isinstance(seeds[i], (int, np.integer)) or seeds[i] < 0:
+                    raise ValueError(f"seed {seeds[i]!r} of environment {i}: seeds are whole numbers >= 0")
+                self._rngs[i], _ = seeding.np_random(int(seeds[i]))
+                self._seeds[i] = int(seeds[i])
+            else:
+                self._seeds[i] = self._draw_seed(i)
+            self._canvases[i] = None
+        obs, rewards, terminated, truncated, info = self._outputs()
+        if self._started:
+            obs[:] = self._last_obs
+        self._vec.reset(self._seeds, mask, obs, rewards, terminated, truncated, *info)
+        self._ended[mask] = False
+        self._started = True
+        self._last_obs = obs
+        return obs.copy(), self._infos(info)
+
+    def step(self, actions):
+        if not self._started:
+            raise RuntimeError("call reset() before step()")
+        a = np.asarray(actions, dtype=np.float64)
+        if a.shape != (self.num_envs, 2):
+            raise ValueError(
+                f"actions of shape {a.shape}, expected ({self.num_envs}, 2): one row of two numbers per environment"
+            )
+        a = np.ascontiguousarray(a)
+        if self._ended.any():
+            for i in np.flatnonzero(self._ended):
+                self._seeds[i] = self._draw_seed(i)
+                self._canvases[i] = None
+        obs, rewards, terminated, truncated, info = self._outputs()
+        self._vec.step(a, self._seeds, obs, rewards, terminated, truncated, *info)
+        np.logical_or(terminated, truncated, out=self._ended)
+        self._last_obs = obs
+        return obs.copy(), rewards, terminated, truncated, self._infos(info)
+
+    def render(self):
+        if self.render_mode != "rgb_array":
+            return None
+        frames = []
+        for i in range(self.num_envs):
+            view = _EnvView(self._vec, i)
+            if self._canvases[i] is None:
+                self._canvases[i] = Canvas(view, self._render_size)
+            frames.append(self._canvases[i].draw(view))
+        return tuple(frames)
+
+
 # Registered on import (``import mrsim`` imports this module):
 # ``gymnasium.make("mrsim/Nav-v0", **kwargs)`` builds a NavEnv with the
-# constructor's keyword arguments.
-gymnasium.register(id="mrsim/Nav-v0", entry_point="mrsim.gym:NavEnv")
+# constructor's keyword arguments, ``gymnasium.make_vec("mrsim/Nav-v0",
+# num_envs=N, **kwargs)`` a NavVectorEnv.
+gymnasium.register(
+    id="mrsim/Nav-v0",
+    entry_point="mrsim.gym:NavEnv",
+    vector_entry_point="mrsim.gym:NavVectorEnv",
+)

@@ -7,13 +7,13 @@
 mod live;
 mod planner;
 mod run;
+mod sweep;
+mod vector;
 
 use mrsim_runtime::sim::{Sim as Engine, SimError, observation_size};
 use mrsim_runtime::{ScenarioSource, Validated};
 use mrsim_world::Applied;
-use numpy::{
-    PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadwriteArray2,
-};
+use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyReadwriteArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
@@ -208,57 +208,100 @@ impl Sim {
 
     /// The learners' goals, (learners, 2).
     fn goals<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let s = self.engine.scenario();
-        let rows: Vec<Vec<f64>> = (self.engine.learners().iter())
+        engine_arrays::goals(py, &self.engine)
+    }
+
+    /// Every body's position, (bodies, 2): robots, then obstacles.
+    fn positions<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        engine_arrays::positions(py, &self.engine)
+    }
+
+    /// Every body's velocity, (bodies, 2).
+    fn velocities<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        engine_arrays::velocities(py, &self.engine)
+    }
+
+    /// Every body's radius.
+    fn radii<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        engine_arrays::radii(py, &self.engine)
+    }
+
+    /// Every body's kind: 0 robot, 1 obstacle.
+    fn kinds<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u32>> {
+        engine_arrays::kinds(py, &self.engine)
+    }
+
+    /// Every wall segment (the arena's included), (walls, 4): x0, y0, x1, y1.
+    fn walls<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        engine_arrays::walls(py, &self.engine)
+    }
+}
+
+/// A stepping engine's state as numpy arrays, for [`Sim`] and
+/// [`vector::VecSim`].
+mod engine_arrays {
+    use super::Engine;
+    use numpy::{PyArray1, PyArray2, PyArrayMethods};
+    use pyo3::prelude::*;
+
+    /// The learners' goals, (learners, 2).
+    pub fn goals<'py>(py: Python<'py>, e: &Engine) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let s = e.scenario();
+        let rows: Vec<Vec<f64>> = (e.learners().iter())
             .map(|&i| s.robots[i].goal.to_vec())
             .collect();
         Ok(PyArray2::from_vec2(py, &rows)?)
     }
 
     /// Every body's position, (bodies, 2): robots, then obstacles.
-    fn positions<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        let s = self.engine.world().states();
+    pub fn positions<'py>(py: Python<'py>, e: &Engine) -> Bound<'py, PyArray2<f64>> {
+        let s = e.world().states();
         let flat: Vec<f64> = s.iter().flat_map(|b| b.position).collect();
         reshape(py, flat, s.len(), 2)
     }
 
     /// Every body's velocity, (bodies, 2).
-    fn velocities<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        let s = self.engine.world().states();
+    pub fn velocities<'py>(py: Python<'py>, e: &Engine) -> Bound<'py, PyArray2<f64>> {
+        let s = e.world().states();
         let flat: Vec<f64> = s.iter().flat_map(|b| b.velocity).collect();
         reshape(py, flat, s.len(), 2)
     }
 
     /// Every body's radius.
-    fn radii<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        let s = self.engine.world().states();
+    pub fn radii<'py>(py: Python<'py>, e: &Engine) -> Bound<'py, PyArray1<f64>> {
+        let s = e.world().states();
         PyArray1::from_iter(py, s.iter().map(|b| b.radius))
     }
 
     /// Every body's kind: 0 robot, 1 obstacle.
-    fn kinds<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u32>> {
-        let s = self.engine.world().states();
+    pub fn kinds<'py>(py: Python<'py>, e: &Engine) -> Bound<'py, PyArray1<u32>> {
+        let s = e.world().states();
         PyArray1::from_iter(py, s.iter().map(|b| b.kind))
     }
 
     /// Every wall segment (the arena's included), (walls, 4): x0, y0, x1, y1.
-    fn walls<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        let w = self.engine.world().walls();
+    pub fn walls<'py>(py: Python<'py>, e: &Engine) -> Bound<'py, PyArray2<f64>> {
+        let w = e.world().walls();
         let flat: Vec<f64> = w
             .iter()
             .flat_map(|s| [s[0][0], s[0][1], s[1][0], s[1][1]])
             .collect();
         reshape(py, flat, w.len(), 4)
     }
-}
 
-/// A (rows, cols) array of `flat`, row by row.
-fn reshape(py: Python<'_>, flat: Vec<f64>, rows: usize, cols: usize) -> Bound<'_, PyArray2<f64>> {
-    let a = PyArray1::from_vec(py, flat);
-    match a.reshape([rows, cols]) {
-        Ok(a) => a,
-        // Cannot happen: `flat` has rows × cols values by construction.
-        Err(_) => PyArray2::zeros(py, [rows, cols], false),
+    /// A (rows, cols) array of `flat`, row by row.
+    fn reshape(
+        py: Python<'_>,
+        flat: Vec<f64>,
+        rows: usize,
+        cols: usize,
+    ) -> Bound<'_, PyArray2<f64>> {
+        let a = PyArray1::from_vec(py, flat);
+        match a.reshape([rows, cols]) {
+            Ok(a) => a,
+            // Cannot happen: `flat` has rows × cols values by construction.
+            Err(_) => PyArray2::zeros(py, [rows, cols], false),
+        }
     }
 }
 
@@ -267,6 +310,9 @@ fn reshape(py: Python<'_>, flat: Vec<f64>, rows: usize, cols: usize) -> Bound<'_
 fn _mrsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     planner::quiet_planner_panics();
     m.add_class::<Sim>()?;
+    m.add_class::<vector::VecSim>()?;
+    m.add_function(wrap_pyfunction!(sweep::sweep_jobs, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep::sweep_run, m)?)?;
     m.add_class::<planner::PyObservation>()?;
     m.add_class::<live::Agent>()?;
     m.add_function(wrap_pyfunction!(run::run_inproc, m)?)?;

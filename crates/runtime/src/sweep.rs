@@ -307,8 +307,8 @@ fn file_error(e: mrsim_runfolder::FileError) -> String {
 }
 
 /// Reads a run folder's metrics.json and scenario.json (with the run
-/// folder's schema and the scenario's own type).
-fn read_run(dir: &Path) -> Result<RunMetrics, String> {
+/// folder's schema and the scenario's own type) into sweep.csv's metrics.
+pub fn read_run(dir: &Path) -> Result<RunMetrics, String> {
     let m = mrsim_runfolder::read_metrics(dir).map_err(file_error)?;
     let sc: mrsim_scenario::Scenario =
         mrsim_runfolder::read_json(dir, mrsim_runfolder::SCENARIO_FILE).map_err(file_error)?;
@@ -480,8 +480,63 @@ pub struct JobDone<'a> {
     pub error: Option<&'a str>,
 }
 
+/// A checked plan: every combination valid, the runs listed, nothing
+/// made on disk yet.
+#[derive(Debug, Clone)]
+pub struct Checked {
+    /// The swept keys and their values.
+    pub axes: Vec<(String, Vec<String>)>,
+    /// Every combination of the values, first key slowest.
+    pub combos: Vec<Vec<String>>,
+    /// Every run, combination by combination, seed by seed (folders
+    /// relative to the sweep's).
+    pub jobs: Vec<Job>,
+    /// The scenario's name.
+    pub name: String,
+    /// The scenario's length unit (`m`, `cm`, `mm`).
+    pub length_unit: &'static str,
+    /// Every file the runs read besides the scenario itself (maps' YAML
+    /// files and images), as the scenario's loader found them.
+    pub files: Vec<PathBuf>,
+}
+
 /// Checks the plan and every combination, and makes the sweep's folder.
 pub fn prepare(plan: &SweepPlan) -> Result<Sweep, SweepError> {
+    let Checked {
+        axes,
+        combos,
+        jobs,
+        name,
+        length_unit,
+        files: _,
+    } = check(plan)?;
+    let dir = crate::out::prepare(plan.out.as_deref(), &format!("sweep-{name}"))?;
+    std::fs::create_dir_all(dir.join("runs")).map_err(|e| {
+        Invalid(format!(
+            "output folder {}: cannot create runs/ in it: {e}",
+            dir.display()
+        ))
+    })?;
+    let workers = plan
+        .jobs
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+        .min(jobs.len())
+        .max(1);
+    Ok(Sweep {
+        plan: plan.clone(),
+        axes,
+        combos,
+        jobs,
+        workers,
+        dir,
+        name,
+        length_unit,
+    })
+}
+
+/// Checks the plan and every combination (in each mode) and lists the
+/// runs, without making anything on disk.
+pub fn check(plan: &SweepPlan) -> Result<Checked, SweepError> {
     if plan.seeds == 0 {
         return Err(Invalid::new("--seeds must be at least 1").into());
     }
@@ -529,6 +584,7 @@ pub fn prepare(plan: &SweepPlan) -> Result<Sweep, SweepError> {
     // Validate every combination before anything runs.
     let mut name = String::new();
     let mut length_unit = "m";
+    let mut files: Vec<PathBuf> = Vec::new();
     for &mode in plan.mode.modes() {
         for combo in &combos {
             let v = Validated::new(ScenarioSource {
@@ -552,6 +608,14 @@ pub fn prepare(plan: &SweepPlan) -> Result<Sweep, SweepError> {
                 ))
                 .into());
             }
+            if let Some(map) = &v.scenario().map {
+                for f in [&map.file, &map.image] {
+                    let f = PathBuf::from(f);
+                    if !files.contains(&f) {
+                        files.push(f);
+                    }
+                }
+            }
             name = v.scenario().name.clone();
             length_unit = match v.scenario().length_unit {
                 mrsim_scenario::LengthUnit::M => "m",
@@ -560,13 +624,6 @@ pub fn prepare(plan: &SweepPlan) -> Result<Sweep, SweepError> {
             };
         }
     }
-    let dir = crate::out::prepare(plan.out.as_deref(), &format!("sweep-{name}"))?;
-    std::fs::create_dir_all(dir.join("runs")).map_err(|e| {
-        Invalid(format!(
-            "output folder {}: cannot create runs/ in it: {e}",
-            dir.display()
-        ))
-    })?;
     let mut jobs: Vec<Job> = Vec::new();
     for &mode in plan.mode.modes() {
         for (i, c) in combos.iter().enumerate() {
@@ -583,20 +640,13 @@ pub fn prepare(plan: &SweepPlan) -> Result<Sweep, SweepError> {
             }));
         }
     }
-    let workers = plan
-        .jobs
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
-        .min(jobs.len())
-        .max(1);
-    Ok(Sweep {
-        plan: plan.clone(),
+    Ok(Checked {
         axes,
         combos,
         jobs,
-        workers,
-        dir,
         name,
         length_unit,
+        files,
     })
 }
 
@@ -614,7 +664,7 @@ fn numeric_axis(axes: &[(String, Vec<String>)], key: &str) -> Result<usize, Inva
 }
 
 /// The `--set` overrides of one run: the combination's values and the seed.
-fn sets(axes: &[(String, Vec<String>)], combo: &[String], seed: u64) -> Vec<String> {
+pub fn sets(axes: &[(String, Vec<String>)], combo: &[String], seed: u64) -> Vec<String> {
     let mut s: Vec<String> = axes
         .iter()
         .zip(combo)
@@ -714,6 +764,35 @@ impl Sweep {
             ))
         }
     }
+}
+
+/// Runs one run of a sweep in this process, in lockstep, as the sweep's
+/// `mrsim run` child would (the same scenario, overrides and seed give the
+/// same metrics: lockstep runs are identical in and out of process), into
+/// the folder `out`, and reads its metrics. For callers that spread a
+/// sweep's runs themselves (the Python package's `mrsim.sweep`).
+pub fn run_in_process(scenario: &Path, set: Vec<String>, out: &Path) -> JobResult {
+    let req = crate::launch::InProcess {
+        scenario: ScenarioSource {
+            path: Some(scenario.to_path_buf()),
+            mode: Some(Mode::Lockstep),
+            set,
+        },
+        registry: std::sync::Arc::new(mrsim_planners::Registry::builtin()),
+        out: Some(out.to_path_buf()),
+        render: false,
+        plan_timeout: None,
+    };
+    let r = crate::launch::run_in_process(&req).map_err(|e| {
+        let mut text = e.to_string();
+        let mut src = std::error::Error::source(&e);
+        while let Some(s) = src {
+            text.push_str(&format!(": {s}"));
+            src = s.source();
+        }
+        text
+    })?;
+    read_run(&r.dir)
 }
 
 /// One combination's means in one mode.
