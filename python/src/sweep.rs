@@ -30,6 +30,7 @@ pub fn sweep_jobs<'py>(
         allowable: None,
         mode: SweepMode::Lockstep,
         x: None,
+        metrics: Vec::new(),
     };
     let checked = check(&plan).map_err(|e| match e.refused() {
         Some(i) => PyValueError::new_err(i.to_string()),
