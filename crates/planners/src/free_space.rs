@@ -499,13 +499,7 @@ mod tests {
     use crate::testkit::{RobotModel, Sim, observation, obstacle};
     use crate::{ParamValue, SelfState, Sensed};
 
-    const ROBOT: RobotModel = RobotModel {
-        radius: 0.2,
-        mass: 1.0,
-        damping: 0.0,
-        max_speed: 1.0,
-        max_accel: 2.0,
-    };
+    const ROBOT: RobotModel = RobotModel::unit(0.2);
 
     /// The robot at rest at `position`.
     fn me(position: Vec2) -> SelfState {

@@ -208,13 +208,7 @@ mod tests {
         }
     }
 
-    const ROBOT: RobotModel = RobotModel {
-        radius: 0.25,
-        mass: 1.0,
-        damping: 0.0,
-        max_speed: 1.0,
-        max_accel: 2.0,
-    };
+    const ROBOT: RobotModel = RobotModel::unit(0.25);
 
     /// The unicycle at (1, 2) with heading `heading`, speed `v` and turn
     /// rate `w`.

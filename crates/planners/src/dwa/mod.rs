@@ -279,13 +279,7 @@ mod tests {
     use crate::Segment;
     use crate::testkit::{RobotModel, Sim, observation, obstacle};
 
-    const ROBOT: RobotModel = RobotModel {
-        radius: 0.3,
-        mass: 1.0,
-        damping: 0.0,
-        max_speed: 1.0,
-        max_accel: 2.0,
-    };
+    const ROBOT: RobotModel = RobotModel::unit(0.3);
 
     /// The robot at the origin moving at `velocity`, its goal 10 along x.
     fn obs<'a>(velocity: Vec2, others: &'a [Sensed], walls: &'a [Segment]) -> Observation<'a> {

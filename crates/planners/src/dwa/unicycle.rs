@@ -319,13 +319,7 @@ mod tests {
     use crate::SelfState;
     use crate::testkit::{RobotModel, observation, robot};
 
-    const ROBOT: RobotModel = RobotModel {
-        radius: 0.25,
-        mass: 1.0,
-        damping: 0.0,
-        max_speed: 1.0,
-        max_accel: 2.0,
-    };
+    const ROBOT: RobotModel = RobotModel::unit(0.25);
 
     /// The unicycle at rest at the origin, heading `heading`.
     fn me(heading: f64) -> SelfState {

@@ -33,6 +33,18 @@ pub struct RobotModel {
 }
 
 impl RobotModel {
+    /// The model most planner tests use: a disc of `radius`, mass 1, no
+    /// damping, 1 m/s and 2 m/s².
+    pub const fn unit(radius: f64) -> Self {
+        Self {
+            radius,
+            mass: 1.0,
+            damping: 0.0,
+            max_speed: 1.0,
+            max_accel: 2.0,
+        }
+    }
+
     /// The holonomic robot with id 0 at `position`, moving at `velocity`
     /// (heading 0, not turning).
     pub fn at(&self, position: Vec2, velocity: Vec2) -> SelfState {

@@ -5,13 +5,7 @@ use super::*;
 use crate::testkit::{RobotModel, Sim, observation, obstacle};
 use crate::{ParamValue, SelfState, Sensed};
 
-const ROBOT: RobotModel = RobotModel {
-    radius: 0.3,
-    mass: 1.0,
-    damping: 0.0,
-    max_speed: 1.0,
-    max_accel: 2.0,
-};
+const ROBOT: RobotModel = RobotModel::unit(0.3);
 
 fn me(position: Vec2, velocity: Vec2) -> SelfState {
     ROBOT.at(position, velocity)
