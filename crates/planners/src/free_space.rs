@@ -496,42 +496,23 @@ impl Planner for FreeSpace {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testkit::Sim;
-    use crate::{BodyKind, ParamValue, SelfState, Sensed};
+    use crate::testkit::{RobotModel, Sim, observation, obstacle};
+    use crate::{ParamValue, SelfState, Sensed};
 
+    const ROBOT: RobotModel = RobotModel::unit(0.2);
+
+    /// The robot at rest at `position`.
     fn me(position: Vec2) -> SelfState {
-        SelfState {
-            id: 0,
-            position,
-            velocity: Vec2::zeros(),
-            radius: 0.2,
-            mass: 1.0,
-            damping: 0.0,
-            max_speed: 1.0,
-            max_accel: 2.0,
-            heading: 0.0,
-            angular_velocity: 0.0,
-            kinematics: crate::Kinematics::Holonomic,
-        }
-    }
-
-    fn observation<'a>(me: SelfState, goal: Vec2, others: &'a [Sensed]) -> Observation<'a> {
-        crate::testkit::observation(me, goal, others)
+        ROBOT.at(position, Vec2::zeros())
     }
 
     fn planner() -> FreeSpace {
         FreeSpace::from_params(&Params::new()).unwrap()
     }
 
+    /// A standing obstacle.
     fn still(id: u32, position: Vec2, radius: f64) -> Sensed {
-        Sensed {
-            id,
-            kind: BodyKind::Obstacle,
-            position,
-            velocity: Vec2::zeros(),
-            acceleration: Vec2::zeros(),
-            radius,
-        }
+        obstacle(id, position, Vec2::zeros(), radius)
     }
 
     #[test]
@@ -585,14 +566,7 @@ mod tests {
         let mut p = planner();
         // A crossing obstacle sweeping the inside of the ring in 1 s.
         let mut others = others;
-        others.push(Sensed {
-            id: 99,
-            kind: BodyKind::Obstacle,
-            position: Vec2::new(-1.5, 0.0),
-            velocity: Vec2::new(1.5, 0.0),
-            acceleration: Vec2::zeros(),
-            radius: 0.9,
-        });
+        others.push(obstacle(99, Vec2::new(-1.5, 0.0), Vec2::new(1.5, 0.0), 0.9));
         p.plan(&observation(
             me(Vec2::zeros()),
             Vec2::new(10.0, 0.0),

@@ -56,33 +56,22 @@ impl Planner for Homing {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{SelfState, Vec2};
+    use crate::Vec2;
+    use crate::testkit::{RobotModel, observation};
 
+    const ROBOT: RobotModel = RobotModel {
+        radius: 0.0,
+        mass: 1.0,
+        damping: 0.1,
+        max_speed: 10.0,
+        max_accel: 100.0,
+    };
+
+    /// The point robot at `pos` moving at `vel`, alone, its goal 10 along x.
     fn obs(pos: Vec2, vel: Vec2) -> Observation<'static> {
         Observation {
-            tick: 0,
-            time: 0.0,
-            dt: 0.1,
-            me: SelfState {
-                id: 0,
-                position: pos,
-                velocity: vel,
-                radius: 0.0,
-                mass: 1.0,
-                damping: 0.1,
-                max_speed: 10.0,
-                max_accel: 100.0,
-                heading: 0.0,
-                angular_velocity: 0.0,
-                kinematics: crate::Kinematics::Holonomic,
-            },
-            goal: Vec2::new(10.0, 0.0),
             goal_tolerance: 0.1,
-            goal_hold_ticks: 3,
-            others: &[],
-            walls: &[],
-            path: None,
-            scan: None,
+            ..observation(ROBOT.at(pos, vel), Vec2::new(10.0, 0.0), &[])
         }
     }
 

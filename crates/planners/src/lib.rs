@@ -17,7 +17,10 @@
 //!   the paper (`homing` is the smallest example). A method too long for one
 //!   file becomes a folder split the way its reference implementation is:
 //!   [`orca`] is the method in `mod.rs`, its linear programs and its static
-//!   obstacles beside it, its tests in their own file.
+//!   obstacles beside it, its tests in their own file. A test module longer
+//!   than about 200 lines lives in `<method>/tests.rs` the same way, so that
+//!   the method file reads like the paper; the states and observations the
+//!   tests start from are the testkit's fixtures.
 //! - **One table.** [`PLANNERS`] is the only list of planners: each entry
 //!   has the scenario name, a one-line summary and the constructor, and
 //!   both the listing (`mrsim --help`, error messages) and [`build`] read
@@ -38,7 +41,6 @@ mod registry;
 pub mod chung;
 pub mod designated_path;
 pub mod dwa;
-mod dwa_unicycle;
 pub mod estimate;
 pub mod free_space;
 pub mod homing;

@@ -400,17 +400,11 @@ impl Prediction {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{BodyKind, ParamValue};
+    use crate::ParamValue;
+    use crate::testkit::obstacle;
 
     fn body(id: u32, position: Vec2, velocity: Vec2) -> Sensed {
-        Sensed {
-            id,
-            kind: BodyKind::Obstacle,
-            position,
-            velocity,
-            acceleration: Vec2::zeros(),
-            radius: 0.5,
-        }
+        obstacle(id, position, velocity, 0.5)
     }
 
     fn v(x: f64, y: f64) -> Vec2 {

@@ -145,46 +145,30 @@ impl Planner for SocialForce {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testkit::Sim;
-    use crate::{BodyKind, ParamValue, Segment, SelfState, Sensed};
+    use crate::testkit::{RobotModel, Sim, observation, robot};
+    use crate::{ParamValue, Segment, Sensed};
 
+    const ROBOT: RobotModel = RobotModel {
+        radius: 0.3,
+        mass: 2.0,
+        damping: 0.5,
+        max_speed: 2.0,
+        max_accel: 10.0,
+    };
+
+    /// The robot at the origin moving at `velocity`, its goal 10 along x.
     fn obs<'a>(velocity: Vec2, others: &'a [Sensed], walls: &'a [Segment]) -> Observation<'a> {
+        let me = ROBOT.at(Vec2::zeros(), velocity);
         Observation {
-            tick: 0,
-            time: 0.0,
-            dt: 0.1,
-            me: SelfState {
-                id: 0,
-                position: Vec2::zeros(),
-                velocity,
-                radius: 0.3,
-                mass: 2.0,
-                damping: 0.5,
-                max_speed: 2.0,
-                max_accel: 10.0,
-                heading: 0.0,
-                angular_velocity: 0.0,
-                kinematics: crate::Kinematics::Holonomic,
-            },
-            goal: Vec2::new(10.0, 0.0),
             goal_tolerance: 0.1,
-            goal_hold_ticks: 3,
-            others,
             walls,
-            path: None,
-            scan: None,
+            ..observation(me, Vec2::new(10.0, 0.0), others)
         }
     }
 
+    /// Robot 1, standing, of the same size.
     fn body_at(p: Vec2) -> Sensed {
-        Sensed {
-            id: 1,
-            kind: BodyKind::Robot,
-            position: p,
-            velocity: Vec2::zeros(),
-            acceleration: Vec2::zeros(),
-            radius: 0.3,
-        }
+        robot(1, p, Vec2::zeros(), ROBOT.radius)
     }
 
     #[test]

@@ -157,6 +157,7 @@ impl Planner for LookAhead {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testkit::{RobotModel, observation};
     use std::f64::consts::FRAC_PI_2;
 
     /// p' = T(theta) (v, omega).
@@ -207,23 +208,13 @@ mod tests {
         }
     }
 
+    const ROBOT: RobotModel = RobotModel::unit(0.25);
+
+    /// The unicycle at (1, 2) with heading `heading`, speed `v` and turn
+    /// rate `w`.
     fn unicycle_me(heading: f64, v: f64, w: f64) -> crate::SelfState {
-        crate::SelfState {
-            id: 0,
-            position: Vec2::new(1.0, 2.0),
-            velocity: Vec2::new(heading.cos(), heading.sin()) * v,
-            radius: 0.25,
-            mass: 1.0,
-            damping: 0.0,
-            max_speed: 1.0,
-            max_accel: 2.0,
-            heading,
-            angular_velocity: w,
-            kinematics: Kinematics::Unicycle {
-                max_angular_speed: 2.0,
-                max_angular_accel: 4.0,
-            },
-        }
+        let velocity = Vec2::new(heading.cos(), heading.sin()) * v;
+        ROBOT.unicycle(Vec2::new(1.0, 2.0), velocity, heading, w, 2.0, 4.0)
     }
 
     fn probe(answer: Command, native: bool) -> (LookAhead, impl Fn() -> (Vec2, Vec2, f64)) {
@@ -240,8 +231,7 @@ mod tests {
     #[test]
     fn a_holonomic_planner_sees_the_look_ahead_point_and_a_smaller_tolerance() {
         let (mut la, seen) = probe(Command::Velocity(Vec2::new(0.5, 0.0)), false);
-        let mut obs =
-            crate::testkit::observation(unicycle_me(FRAC_PI_2, 0.4, 1.0), Vec2::zeros(), &[]);
+        let mut obs = observation(unicycle_me(FRAC_PI_2, 0.4, 1.0), Vec2::zeros(), &[]);
         obs.goal_tolerance = 0.1;
         la.plan(&obs);
         let (p, v, tol) = seen();
@@ -258,7 +248,7 @@ mod tests {
             omega: -0.2,
         };
         let (mut la, seen) = probe(answer, true);
-        let obs = crate::testkit::observation(unicycle_me(0.3, 0.4, 1.0), Vec2::zeros(), &[]);
+        let obs = observation(unicycle_me(0.3, 0.4, 1.0), Vec2::zeros(), &[]);
         assert_eq!(la.plan(&obs), answer);
         let (p, v, tol) = seen();
         assert_eq!(
@@ -272,7 +262,7 @@ mod tests {
         // Heading +y, asked (0.5, 0): v = 0, omega = -0.5 / 0.05 = -10,
         // beyond the 2 rad/s limit: the world clamps it, not the controller.
         let (mut la, _) = probe(Command::Velocity(Vec2::new(0.5, 0.0)), false);
-        let obs = crate::testkit::observation(unicycle_me(FRAC_PI_2, 0.0, 0.0), Vec2::zeros(), &[]);
+        let obs = observation(unicycle_me(FRAC_PI_2, 0.0, 0.0), Vec2::zeros(), &[]);
         let Command::Unicycle { v, omega } = la.plan(&obs) else {
             panic!("a unicycle command");
         };
@@ -287,7 +277,7 @@ mod tests {
         // At rest heading +x, a force of 10 N on 1 kg is clamped to
         // max_accel 2: u = 0.2 m/s along the force, here +x: v = 0.2.
         let (mut la, _) = probe(Command::Force(Vec2::new(10.0, 0.0)), false);
-        let obs = crate::testkit::observation(unicycle_me(0.0, 0.0, 0.0), Vec2::zeros(), &[]);
+        let obs = observation(unicycle_me(0.0, 0.0, 0.0), Vec2::zeros(), &[]);
         let Command::Unicycle { v, omega } = la.plan(&obs) else {
             panic!("a unicycle command");
         };
@@ -302,7 +292,7 @@ mod tests {
         let (mut la, seen) = probe(Command::Velocity(Vec2::new(0.5, 0.1)), false);
         let mut me = unicycle_me(0.0, 0.0, 0.0);
         me.kinematics = Kinematics::Holonomic;
-        let obs = crate::testkit::observation(me, Vec2::zeros(), &[]);
+        let obs = observation(me, Vec2::zeros(), &[]);
         assert_eq!(la.plan(&obs), Command::Velocity(Vec2::new(0.5, 0.1)));
         assert_eq!(seen().0, obs.me.position);
     }

@@ -13,9 +13,11 @@
 
 pub mod bench_plot;
 mod foxglove;
+mod geometry;
+mod load;
 mod palette;
-mod parquet;
 mod plot;
+mod records;
 mod replay;
 mod run;
 mod sensing;
@@ -24,14 +26,14 @@ pub mod sweep_plot;
 pub use foxglove::{MCAP_FILE, McapWritten, export_mcap, write_mcap};
 pub use palette::{COLLISION, PALETTE, hex, robot_color};
 pub use plot::{MAX_PLOT_POINTS, PLOT_WIDTH, plot_every, plot_size, write_plots};
+pub use records::{BodyKind, BodyTrack, DiagnosticSample, Event, EventKind, Sample, Trajectory};
 pub use replay::{
     MAP_HEIGHT, MAP_WIDTH, MAX_REPLAY_POSITIONS, ReplayView, STRIP_HEIGHT, replay_every,
     write_replay,
 };
 pub use run::{
-    BodyKind, BodyTrack, DIAGNOSTICS_FILE, DiagnosticSample, EVENTS_FILE, Event, EventKind,
-    METRICS_FILE, Metrics, Percentiles, RobotMetrics, RunData, SCENARIO_FILE, Sample,
-    TRAJECTORY_FILE, Trajectory,
+    DIAGNOSTICS_FILE, EVENTS_FILE, METRICS_FILE, Metrics, Percentiles, RobotMetrics, RunData,
+    SCENARIO_FILE, TRAJECTORY_FILE,
 };
 
 use std::path::{Path, PathBuf};

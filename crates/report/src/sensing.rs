@@ -29,21 +29,15 @@ pub(crate) fn headings(dir: &Path) -> HashMap<String, Vec<(u64, f64)>> {
     let Ok(text) = std::fs::read_to_string(dir.join(mrsim_runfolder::TRAJECTORY_FILE)) else {
         return out;
     };
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
-    let Some(col) = header.iter().position(|h| *h == "theta") else {
+    let Ok(rows) = mrsim_runfolder::csv::trajectory_rows(&text) else {
         return out;
     };
-    for l in lines {
-        let f: Vec<&str> = l.split(',').collect();
-        let (Some(t), Some(name), Some(th)) = (
-            f.first().and_then(|t| t.parse::<u64>().ok()),
-            f.get(2),
-            f.get(col).and_then(|v| v.parse::<f64>().ok()),
-        ) else {
-            continue;
-        };
-        out.entry(name.to_string()).or_default().push((t, th));
+    for (_, row) in rows.flatten() {
+        if let Some(theta) = row.theta {
+            out.entry(row.body.to_string())
+                .or_default()
+                .push((row.tick, theta));
+        }
     }
     out
 }
@@ -134,4 +128,42 @@ pub(crate) fn add(data: &mut Value, dir: &Path, ticks: &[u64], unicycles: &[&str
         entry["frames"][frame] = Value::Array(ranges);
     }
     data["scans"] = Value::Object(out);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn folder_with_trajectory(name: &str, csv: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("mrsim-sensing-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        std::fs::write(dir.join(mrsim_runfolder::TRAJECTORY_FILE), csv).expect("write");
+        dir
+    }
+
+    #[test]
+    fn headings_are_read_per_body_from_the_theta_column_skipping_unreadable_rows() {
+        let dir = folder_with_trajectory(
+            "theta",
+            "tick,time,body,kind,x,y,vx,vy,theta\n\
+             0,0,u0,robot,0,0,0,0,0.5\n\
+             0,0,o1,obstacle,1,1,0,0,0\n\
+             1,0.1,u0,robot,0,0,0,0,x\n\
+             2,0.2,u0,robot,0,0,0,0,-1.25\n",
+        );
+        let h = headings(&dir);
+        assert_eq!(h["u0"], vec![(0, 0.5), (2, -1.25)]);
+        assert_eq!(h["o1"], vec![(0, 0.0)]);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_trajectory_without_a_theta_column_has_no_headings() {
+        let dir = folder_with_trajectory(
+            "notheta",
+            "tick,time,body,kind,x,y,vx,vy\n0,0,r0,robot,0,0,0,0\n",
+        );
+        assert!(headings(&dir).is_empty());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }

@@ -13,13 +13,14 @@
 //! one in a test, still reads; writing is exact (every field, in the order
 //! declared, `null` for an absent value).
 //!
-//! The trajectory is `trajectory.csv`, `trajectory.parquet` ([`trajectory`]
-//! has its schema, a writer and a reader) or absent, as the scenario's
-//! `[output]` says. What timing decided per planner call is `timing.csv`
+//! The trajectory is `trajectory.csv` ([`csv`] reads its rows),
+//! `trajectory.parquet` ([`trajectory`] has its schema, a writer and a
+//! reader) or absent, as the scenario's `[output]` says. What timing decided per planner call is `timing.csv`
 //! ([`timing`]).
 #![warn(missing_docs)]
 
 pub mod bench;
+pub mod csv;
 pub mod metrics;
 pub mod timing;
 pub mod trajectory;

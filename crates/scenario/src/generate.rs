@@ -30,9 +30,9 @@
 //! Names are `name_prefix` (default `g`) and the index, zero-padded to at
 //! least two digits (`g00`, `g01`, ..., `g100` for 101 robots).
 
+use crate::checks::{Rule, check, point};
 use crate::error::Fail;
 use crate::raw::{P, RawGenerate, S};
-use crate::resolve::checks::{Rule, check, point};
 use crate::rng::Rng;
 use crate::types::{Arena, ObstacleSpec, RobotSpec, WorldConfig};
 use std::f64::consts::PI;

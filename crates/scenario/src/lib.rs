@@ -24,6 +24,7 @@
 //! 1, whole number >= 1).
 #![warn(missing_docs)]
 
+mod checks;
 mod error;
 mod generate;
 pub mod map;
@@ -112,7 +113,7 @@ pub fn parse_with_overrides(
     let patches = overrides::apply(&mut table, &spans, overrides)?;
     let raw = raw::RawDoc::deserialize(toml::de::Deserializer::from(Spanned::new(whole, table)))
         .map_err(|e| {
-            let mut fail = resolve::de_fail(e, "");
+            let mut fail = checks::de_fail(e, "");
             if fail
                 .span
                 .as_ref()

@@ -4,24 +4,22 @@
 
 use super::obstacles::left_of;
 use super::*;
-use crate::testkit::Sim;
 use crate::testkit::rvo2::{self, blocks_orca, circle};
+use crate::testkit::{RobotModel, Sim, observation, sensed};
 use crate::{ParamValue, SelfState};
 
+/// RVO2's agents: speed 2, acceleration unbounded; the radius is each
+/// test's.
+const ROBOT: RobotModel = RobotModel {
+    radius: 0.0,
+    mass: 1.0,
+    damping: 0.0,
+    max_speed: 2.0,
+    max_accel: 1e9,
+};
+
 fn me(position: Vec2, velocity: Vec2, radius: f64) -> SelfState {
-    SelfState {
-        id: 0,
-        position,
-        velocity,
-        radius,
-        mass: 1.0,
-        damping: 0.0,
-        max_speed: 2.0,
-        max_accel: 1e9,
-        heading: 0.0,
-        angular_velocity: 0.0,
-        kinematics: crate::Kinematics::Holonomic,
-    }
+    RobotModel { radius, ..ROBOT }.at(position, velocity)
 }
 
 fn obs<'a>(
@@ -31,28 +29,10 @@ fn obs<'a>(
     walls: &'a [Segment],
 ) -> Observation<'a> {
     Observation {
-        tick: 0,
-        time: 0.0,
         dt: 0.25,
-        me,
-        goal,
         goal_tolerance: 0.1,
-        goal_hold_ticks: 3,
-        others,
         walls,
-        path: None,
-        scan: None,
-    }
-}
-
-fn body(id: u32, kind: BodyKind, position: Vec2, velocity: Vec2, radius: f64) -> Sensed {
-    Sensed {
-        id,
-        kind,
-        position,
-        velocity,
-        acceleration: Vec2::zeros(),
-        radius,
+        ..observation(me, goal, others)
     }
 }
 
@@ -136,8 +116,8 @@ fn head_on(kind_of_b: BodyKind) -> (Vec2, Vec2, Vec2, Vec2) {
     let (pa, va) = (Vec2::new(-5.0, 0.0), Vec2::new(1.0, 0.0));
     let (pb, vb) = (Vec2::new(5.0, 0.0), Vec2::new(-1.0, 0.0));
     let mut orca = Orca::default();
-    let b_seen_by_a = [body(1, kind_of_b, pb, vb, 1.0)];
-    let a_seen_by_b = [body(0, BodyKind::Robot, pa, va, 1.0)];
+    let b_seen_by_a = [sensed(1, kind_of_b, pb, vb, 1.0)];
+    let a_seen_by_b = [sensed(0, BodyKind::Robot, pa, va, 1.0)];
     // Goals far ahead: the preferred velocity is the current one.
     let new_a = orca
         .plan(&obs(
@@ -190,7 +170,7 @@ fn overlapping_robots_separate_within_one_control_period() {
     // Centres 1.5 apart, combined radius 2, both still: the collision
     // case asks for a relative velocity that opens the gap in one dt.
     let mut orca = Orca::default();
-    let other = [body(
+    let other = [sensed(
         1,
         BodyKind::Robot,
         Vec2::new(1.5, 0.0),
@@ -475,17 +455,17 @@ fn only_the_nearest_max_neighbors_within_neighbor_dist_are_avoided() {
     // Three bodies close by but out of the way, one far ahead in the
     // way (inside neighbor_dist), one beyond neighbor_dist.
     let others = [
-        body(1, BodyKind::Robot, Vec2::new(0.0, 4.0), Vec2::zeros(), 0.5),
-        body(2, BodyKind::Robot, Vec2::new(0.0, -4.0), Vec2::zeros(), 0.5),
-        body(3, BodyKind::Robot, Vec2::new(-4.0, 0.0), Vec2::zeros(), 0.5),
-        body(
+        sensed(1, BodyKind::Robot, Vec2::new(0.0, 4.0), Vec2::zeros(), 0.5),
+        sensed(2, BodyKind::Robot, Vec2::new(0.0, -4.0), Vec2::zeros(), 0.5),
+        sensed(3, BodyKind::Robot, Vec2::new(-4.0, 0.0), Vec2::zeros(), 0.5),
+        sensed(
             4,
             BodyKind::Obstacle,
             Vec2::new(8.0, 0.0),
             Vec2::zeros(),
             0.5,
         ),
-        body(
+        sensed(
             5,
             BodyKind::Obstacle,
             Vec2::new(20.0, 0.0),

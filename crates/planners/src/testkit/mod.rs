@@ -10,9 +10,13 @@
 //!
 //! Compiled for the crate's own tests, and with the `testkit` feature for
 //! examples and other crates' tests; the agents and the world never build
-//! it. [`rvo2`] holds RVO2's own example scenes.
+//! it. [`rvo2`] holds RVO2's own example scenes, [`fixtures`] the states,
+//! bodies and observations the unit tests build.
 
+pub mod fixtures;
 pub mod rvo2;
+
+pub use fixtures::{RobotModel, observation, obstacle, robot, sensed};
 
 use crate::{
     BodyKind, Command, DesignatedPath, Observation, Planner, Segment, SelfState, Sensed, Vec2,
@@ -220,23 +224,5 @@ impl Sim {
             .iter()
             .map(|o| (o.position - me.position).norm() - o.radius - me.radius)
             .fold(f64::INFINITY, f64::min)
-    }
-}
-
-/// The observation planner unit tests start from: tick 0, dt 0.1 s, goal
-/// tolerance 0.05, goal held for 3 ticks, no walls, no path.
-pub fn observation<'a>(me: SelfState, goal: Vec2, others: &'a [Sensed]) -> Observation<'a> {
-    Observation {
-        tick: 0,
-        time: 0.0,
-        dt: 0.1,
-        me,
-        goal,
-        goal_tolerance: 0.05,
-        goal_hold_ticks: 3,
-        others,
-        walls: &[],
-        path: None,
-        scan: None,
     }
 }

@@ -21,10 +21,7 @@
 //! [`OccupancyMap::walls`] traces the walls' outlines into segments.
 
 mod image;
-mod scene;
 mod trace;
-
-pub(crate) use scene::attach;
 
 use crate::types::UnknownCells;
 use serde::Deserialize;

@@ -3,21 +3,19 @@
 //! overrides, in that order of precedence; then every check.
 //!
 //! `resolve` here walks the document in that order; each part lives in its
-//! own module: the shared number checks and built-in defaults (`checks`, a
-//! leaf), one robot from its layers (`robots`), the world and walls
-//! (`world`), obstacles and their motion models (`obstacles`), and the checks
-//! across every body (`scene`).
+//! own module: one robot from its layers (`robots`), the world and walls
+//! (`world`), obstacles and their motion models (`obstacles`), the checks
+//! across every body (`scene`), and the `[map]`, whose walls the bodies
+//! must keep clear of (`map`). The number checks and built-in defaults they
+//! share are the crate's `checks`, which `generate` uses too.
 
+mod map;
 mod obstacles;
 mod output;
+mod robots;
+mod scene;
 mod timing;
 mod world;
-
-pub(crate) mod checks;
-pub(crate) mod robots;
-pub(crate) mod scene;
-
-pub(crate) use checks::de_fail;
 
 use crate::error::{Fail, Spans};
 use crate::generate;
@@ -185,7 +183,7 @@ pub(crate) fn resolve(
         output: output::resolve_output(raw.output.as_ref())?,
     };
     if let Some(m) = &raw.map {
-        crate::map::attach(
+        map::attach(
             m,
             spans.origin,
             &mut scenario,

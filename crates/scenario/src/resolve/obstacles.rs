@@ -2,7 +2,7 @@
 //! waypoints, random, intentional): which keys each model takes, which it
 //! needs, and their defaults.
 
-use super::checks::{Rule, builtin, check, opt, point, points};
+use crate::checks::{Rule, builtin, check, opt, point, points};
 use crate::error::Fail;
 use crate::raw::{RawMotion, RawObstacle, S};
 use crate::types::*;

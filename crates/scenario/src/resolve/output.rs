@@ -2,7 +2,7 @@
 //! whether the run also writes run.mcap, and the gap at which two bodies
 //! meet (encounters.csv).
 
-use super::checks::{Rule, opt};
+use crate::checks::{Rule, opt};
 use crate::error::Fail;
 use crate::raw::{RawOutput, S};
 use crate::types::{DEFAULT_ENCOUNTER_GAP, OutputConfig, TrajectoryFormat};

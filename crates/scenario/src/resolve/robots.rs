@@ -2,7 +2,7 @@
 //! select it, `[generate]`, `[defaults]`, the built-in defaults): pick each
 //! field from the highest layer that has it, check it in every layer.
 
-use super::checks::{Rule, builtin, check, de_fail, point, points};
+use crate::checks::{Rule, builtin, check, de_fail, point, points};
 use crate::error::{Fail, Spans};
 use crate::overrides::{RobotPatch, set_path};
 use crate::raw::{P, RawParams, RawRobot, RawSensor, S};

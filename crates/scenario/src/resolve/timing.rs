@@ -3,8 +3,8 @@
 //! `--set defaults.timing.compute.ms=40` changes only the time), every
 //! value checked where it is written.
 
-use super::checks::{Rule, check};
 use super::robots::Layer;
+use crate::checks::{Rule, check};
 use crate::error::Fail;
 use crate::raw::{RawCompute, RawTiming, S};
 use crate::timing::{Compute, Timing};

@@ -1,7 +1,7 @@
 //! The `[world]` table (timing, mode, seed, arena) and the `[[wall]]`
 //! segments: the fixed frame every body is placed in.
 
-use super::checks::{Rule, opt, point};
+use crate::checks::{Rule, opt, point};
 use crate::error::Fail;
 use crate::raw::{Pt, RawWall, RawWorld, S};
 use crate::types::*;

@@ -2,11 +2,11 @@
 //! start (or robots whose goal is) in or too near its walls, and add its
 //! traced walls to the scenario's.
 
-use super::OccupancyMap;
+use super::robots::RobotSpans;
+use super::scene::dist_to_segment;
 use crate::error::Fail;
+use crate::map::OccupancyMap;
 use crate::raw::{RawMap, S};
-use crate::resolve::robots::RobotSpans;
-use crate::resolve::scene::dist_to_segment;
 use crate::types::{MapInfo, Scenario, WallSpec};
 use std::ops::Range;
 use std::path::Path;
@@ -38,7 +38,8 @@ pub(crate) fn attach(
             .unwrap_or(Path::new(""))
             .join(given)
     };
-    let map = super::load(&path).map_err(|e| Fail::new(Some(file.span()), "map", e.to_string()))?;
+    let map =
+        crate::map::load(&path).map_err(|e| Fail::new(Some(file.span()), "map", e.to_string()))?;
     let unknown = m.unknown.as_ref().map(|u| *u.get_ref()).unwrap_or_default();
     let scale = scenario.length_unit.per_metre();
     let walls: Vec<[[f64; 2]; 2]> = map

@@ -57,7 +57,7 @@
 //!
 //! **On a unicycle robot** (`kinematics = "unicycle"`) the planner searches
 //! the paper's own space, (v, omega), and answers [`Command::Unicycle`]
-//! (the `dwa_unicycle` module beside this one): the window is
+//! (its `unicycle` module): the window is
 //! [v_c - a dt, v_c + a dt] x [omega_c - alpha dt, omega_c + alpha dt]
 //! within 0 <= v <= max_speed, |omega| <= max_angular_speed (section 3.1,
 //! forward motion only as in the paper); each candidate's curvature is the
@@ -108,146 +108,16 @@
 //! the gap, each after a tick's delay: v^2 / a <= v (t_c - 2 dt), t_c the
 //! time to contact with the return standing still.
 
-use crate::{
-    BodyKind, Command, Kinematics, Observation, ParamError, ParamReader, Params, Planner, Segment,
-    Sensed, Vec2,
-};
+mod contact;
+mod planner;
+mod unicycle;
 
-/// What dwa avoids (its `obstacles` parameter).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Obstacles {
-    /// The sensed bodies (at their sensed velocities) and the walls
-    /// (default).
-    #[default]
-    Truth,
-    /// The robot's laser scan alone: every return is a still point in the
-    /// robot's frame; no body's state and no wall is used.
-    Scan,
-}
+pub use planner::{Dwa, Obstacles};
 
-/// Dynamic window approach for a holonomic disc.
-#[derive(Debug, Clone)]
-pub struct Dwa {
-    /// Grid points per axis over the dynamic window.
-    pub samples: usize,
-    /// Weight of the heading term (paper's alpha).
-    pub w_heading: f64,
-    /// Weight of the clearance term (paper's beta).
-    pub w_clearance: f64,
-    /// Weight of the speed term (paper's gamma).
-    pub w_speed: f64,
-    /// Look-ahead time at which clearance saturates, s.
-    pub horizon: f64,
-    /// Bodies and walls, or the laser scan.
-    pub obstacles: Obstacles,
-    /// A unicycle's safety distance, kept from everything as if its disc
-    /// were that much larger; `None`: a quarter of its radius.
-    pub padding: Option<f64>,
-    /// A unicycle's recovery state (`dwa_unicycle`).
-    pub(crate) recovery: crate::dwa_unicycle::Recovery,
-}
-
-impl Default for Dwa {
-    fn default() -> Self {
-        Self {
-            samples: 11,
-            w_heading: 2.0,
-            w_clearance: 0.2,
-            w_speed: 0.2,
-            horizon: 3.0,
-            obstacles: Obstacles::Truth,
-            padding: None,
-            recovery: Default::default(),
-        }
-    }
-}
-
-/// Smallest t >= 0 with |p + v t| <= r, for a point at `p` moving at `v`
-/// relative to a disc of radius `r` at the origin; `None` if never. A point
-/// already inside counts as a contact at 0 only while it moves inwards.
-pub(crate) fn time_to_disc(p: Vec2, v: Vec2, r: f64) -> Option<f64> {
-    let c = p.norm_squared() - r * r;
-    let b = p.dot(&v);
-    if c <= 0.0 {
-        return (b < 0.0).then_some(0.0);
-    }
-    let a = v.norm_squared();
-    if b >= 0.0 || a <= f64::EPSILON {
-        return None;
-    }
-    let disc = b * b - a * c;
-    if disc < 0.0 {
-        return None;
-    }
-    Some((-b - disc.sqrt()) / a)
-}
-
-/// Time until a disc of radius `r` at `p` moving at `v` first touches the
-/// static segment `s`; `None` if never.
-pub(crate) fn time_to_segment(p: Vec2, v: Vec2, r: f64, s: &Segment) -> Option<f64> {
-    let closest = s.closest_point(p);
-    let gap = p - closest;
-    if gap.norm() <= r {
-        // Touching already: contact now only when moving into the wall.
-        return (gap.dot(&v) < 0.0).then_some(0.0);
-    }
-    // The two round ends.
-    let mut best = [s.a, s.b]
-        .iter()
-        .filter_map(|&e| time_to_disc(p - e, v, r))
-        .fold(f64::INFINITY, f64::min);
-    // The flat sides: the line through the segment, offset by r.
-    let ab = s.b - s.a;
-    let len = ab.norm();
-    if len > f64::EPSILON {
-        let n = Vec2::new(-ab.y, ab.x) / len;
-        let dist = (p - s.a).dot(&n);
-        let closing = -v.dot(&n) * dist.signum();
-        if closing > 0.0 {
-            let t = (dist.abs() - r) / closing;
-            let q = p + v * t;
-            let along = (q - s.a).dot(&ab) / (len * len);
-            if (0.0..=1.0).contains(&along) {
-                best = best.min(t);
-            }
-        }
-    }
-    best.is_finite().then_some(best)
-}
+use crate::{BodyKind, Command, Kinematics, Observation, Planner, Sensed, Vec2};
+use contact::{scan_points, time_to_disc, time_to_segment};
 
 impl Dwa {
-    /// Reads `samples`, `w_heading`, `w_clearance`, `w_speed`, `horizon`,
-    /// `obstacles` (`truth` or `scan`) and `padding` (>= 0).
-    pub fn from_params(params: &Params) -> Result<Self, ParamError> {
-        let d = Self::default();
-        let mut r = ParamReader::new("dwa", params);
-        let samples = r.count("samples", d.samples, 2)?;
-        let w_heading = r.non_negative("w_heading", d.w_heading)?;
-        let w_clearance = r.non_negative("w_clearance", d.w_clearance)?;
-        let w_speed = r.non_negative("w_speed", d.w_speed)?;
-        let horizon = r.positive("horizon", d.horizon)?;
-        let obstacles = match r.choice("obstacles", &["truth", "scan"], "truth")? {
-            "scan" => Obstacles::Scan,
-            _ => Obstacles::Truth,
-        };
-        let padding = match r.number("padding", f64::NAN)? {
-            p if p.is_nan() => None,
-            p if p >= 0.0 => Some(p),
-            p => return Err(r.invalid("padding", format!("must be >= 0, got {p}"))),
-        };
-        r.finish()?;
-        Ok(Self {
-            samples,
-            w_heading,
-            w_clearance,
-            w_speed,
-            horizon,
-            obstacles,
-            padding,
-            recovery: Default::default(),
-        })
-    }
-
     /// Time to the first contact of the robot moving at `v` (infinite if
     /// none), and whether `v` is admissible: for every body (and wall),
     /// the robot can bring its velocity relative to that body to zero
@@ -316,7 +186,7 @@ impl Planner for Dwa {
             max_angular_accel,
         } = obs.me.kinematics
         {
-            return crate::dwa_unicycle::plan(self, obs, max_angular_speed, max_angular_accel);
+            return unicycle::plan(self, obs, max_angular_speed, max_angular_accel);
         }
         if self.obstacles == Obstacles::Scan {
             // The scan's returns as still points, in the world's frame (a
@@ -347,17 +217,6 @@ impl Planner for Dwa {
     fn needs_scan(&self) -> bool {
         self.obstacles == Obstacles::Scan
     }
-}
-
-/// The returns of the observation's scan (finite ranges) as points in the
-/// robot's frame (x along its heading).
-pub(crate) fn scan_points<'a>(obs: &'a Observation) -> impl Iterator<Item = Vec2> + 'a {
-    obs.scan.into_iter().flat_map(|s| {
-        s.ranges.iter().enumerate().filter_map(move |(k, &r)| {
-            let a = s.angle_min + s.angle_increment * k as f64;
-            r.is_finite().then(|| Vec2::new(a.cos(), a.sin()) * r)
-        })
-    })
 }
 
 impl Dwa {
@@ -417,34 +276,18 @@ impl Dwa {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::SelfState;
-    use crate::testkit::Sim;
+    use crate::Segment;
+    use crate::testkit::{RobotModel, Sim, observation, obstacle};
 
+    const ROBOT: RobotModel = RobotModel::unit(0.3);
+
+    /// The robot at the origin moving at `velocity`, its goal 10 along x.
     fn obs<'a>(velocity: Vec2, others: &'a [Sensed], walls: &'a [Segment]) -> Observation<'a> {
+        let me = ROBOT.at(Vec2::zeros(), velocity);
         Observation {
-            tick: 0,
-            time: 0.0,
-            dt: 0.1,
-            me: SelfState {
-                id: 0,
-                position: Vec2::zeros(),
-                velocity,
-                radius: 0.3,
-                mass: 1.0,
-                damping: 0.0,
-                max_speed: 1.0,
-                max_accel: 2.0,
-                heading: 0.0,
-                angular_velocity: 0.0,
-                kinematics: crate::Kinematics::Holonomic,
-            },
-            goal: Vec2::new(10.0, 0.0),
             goal_tolerance: 0.1,
-            goal_hold_ticks: 3,
-            others,
             walls,
-            path: None,
-            scan: None,
+            ..observation(me, Vec2::new(10.0, 0.0), others)
         }
     }
 
@@ -491,14 +334,7 @@ mod tests {
         // x, stopping takes u^2 / 4 and contact comes after 0.1, so only
         // u <= sqrt(0.4) = 0.63 is admissible; free, the robot would take
         // the window's fastest, 0.7.
-        let ahead = [Sensed {
-            id: 1,
-            kind: BodyKind::Obstacle,
-            position: Vec2::new(0.7, 0.0),
-            velocity: Vec2::zeros(),
-            acceleration: Vec2::zeros(),
-            radius: 0.3,
-        }];
+        let ahead = [obstacle(1, Vec2::new(0.7, 0.0), Vec2::zeros(), 0.3)];
         let mut dwa = Dwa::default();
         let free = dwa.plan(&obs(Vec2::new(0.5, 0.0), &[], &[])).vector();
         assert!((free - Vec2::new(0.7, 0.0)).norm() < 1e-9, "{free:?}");

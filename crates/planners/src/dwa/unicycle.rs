@@ -2,7 +2,8 @@
 //! Burgard & Thrun's section 3 (the module documentation of `dwa` gives
 //! the window, the admissibility test and the objective).
 
-use crate::dwa::{Dwa, Obstacles, scan_points, time_to_disc, time_to_segment};
+use super::contact::{scan_points, time_to_disc, time_to_segment};
+use super::planner::{Dwa, Obstacles};
 use crate::{Command, Observation, Segment, Sensed, Vec2};
 use std::f64::consts::PI;
 
@@ -121,29 +122,10 @@ fn wrap(a: f64) -> f64 {
     if w > PI { w - 2.0 * PI } else { w }
 }
 
-/// A unicycle's way out of contact or a standstill (module documentation
-/// of `dwa`, "Recovery").
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct Recovery {
-    /// Since when the robot, facing its goal, has stood still (NaN: not).
-    still_since: f64,
-    /// Backing off: until when, at which (v, omega).
-    backing: Option<(f64, f64, f64)>,
-}
-
-impl Default for Recovery {
-    fn default() -> Self {
-        Self {
-            still_since: f64::NAN,
-            backing: None,
-        }
-    }
-}
-
 /// Seconds facing the goal without moving before the robot backs off.
-pub(crate) const STILL_FOR: f64 = 3.0;
+const STILL_FOR: f64 = 3.0;
 /// Seconds a back-off lasts at most.
-pub(crate) const BACK_OFF_FOR: f64 = 1.5;
+const BACK_OFF_FOR: f64 = 1.5;
 
 /// The nearest obstacle's surface distance from the disc and its
 /// direction in the robot's frame (a unit vector; zero if none).
@@ -178,7 +160,7 @@ fn nearest(
 }
 
 /// One control step of DWA in (v, omega).
-pub(crate) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64) -> Command {
+pub(super) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64) -> Command {
     let me = &obs.me;
     let dt = if obs.dt > 0.0 { obs.dt } else { 0.1 };
     let (s, c) = me.heading.sin_cos();
@@ -334,25 +316,14 @@ pub(crate) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Kinematics, SelfState};
+    use crate::SelfState;
+    use crate::testkit::{RobotModel, observation, robot};
 
+    const ROBOT: RobotModel = RobotModel::unit(0.25);
+
+    /// The unicycle at rest at the origin, heading `heading`.
     fn me(heading: f64) -> SelfState {
-        SelfState {
-            id: 0,
-            position: Vec2::zeros(),
-            velocity: Vec2::zeros(),
-            radius: 0.25,
-            mass: 1.0,
-            damping: 0.0,
-            max_speed: 1.0,
-            max_accel: 2.0,
-            heading,
-            angular_velocity: 0.0,
-            kinematics: Kinematics::Unicycle {
-                max_angular_speed: 2.0,
-                max_angular_accel: 4.0,
-            },
-        }
+        ROBOT.unicycle(Vec2::zeros(), Vec2::zeros(), heading, 0.0, 2.0, 4.0)
     }
 
     #[test]
@@ -364,7 +335,7 @@ mod tests {
 
     #[test]
     fn a_robot_facing_away_from_its_goal_turns_towards_it_within_its_window() {
-        let obs = crate::testkit::observation(me(PI), Vec2::new(5.0, 0.0), &[]);
+        let obs = observation(me(PI), Vec2::new(5.0, 0.0), &[]);
         let Command::Unicycle { v, omega } = crate::Planner::plan(&mut Dwa::default(), &obs) else {
             panic!("dwa answers a unicycle robot in (v, omega)");
         };
@@ -383,7 +354,7 @@ mod tests {
         }];
         let mut s = me(0.0);
         s.velocity = Vec2::new(0.6, 0.0);
-        let mut obs = crate::testkit::observation(s, Vec2::new(5.0, 0.0), &[]);
+        let mut obs = observation(s, Vec2::new(5.0, 0.0), &[]);
         obs.walls = &walls;
         let Command::Unicycle { v, .. } = crate::Planner::plan(&mut Dwa::default(), &obs) else {
             panic!("unicycle command expected");
@@ -416,15 +387,8 @@ mod tests {
 
     #[test]
     fn a_robot_touching_another_ahead_backs_off_turning_away() {
-        let other = [crate::Sensed {
-            id: 1,
-            kind: crate::BodyKind::Robot,
-            position: Vec2::new(0.5, 0.1),
-            velocity: Vec2::zeros(),
-            acceleration: Vec2::zeros(),
-            radius: 0.25,
-        }];
-        let mut obs = crate::testkit::observation(me(0.0), Vec2::new(5.0, 0.0), &other);
+        let other = [robot(1, Vec2::new(0.5, 0.1), Vec2::zeros(), 0.25)];
+        let mut obs = observation(me(0.0), Vec2::new(5.0, 0.0), &other);
         obs.time = 1.0;
         let Command::Unicycle { v, omega } = crate::Planner::plan(&mut Dwa::default(), &obs) else {
             panic!("unicycle command expected");
@@ -455,18 +419,11 @@ mod tests {
             ranges,
         };
         // A body in the true states right ahead, which the scan does not show.
-        let hidden = [crate::Sensed {
-            id: 1,
-            kind: crate::BodyKind::Robot,
-            position: Vec2::new(0.3, 0.0),
-            velocity: Vec2::zeros(),
-            acceleration: Vec2::zeros(),
-            radius: 0.25,
-        }];
-        let mut obs = crate::testkit::observation(s, Vec2::new(5.0, 0.0), &hidden);
+        let hidden = [robot(1, Vec2::new(0.3, 0.0), Vec2::zeros(), 0.25)];
+        let mut obs = observation(s, Vec2::new(5.0, 0.0), &hidden);
         obs.scan = Some(&scan);
         let mut dwa = Dwa {
-            obstacles: crate::dwa::Obstacles::Scan,
+            obstacles: Obstacles::Scan,
             ..Dwa::default()
         };
         let Command::Unicycle { v, .. } = crate::Planner::plan(&mut dwa, &obs) else {

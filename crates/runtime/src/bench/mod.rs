@@ -30,16 +30,24 @@
 //! and `bench.svg` (p99 round trip and miss rate against agent count); the
 //! caller prints the table.
 
+mod output;
+mod rows;
+mod scene;
+#[cfg(test)]
+mod tests;
+
 use crate::error::{Invalid, Refusal};
 use crate::launch::Transport;
 use crate::sched::{Applied, Sched};
-use mrsim_report::sweep_plot::{Figure, Panel, Point, Series};
-use mrsim_runfolder::bench::{BenchDoc, BenchRow, MedianP99, Overhead, Quantiles};
+use mrsim_runfolder::bench::{BenchDoc, BenchRow, Overhead};
 use mrsim_runfolder::usage::Usage;
 use mrsim_runfolder::{
     BENCH_CSV_FILE, BENCH_FILE, BENCH_SVG_FILE, FileError, Percentiles, RunMetrics,
     STRESS_PNG_FILE, STRESS_SVG_FILE,
 };
+use output::{csv, stress_figure};
+use rows::{median_p99, overhead, row_from_run};
+use scene::scene_toml;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -158,126 +166,6 @@ impl Refusal for BenchError {
             BenchError::Invalid(i) => Some(i),
             _ => None,
         }
-    }
-}
-
-/// Robot radius, queue spacing and sensing range of the generated scene, m.
-const ROBOT_RADIUS: f64 = 0.25;
-const SENSING_RANGE: f64 = 3.0;
-const HEAD_DISTANCE: f64 = 3.0;
-
-/// The generated scene for `agents` robots: two crossing streams in a walled
-/// arena large enough for both queues and their mirrored goals, realtime at
-/// `rate` Hz for `duration` s, one physics substep per tick.
-fn scene_toml(agents: usize, rate: f64, duration: f64, planner: &str, deadline: f64) -> String {
-    // Queue spacing of [generate] crossing: three robot radii.
-    let queue = agents.div_ceil(2) as f64 * 3.0 * ROBOT_RADIUS;
-    let half = (HEAD_DISTANCE + queue + 2.0).ceil();
-    format!(
-        r#"name = "bench-crossing-{agents}"
-description = "mrsim bench: {agents} robots in two streams crossing at right angles, realtime at {rate} Hz, {planner}"
-length_unit = "m"
-
-[world]
-dt = {dt}
-substeps = 1
-duration = {duration}
-mode = "realtime"
-on_deadline_miss = "hold"
-deadline = {deadline}
-seed = 1
-arena = {{ min = [-{half}, -{half}], max = [{half}, {half}] }}
-
-[defaults]
-radius = {ROBOT_RADIUS}
-max_speed = 1.0
-max_accel = 2.0
-sensing_range = {SENSING_RANGE}
-goal_tolerance = 0.1
-
-[generate]
-kind = "crossing"
-count = {agents}
-radius = {HEAD_DISTANCE}
-planner = "{planner}"
-"#,
-        dt = 1.0 / rate,
-    )
-}
-
-/// Percentiles of a metrics.json histogram; none where it has no samples.
-fn quantiles(p: &Percentiles) -> Quantiles {
-    let has = p.count > 0;
-    Quantiles {
-        p50: has.then_some(p.p50),
-        p99: has.then_some(p.p99),
-        p999: has.then_some(p.p999),
-        max: has.then_some(p.max),
-    }
-}
-
-/// Median and 99th percentile of a metrics.json histogram; none where it
-/// has no samples.
-fn median_p99(p: &Percentiles) -> MedianP99 {
-    let q = quantiles(p);
-    MedianP99 {
-        p50: q.p50,
-        p99: q.p99,
-    }
-}
-
-/// One row of bench.json from a run folder's metrics.json and usage.json
-/// (the bench's own fields, `cpus`, `rt`, `planner`, `run_dir`, left
-/// empty).
-fn row_from_run(
-    agents: usize,
-    transport: Transport,
-    rate: f64,
-    metrics: &RunMetrics,
-    usage: &Usage,
-) -> BenchRow {
-    let t = &metrics.timing;
-    let wall = t.wall_s;
-    let ticks = metrics.ticks;
-    let misses: u64 = metrics.robots.values().map(|r| r.deadline_misses).sum();
-    let slots = ticks * agents as u64;
-    let agents_cpu = usage.agents_cpu_s;
-    // In-process, the world's process holds the agent threads too.
-    let world_cpu = match transport {
-        Transport::Shm | Transport::Zenoh => t.process_cpu_s,
-        Transport::Inproc => (t.process_cpu_s - agents_cpu).max(0.0),
-    };
-    let pct_of_wall = |s: f64| if wall > 0.0 { 100.0 * s / wall } else { 0.0 };
-    let mb = |kb: u64| kb as f64 / 1024.0;
-    BenchRow {
-        agents,
-        transport: transport.name().to_string(),
-        rate_hz: rate,
-        roundtrip_us: quantiles(&t.latency_us),
-        allin_us: median_p99(&t.allin_us),
-        miss_rate: if slots > 0 {
-            misses as f64 / slots as f64
-        } else {
-            0.0
-        },
-        jitter_us_p99: quantiles(&t.jitter_us).p99,
-        world_cpu_pct: pct_of_wall(world_cpu),
-        agents_cpu_pct: pct_of_wall(agents_cpu),
-        steal_pct: t.cpus_steal_s.map(pct_of_wall),
-        world_rss_mb: Some(mb(t.process_maxrss_kb)),
-        agent_rss_mb: usage.agent_maxrss_kb.map(mb),
-        wake_us: quantiles(&t.wake_us),
-        compute_us: quantiles(&t.compute_us),
-        world_tick_us: quantiles(&t.world_tick_us),
-        physics_us: quantiles(&t.physics_us),
-        ticks,
-        deadline_misses: misses,
-        wall_s: wall,
-        // Simulated over wall time of the tick loop: below 1 the world could
-        // not hold the rate (ticks started ever later, see the jitter), and
-        // the miss rate alone understates how far it fell behind.
-        realtime_factor: metrics.realtime_factor,
-        ..Default::default()
     }
 }
 
@@ -660,121 +548,6 @@ fn run_baseline(
     read_json(dir, name)
 }
 
-/// The value at fraction `q` of sorted `xs`, interpolated linearly between
-/// neighbours (as numpy's default).
-fn quantile(xs: &[f64], q: f64) -> f64 {
-    if xs.is_empty() {
-        return f64::NAN;
-    }
-    let pos = q * (xs.len() - 1) as f64;
-    let (lo, hi) = (pos.floor() as usize, pos.ceil() as usize);
-    xs[lo] + (xs[hi] - xs[lo]) * (pos - lo as f64)
-}
-
-/// Per agent count, transport and load: the ratio of mrsim's all-in
-/// median to the bare fan-out's measured right after it, over the
-/// repetitions, with its median, quartiles and range.
-fn overhead(rows: &[BenchRow]) -> Vec<Overhead> {
-    let mut out: Vec<Overhead> = Vec::new();
-    for r in rows {
-        let ratio = match (r.allin_us.p50, r.baseline_allin_us.and_then(|b| b.p50)) {
-            (Some(a), Some(b)) if b > 0.0 => a / b,
-            _ => continue,
-        };
-        match out
-            .iter_mut()
-            .find(|o| o.agents == r.agents && o.transport == r.transport && o.stress == r.stress)
-        {
-            Some(o) => o.ratios.push(ratio),
-            None => out.push(Overhead {
-                agents: r.agents,
-                transport: r.transport.clone(),
-                stress: r.stress,
-                ratios: vec![ratio],
-                ..Default::default()
-            }),
-        }
-    }
-    for o in &mut out {
-        let mut xs = o.ratios.clone();
-        xs.sort_by(f64::total_cmp);
-        o.pairs = xs.len();
-        o.median = quantile(&xs, 0.5);
-        o.q1 = quantile(&xs, 0.25);
-        o.q3 = quantile(&xs, 0.75);
-        o.min = xs[0];
-        o.max = xs[xs.len() - 1];
-    }
-    out
-}
-
-/// `stress.svg`: round trip and misses against the number of CPU-bound
-/// processes, one line per transport and agent count, each point the mean
-/// over the repetitions with its 95 % interval.
-fn stress_figure(rows: &[BenchRow], levels: &[usize]) -> Figure {
-    let mut lines: Vec<(String, usize)> = Vec::new();
-    for r in rows {
-        let key = (r.transport.clone(), r.agents);
-        if !lines.contains(&key) {
-            lines.push(key);
-        }
-    }
-    type Metric = (&'static str, &'static str, fn(&BenchRow) -> Option<f64>);
-    let metrics: [Metric; 4] = [
-        ("round trip p50", "us", |r| r.roundtrip_us.p50),
-        ("round trip p99", "us", |r| r.roundtrip_us.p99),
-        ("all-in p99", "us (published -> last command in)", |r| {
-            r.allin_us.p99
-        }),
-        ("deadline misses", "% of agent-ticks", |r| {
-            Some(100.0 * r.miss_rate)
-        }),
-    ];
-    let panels = metrics
-        .iter()
-        .map(|(title, unit, value)| Panel {
-            title: title.to_string(),
-            y_label: unit.to_string(),
-            fraction: false,
-            lines: lines
-                .iter()
-                .map(|(t, n)| {
-                    levels
-                        .iter()
-                        .filter_map(|&k| {
-                            let xs: Vec<f64> = rows
-                                .iter()
-                                .filter(|r| r.transport == *t && r.agents == *n && r.stress == k)
-                                .filter_map(value)
-                                .collect();
-                            let (mean, half_width) = crate::sweep::mean_ci(&xs);
-                            Some(Point {
-                                x: k as f64,
-                                mean: mean?,
-                                half_width,
-                            })
-                        })
-                        .collect()
-                })
-                .collect(),
-        })
-        .collect();
-    Figure {
-        title: "mrsim bench --stress: timing against CPU-bound load on the run's CPUs".into(),
-        x_label: "CPU-bound processes beside the run".into(),
-        series: lines
-            .iter()
-            .enumerate()
-            .map(|(i, (t, n))| Series {
-                label: format!("{t}, {n} agents"),
-                colour: i,
-                measured: false,
-            })
-            .collect(),
-        panels,
-    }
-}
-
 /// What the baseline program writes: its all-in time and round trip.
 #[derive(Debug, Clone, Default, serde::Deserialize)]
 #[serde(default)]
@@ -783,162 +556,4 @@ struct BaselineResult {
     allin_us: Percentiles,
     /// Tick published -> one reply in, µs.
     roundtrip_us: Percentiles,
-}
-
-/// bench.csv: the rows flattened (nested percentiles as `field_p50` ...).
-fn csv(rows: &[Value]) -> String {
-    let mut cols: Vec<String> = Vec::new();
-    let flat: Vec<Vec<(String, String)>> = rows
-        .iter()
-        .map(|r| {
-            let mut cells = Vec::new();
-            if let Some(o) = r.as_object() {
-                for (k, v) in o {
-                    match v {
-                        Value::Object(inner) => {
-                            for (ik, iv) in inner {
-                                cells.push((format!("{k}_{ik}"), cell(iv)));
-                            }
-                        }
-                        other => cells.push((k.clone(), cell(other))),
-                    }
-                }
-            }
-            cells
-        })
-        .collect();
-    for r in &flat {
-        for (k, _) in r {
-            if !cols.contains(k) {
-                cols.push(k.clone());
-            }
-        }
-    }
-    let mut out = cols.join(",");
-    out.push('\n');
-    for r in &flat {
-        let line: Vec<String> = cols
-            .iter()
-            .map(|c| {
-                r.iter()
-                    .find(|(k, _)| k == c)
-                    .map(|(_, v)| v.clone())
-                    .unwrap_or_default()
-            })
-            .collect();
-        out.push_str(&line.join(","));
-        out.push('\n');
-    }
-    out
-}
-
-fn cell(v: &Value) -> String {
-    match v {
-        Value::Null => String::new(),
-        Value::String(s) => s.clone(),
-        Value::Array(a) => a.iter().map(cell).collect::<Vec<_>>().join(" "),
-        other => other.to_string(),
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn run(transport: &str) -> (RunMetrics, Usage) {
-        let metrics: RunMetrics = serde_json::from_value(serde_json::json!({
-            "ticks": 10,
-            "realtime_factor": 0.9,
-            "robots": {"a": {"deadline_misses": 3}, "b": {"deadline_misses": 1}},
-            "timing": {
-                "wall_s": 2.0, "process_cpu_s": 1.0, "process_maxrss_kb": 2048,
-                "latency_us": {"p50": 10.0, "p99": 20.0, "p999": 30.0, "max": 40.0, "count": 5},
-                "allin_us": {"count": 0}
-            }
-        }))
-        .expect("metrics.json");
-        let usage = Usage {
-            transport: transport.into(),
-            agents_reported: 2,
-            agents_cpu_s: 0.4,
-            agent_maxrss_kb: (transport == "shm").then_some(1024),
-        };
-        (metrics, usage)
-    }
-
-    #[test]
-    fn a_row_counts_misses_per_slot_and_leaves_empty_histograms_null() {
-        let (m, u) = run("shm");
-        let row = row_from_run(2, Transport::Shm, 5.0, &m, &u);
-        assert_eq!(row.miss_rate, 4.0 / 20.0);
-        assert_eq!(row.roundtrip_us.p99, Some(20.0));
-        assert_eq!(row.allin_us, MedianP99::default(), "no sample: null");
-        assert_eq!((row.world_rss_mb, row.agent_rss_mb), (Some(2.0), Some(1.0)));
-        assert_eq!(row.world_cpu_pct, 50.0);
-    }
-
-    fn pair(agents: usize, stress: usize, mrsim: f64, bare: f64) -> BenchRow {
-        BenchRow {
-            agents,
-            stress,
-            transport: "shm".into(),
-            allin_us: MedianP99 {
-                p50: Some(mrsim),
-                p99: None,
-            },
-            baseline_allin_us: Some(MedianP99 {
-                p50: Some(bare),
-                p99: None,
-            }),
-            ..Default::default()
-        }
-    }
-
-    #[test]
-    fn the_overhead_is_the_median_of_the_pairs_ratios_with_quartiles_and_range() {
-        let rows = [
-            pair(64, 0, 120.0, 100.0),
-            pair(64, 0, 150.0, 100.0),
-            pair(64, 0, 100.0, 100.0),
-            pair(64, 0, 260.0, 200.0),
-            pair(64, 0, 140.0, 100.0),
-            pair(64, 1, 300.0, 100.0),
-            // No baseline median: not a pair.
-            BenchRow {
-                agents: 64,
-                stress: 1,
-                transport: "shm".into(),
-                ..Default::default()
-            },
-        ];
-        let o = overhead(&rows);
-        assert_eq!(o.len(), 2);
-        assert_eq!(o[0].ratios, [1.2, 1.5, 1.0, 1.3, 1.4]);
-        assert_eq!(o[0].pairs, 5);
-        assert!((o[0].median - 1.3).abs() < 1e-12);
-        // Sorted 1.0 1.2 1.3 1.4 1.5: quartiles at positions 1 and 3.
-        assert!((o[0].q1 - 1.2).abs() < 1e-12 && (o[0].q3 - 1.4).abs() < 1e-12);
-        assert_eq!((o[0].min, o[0].max), (1.0, 1.5));
-        assert_eq!((o[1].stress, o[1].pairs, o[1].median), (1, 1, 3.0));
-    }
-
-    #[test]
-    fn quantiles_interpolate_between_neighbours() {
-        assert_eq!(quantile(&[1.0, 2.0], 0.5), 1.5);
-        assert_eq!(quantile(&[1.0, 2.0, 4.0, 8.0], 0.25), 1.75);
-        assert!(quantile(&[], 0.5).is_nan());
-    }
-
-    #[test]
-    fn in_process_the_agents_cpu_is_taken_out_of_the_worlds() {
-        let (m, u) = run("inproc");
-        let row = row_from_run(2, Transport::Inproc, 5.0, &m, &u);
-        assert!(
-            (row.world_cpu_pct - 30.0).abs() < 1e-9,
-            "{}",
-            row.world_cpu_pct
-        );
-        assert!((row.agents_cpu_pct - 20.0).abs() < 1e-9);
-        assert_eq!(row.agent_rss_mb, None);
-    }
 }

@@ -23,9 +23,19 @@
 //! inside a plain value cannot be written (none of the scenario format's
 //! plain values needs one).
 
+mod axes;
+mod figure;
+mod metrics;
+mod stats;
+
+pub use metrics::{Column, METRICS, ROBOT_MEANS, RobotColumn, RunMetrics};
+pub use stats::{largest_allowable, mean_ci};
+
 use crate::error::{Invalid, Refusal};
 use crate::validate::{ScenarioSource, Validated};
-use mrsim_report::sweep_plot::{Figure, Panel, Point, Series, write_figure};
+pub use axes::sets;
+use axes::{combinations, label, numeric_axis, parse_axes};
+pub use metrics::read_run;
 use mrsim_scenario::Mode;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -105,269 +115,6 @@ impl Refusal for SweepError {
     }
 }
 
-/// Splits `text` at commas outside brackets, braces and quotes.
-fn split_values(text: &str) -> Vec<String> {
-    let mut out = Vec::new();
-    let mut depth = 0i32;
-    let mut quote: Option<char> = None;
-    let mut cur = String::new();
-    for c in text.chars() {
-        match (quote, c) {
-            (Some(q), c) if c == q => quote = None,
-            (Some(_), _) => {}
-            (None, '"' | '\'') => quote = Some(c),
-            (None, '[' | '{') => depth += 1,
-            (None, ']' | '}') => depth -= 1,
-            (None, ',') if depth == 0 => {
-                out.push(cur.trim().to_string());
-                cur.clear();
-                continue;
-            }
-            _ => {}
-        }
-        cur.push(c);
-    }
-    out.push(cur.trim().to_string());
-    out
-}
-
-/// The varied keys and their values, parsed from the `--set` options.
-fn parse_axes(set: &[String]) -> Result<Vec<(String, Vec<String>)>, Invalid> {
-    let mut axes: Vec<(String, Vec<String>)> = Vec::new();
-    for s in set {
-        let (k, v) = s
-            .split_once('=')
-            .ok_or_else(|| Invalid(format!("--set {s}: expected KEY=V1,V2,...")))?;
-        let k = k.trim().to_string();
-        if k == "world.seed" {
-            return Err(Invalid(format!(
-                "--set {s}: the seed is varied by --seeds (runs use seeds 1..=N)"
-            )));
-        }
-        if axes.iter().any(|(a, _)| *a == k) {
-            return Err(Invalid(format!("--set {s}: `{k}` is set twice")));
-        }
-        let values = split_values(v);
-        if let Some(i) = values.iter().position(|v| v.is_empty()) {
-            return Err(Invalid(format!(
-                "--set {s}: value {} of `{k}` is empty",
-                i + 1
-            )));
-        }
-        axes.push((k, values));
-    }
-    Ok(axes)
-}
-
-/// Every combination of the axes' values, first axis slowest.
-fn combinations(axes: &[(String, Vec<String>)]) -> Vec<Vec<String>> {
-    let mut out = vec![Vec::new()];
-    for (_, values) in axes {
-        out = out
-            .into_iter()
-            .flat_map(|prefix| {
-                values.iter().map(move |v| {
-                    let mut c = prefix.clone();
-                    c.push(v.clone());
-                    c
-                })
-            })
-            .collect();
-    }
-    out
-}
-
-/// A folder-name-safe label of a combination: its index (which makes it
-/// unique), then `key=value` pairs (last part of each key, values cleaned
-/// and cut to 24 characters).
-fn label(index: usize, axes: &[(String, Vec<String>)], combo: &[String]) -> String {
-    let clean = |s: &str| {
-        let mut out = String::new();
-        for c in s.chars() {
-            let c = if c.is_ascii_alphanumeric() || matches!(c, '.' | '-') {
-                c
-            } else {
-                '_'
-            };
-            if !(c == '_' && (out.is_empty() || out.ends_with('_'))) {
-                out.push(c);
-            }
-        }
-        out.truncate(24);
-        out.trim_end_matches('_').to_string()
-    };
-    let mut s = format!("{index:03}");
-    for ((k, _), v) in axes.iter().zip(combo) {
-        let short = k.rsplit('.').next().unwrap_or(k);
-        s.push('-');
-        s.push_str(&clean(short));
-        s.push('=');
-        s.push_str(&clean(v));
-    }
-    s
-}
-
-/// One run's metrics, as sweep.csv reports them.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct RunMetrics {
-    /// Fraction of robots that reached their goals.
-    pub success_rate: f64,
-    /// Contacts started, all robots.
-    pub collisions_total: f64,
-    /// Max time_to_goal if every robot arrived, else the run's duration.
-    pub makespan: f64,
-    /// Mean over robots of path_length / straight start-goal distance.
-    pub path_ratio: Option<f64>,
-    /// Min over robots of min_clearance.
-    pub min_clearance: Option<f64>,
-    /// Mean time_to_goal of the robots that arrived.
-    pub time_to_goal: Option<f64>,
-    /// Agents lost during the run.
-    pub agents_lost: f64,
-    /// Ticks run.
-    pub ticks: f64,
-    /// The run's `spl` (mean over robots).
-    pub spl: Option<f64>,
-    /// Sum of the robots' times to goal, if every robot arrived.
-    pub flowtime: Option<f64>,
-    /// Contacts per robot-kilometre.
-    pub collisions_per_robot_km: Option<f64>,
-    /// Deadlocks detected.
-    pub deadlocks: f64,
-    /// Means over robots of the interaction metrics, in the order of
-    /// [`ROBOT_MEANS`].
-    pub robot_means: [Option<f64>; ROBOT_MEANS.len()],
-    /// Deadline misses per robot and tick (lockstep: those its timing
-    /// model decides; realtime: those measured).
-    pub miss_rate: Option<f64>,
-}
-
-/// How a per-robot metric is read from a robot's entry of metrics.json.
-pub type RobotColumn = (
-    &'static str,
-    fn(&mrsim_runfolder::RobotMetrics) -> Option<f64>,
-);
-
-/// The per-robot metrics sweep.csv reports as a mean over the run's robots.
-pub const ROBOT_MEANS: [RobotColumn; 9] = [
-    ("time_not_moving", |r| r.time_not_moving),
-    ("ttc_min", |r| r.ttc_min.flatten()),
-    ("time_intimate", |r| r.time_intimate),
-    ("time_personal", |r| r.time_personal),
-    ("time_social", |r| r.time_social),
-    ("jerk_mean", |r| r.jerk_mean),
-    ("path_irregularity", |r| r.path_irregularity),
-    ("heading_change", |r| r.heading_change),
-    ("stuck_time", |r| r.stuck_time),
-];
-
-/// How a metric column is read from a run's metrics.
-pub type Column = (&'static str, fn(&RunMetrics) -> Option<f64>);
-
-/// The metric columns of sweep.csv, in order, with how to get each.
-pub const METRICS: [Column; 23] = [
-    ("success_rate", |m| Some(m.success_rate)),
-    ("collisions_total", |m| Some(m.collisions_total)),
-    // 1 if the run had any collision: its mean is the collision rate.
-    ("collided", |m| {
-        Some(f64::from(u8::from(m.collisions_total > 0.0)))
-    }),
-    ("makespan", |m| Some(m.makespan)),
-    ("path_length_ratio", |m| m.path_ratio),
-    ("min_clearance", |m| m.min_clearance),
-    ("time_to_goal", |m| m.time_to_goal),
-    ("agents_lost", |m| Some(m.agents_lost)),
-    ("ticks", |m| Some(m.ticks)),
-    ("spl", |m| m.spl),
-    ("flowtime", |m| m.flowtime),
-    ("collisions_per_robot_km", |m| m.collisions_per_robot_km),
-    ("deadlocks", |m| Some(m.deadlocks)),
-    ("time_not_moving", |m| m.robot_means[0]),
-    ("ttc_min", |m| m.robot_means[1]),
-    ("time_intimate", |m| m.robot_means[2]),
-    ("time_personal", |m| m.robot_means[3]),
-    ("time_social", |m| m.robot_means[4]),
-    ("jerk_mean", |m| m.robot_means[5]),
-    ("path_irregularity", |m| m.robot_means[6]),
-    ("heading_change", |m| m.robot_means[7]),
-    ("stuck_time", |m| m.robot_means[8]),
-    ("miss_rate", |m| m.miss_rate),
-];
-
-/// A run folder's file that could not be read, in words.
-fn file_error(e: mrsim_runfolder::FileError) -> String {
-    match e {
-        mrsim_runfolder::FileError::Io { path, source } => {
-            format!("reading {}: {source}", path.display())
-        }
-        mrsim_runfolder::FileError::Json { path, source } => {
-            format!("parsing {}: {source}", path.display())
-        }
-    }
-}
-
-/// Reads a run folder's metrics.json and scenario.json (with the run
-/// folder's schema and the scenario's own type) into sweep.csv's metrics.
-pub fn read_run(dir: &Path) -> Result<RunMetrics, String> {
-    let m = mrsim_runfolder::read_metrics(dir).map_err(file_error)?;
-    let sc: mrsim_scenario::Scenario =
-        mrsim_runfolder::read_json(dir, mrsim_runfolder::SCENARIO_FILE).map_err(file_error)?;
-    let ticks = m.ticks as f64;
-    let mut arrived = Vec::new();
-    let mut ratios = Vec::new();
-    let mut clearance: Option<f64> = None;
-    let mut all_arrived = true;
-    let none = Default::default();
-    for r in &sc.robots {
-        let rm = m.robots.get(&r.name).unwrap_or(&none);
-        match rm.time_to_goal {
-            Some(t) if rm.reached_goal => arrived.push(t),
-            _ => all_arrived = false,
-        }
-        let straight = (r.goal[0] - r.start[0]).hypot(r.goal[1] - r.start[1]);
-        if straight > 0.0 {
-            ratios.push(rm.path_length / straight);
-        }
-        if let Some(c) = rm.min_clearance {
-            clearance = Some(clearance.map_or(c, |m: f64| m.min(c)));
-        }
-    }
-    let mean = |xs: &[f64]| (!xs.is_empty()).then(|| xs.iter().sum::<f64>() / xs.len() as f64);
-    let makespan = if all_arrived && !arrived.is_empty() {
-        arrived.iter().copied().fold(f64::MIN, f64::max)
-    } else {
-        ticks * sc.world.dt
-    };
-    let robot_means = ROBOT_MEANS.map(|(_, get)| {
-        let xs: Vec<f64> = m.robots.values().filter_map(get).collect();
-        mean(&xs)
-    });
-    let slots = m.robots.len() as f64 * ticks;
-    let miss_rate = (slots > 0.0).then(|| {
-        m.robots
-            .values()
-            .map(|r| r.deadline_misses as f64)
-            .sum::<f64>()
-            / slots
-    });
-    Ok(RunMetrics {
-        miss_rate,
-        spl: m.spl,
-        flowtime: m.flowtime.flatten(),
-        collisions_per_robot_km: m.collisions_per_robot_km.flatten(),
-        deadlocks: m.deadlocks.len() as f64,
-        robot_means,
-        success_rate: m.success_rate,
-        collisions_total: m.collisions_total as f64,
-        makespan,
-        path_ratio: mean(&ratios),
-        min_clearance: clearance,
-        time_to_goal: mean(&arrived),
-        agents_lost: m.agents_lost as f64,
-        ticks,
-    })
-}
-
 /// True when a sweep ran more than one seed and every combination's seeds
 /// gave the same metrics: the scene has nothing random (no `jitter`, no
 /// noise, no random obstacles), so its intervals say nothing.
@@ -386,50 +133,6 @@ pub fn seeds_change_nothing(jobs: &[Job], results: &[JobResult]) -> bool {
         }
     }
     repeated
-}
-
-/// The 0.975 quantile of Student's t with `df` degrees of freedom (exact
-/// to 3 decimals from a table up to 30, Cornish-Fisher expansion beyond).
-fn t975(df: usize) -> f64 {
-    const TABLE: [f64; 30] = [
-        12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160,
-        2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056,
-        2.052, 2.048, 2.045, 2.042,
-    ];
-    match df {
-        0 => f64::NAN,
-        1..=30 => TABLE[df - 1],
-        _ => {
-            let z: f64 = 1.959_964;
-            let n = df as f64;
-            z + (z.powi(3) + z) / (4.0 * n)
-                + (5.0 * z.powi(5) + 16.0 * z.powi(3) + 3.0 * z) / (96.0 * n * n)
-        }
-    }
-}
-
-/// Mean and the half-width of its 95 % interval (None with fewer than two
-/// values for the interval, or none at all for the mean).
-pub fn mean_ci(xs: &[f64]) -> (Option<f64>, Option<f64>) {
-    if xs.is_empty() {
-        return (None, None);
-    }
-    let n = xs.len() as f64;
-    let mean = xs.iter().sum::<f64>() / n;
-    if xs.len() < 2 {
-        return (Some(mean), None);
-    }
-    let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    (Some(mean), Some(t975(xs.len() - 1) * (var / n).sqrt()))
-}
-
-/// The largest value of `key` that is allowable for one seed: the largest
-/// tested value whose run had no collision (0 if every value collided).
-pub fn largest_allowable(runs: &[(f64, bool)]) -> f64 {
-    runs.iter()
-        .filter(|(_, collided)| !collided)
-        .map(|(v, _)| *v)
-        .fold(0.0, f64::max)
 }
 
 /// One run of a sweep.
@@ -650,30 +353,6 @@ pub fn check(plan: &SweepPlan) -> Result<Checked, SweepError> {
     })
 }
 
-/// The index of swept key `key`, if its values are all numbers.
-fn numeric_axis(axes: &[(String, Vec<String>)], key: &str) -> Result<usize, Invalid> {
-    match axes.iter().position(|(k, _)| k == key) {
-        None => Err(Invalid(format!(
-            "--x {key}: not a swept key (give it --set {key}=V1,V2,...)"
-        ))),
-        Some(i) if axes[i].1.iter().any(|v| v.parse::<f64>().is_err()) => Err(Invalid(format!(
-            "--x {key}: its values must be numbers to be an axis"
-        ))),
-        Some(i) => Ok(i),
-    }
-}
-
-/// The `--set` overrides of one run: the combination's values and the seed.
-pub fn sets(axes: &[(String, Vec<String>)], combo: &[String], seed: u64) -> Vec<String> {
-    let mut s: Vec<String> = axes
-        .iter()
-        .zip(combo)
-        .map(|((k, _), v)| format!("{k}={v}"))
-        .collect();
-    s.push(format!("world.seed={seed}"));
-    s
-}
-
 impl Sweep {
     /// Runs every job, each an `mrsim run` child process: the lockstep
     /// ones [`Sweep::workers`] at once, then the realtime ones one at a
@@ -809,58 +488,6 @@ pub struct Summary {
     pub stats: Vec<(Option<f64>, Option<f64>)>,
 }
 
-/// A metric's axis label (with its unit) and whether it is a fraction (an
-/// axis from 0 to 1), for the figure.
-fn metric_axis(name: &str, length: &str) -> (String, bool) {
-    match name {
-        "success_rate" => ("robots at their goal (fraction)".into(), true),
-        "collisions_total" => ("contacts per run".into(), false),
-        "collided" => ("runs with a contact (fraction)".into(), true),
-        "makespan" => ("last arrival [s]".into(), false),
-        "path_length_ratio" => ("path / straight line".into(), false),
-        "min_clearance" => (format!("smallest gap [{length}]"), false),
-        "time_to_goal" => ("mean time to goal [s]".into(), false),
-        "agents_lost" => ("agents lost per run".into(), false),
-        "ticks" => ("ticks per run".into(), false),
-        "miss_rate" => ("deadline misses per robot and tick".into(), true),
-        "spl" => ("success weighted by path length".into(), true),
-        "deadlocks" => ("deadlocks per run".into(), false),
-        "time_not_moving" | "time_intimate" | "time_personal" | "time_social" | "stuck_time" => {
-            (format!("{other} [s]", other = name), false)
-        }
-        "ttc_min" => ("smallest time to collision [s]".into(), false),
-        other => (other.to_string(), false),
-    }
-}
-
-/// The unit of a swept key's values, where its name says it (`[ms]` for a
-/// key ending `ms`, seconds for `world.dt`, the length unit for a radius).
-fn key_unit(key: &str, length: &str) -> Option<String> {
-    let last = key.rsplit('.').next().unwrap_or(key);
-    let unit = match last {
-        "ms" => "ms".to_string(),
-        "dt" | "duration" | "stall_timeout" | "horizon" => "s".to_string(),
-        "max_speed" => format!("{length}/s"),
-        "max_accel" => format!("{length}/s^2"),
-        "radius" | "sensing_range" | "goal_tolerance" => length.to_string(),
-        _ if last.ends_with("_ms") => "ms".to_string(),
-        _ if last.ends_with("_deg") => "deg".to_string(),
-        _ if last.ends_with("_s") => "s".to_string(),
-        _ => return None,
-    };
-    Some(unit)
-}
-
-/// A legend's text: `key=value` with the key's last part, cut short.
-fn short_pair(key: &str, value: &str) -> String {
-    let short = key.rsplit('.').next().unwrap_or(key);
-    let mut v: String = value.chars().take(32).collect();
-    if value.chars().count() > 32 {
-        v.push_str("...");
-    }
-    format!("{short}={v}")
-}
-
 impl Sweep {
     /// Each combination's means and 95 % intervals over its seeds, mode by
     /// mode (lockstep first), combination by combination.
@@ -889,155 +516,13 @@ impl Sweep {
         }
         out
     }
-
-    /// The swept key on the figure's x axis: `--x`, else the first swept
-    /// key whose values are all numbers (none: no figure).
-    pub fn x_axis(&self) -> Option<usize> {
-        match &self.plan.x {
-            Some(x) => numeric_axis(&self.axes, x).ok(),
-            None => self
-                .axes
-                .iter()
-                .position(|(_, vs)| vs.iter().all(|v| v.parse::<f64>().is_ok())),
-        }
-    }
-
-    /// The figure of `summaries` ([`Sweep::summarize`]): every metric
-    /// against the swept number [`Sweep::x_axis`], one line per combination
-    /// of the other keys (and per mode), with its 95 % band. None if no
-    /// swept key is a number.
-    pub fn figure(&self, summaries: &[Summary]) -> Option<Figure> {
-        let xi = self.x_axis()?;
-        let others = |combo: usize| -> Vec<&String> {
-            self.combos[combo]
-                .iter()
-                .enumerate()
-                .filter(|(i, _)| *i != xi)
-                .map(|(_, v)| v)
-                .collect()
-        };
-        // Lines: (other values, mode), in order of first appearance.
-        let mut lines: Vec<(Vec<&String>, Mode)> = Vec::new();
-        for s in summaries {
-            let key = (others(s.combo), s.mode);
-            if !lines.contains(&key) {
-                lines.push(key);
-            }
-        }
-        let mut colours: Vec<&Vec<&String>> = Vec::new();
-        let both = self.plan.mode == SweepMode::Both;
-        let series: Vec<Series> = lines
-            .iter()
-            .map(|(rest, mode)| {
-                let colour = match colours.iter().position(|c| *c == rest) {
-                    Some(c) => c,
-                    None => {
-                        colours.push(rest);
-                        colours.len() - 1
-                    }
-                };
-                let pairs: Vec<String> = self
-                    .axes
-                    .iter()
-                    .enumerate()
-                    .filter(|(i, _)| *i != xi)
-                    .zip(rest)
-                    .map(|((_, (k, _)), v)| short_pair(k, v))
-                    .collect();
-                let how = match mode {
-                    Mode::Lockstep => "lockstep (modelled)",
-                    Mode::Realtime => "realtime (measured)",
-                };
-                let label = match (pairs.is_empty(), both) {
-                    (true, _) => how.to_string(),
-                    (false, false) => pairs.join(", "),
-                    (false, true) => format!("{}, {how}", pairs.join(", ")),
-                };
-                Series {
-                    label,
-                    colour,
-                    measured: *mode == Mode::Realtime,
-                }
-            })
-            .collect();
-        // The metrics asked for, in the order asked (all by default).
-        let drawn: Vec<usize> = if self.plan.metrics.is_empty() {
-            (0..METRICS.len()).collect()
-        } else {
-            self.plan
-                .metrics
-                .iter()
-                .filter_map(|want| METRICS.iter().position(|(name, _)| name == want))
-                .collect()
-        };
-        let panels = drawn
-            .into_iter()
-            .map(|m| {
-                let name = METRICS[m].0;
-                let (y_label, fraction) = metric_axis(name, self.length_unit);
-                let lines = lines
-                    .iter()
-                    .map(|(rest, mode)| {
-                        summaries
-                            .iter()
-                            .filter(|s| s.mode == *mode && others(s.combo) == *rest)
-                            .filter_map(|s| {
-                                let x = self.combos[s.combo][xi].parse::<f64>().ok()?;
-                                let (mean, half_width) = s.stats[m];
-                                Some(Point {
-                                    x,
-                                    mean: mean?,
-                                    half_width,
-                                })
-                            })
-                            .collect()
-                    })
-                    .collect();
-                Panel {
-                    title: name.to_string(),
-                    y_label,
-                    fraction,
-                    lines,
-                }
-            })
-            .collect();
-        let key = &self.axes[xi].0;
-        let modes = match self.plan.mode {
-            SweepMode::Lockstep => "lockstep runs",
-            SweepMode::Realtime => "realtime runs",
-            SweepMode::Both => "lockstep (solid) and realtime (dashed) runs",
-        };
-        Some(Figure {
-            title: format!(
-                "{}: mean over seeds 1..{} with its 95 % interval, {modes}",
-                self.name, self.plan.seeds
-            ),
-            x_label: match key_unit(key, self.length_unit) {
-                Some(u) => format!("{key} [{u}]"),
-                None => key.clone(),
-            },
-            series,
-            panels,
-        })
-    }
-
-    /// Draws [`Sweep::figure`] into `sweep.svg` and `sweep.png` in the
-    /// sweep's folder; false (nothing drawn) if no swept key is a number.
-    pub fn draw(&self, summaries: &[Summary]) -> Result<bool, mrsim_report::RenderError> {
-        match self.figure(summaries) {
-            Some(f) => write_figure(
-                &f,
-                &self.dir.join(mrsim_runfolder::SWEEP_SVG_FILE),
-                &self.dir.join(mrsim_runfolder::SWEEP_PNG_FILE),
-            )
-            .map(|()| true),
-            None => Ok(false),
-        }
-    }
 }
 
 #[cfg(test)]
 mod tests {
+    use super::axes::split_values;
+    use super::figure::key_unit;
+    use super::stats::t975;
     use super::*;
 
     #[test]

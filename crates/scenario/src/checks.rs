@@ -1,7 +1,7 @@
 //! The checks every part of resolving shares: the built-in robot defaults,
 //! number and point checks that point their errors at the offending value,
-//! and the TOML error conversion. A leaf: it uses no other resolve module, so
-//! `generate` and every sibling can use it without a cycle.
+//! and the TOML error conversion. A leaf beside `resolve` and `generate`,
+//! which both use it: it uses neither.
 
 use crate::error::Fail;
 use crate::raw::{P, Pt, S};
@@ -59,7 +59,7 @@ pub(crate) fn check(v: &S<f64>, key: &str, rule: Rule, what: &str) -> Result<f64
     }
 }
 
-pub(super) fn opt(
+pub(crate) fn opt(
     v: &Option<S<f64>>,
     key: &str,
     rule: Rule,
@@ -84,7 +84,7 @@ pub(crate) fn point(v: &S<Pt>, key: &str, what: &str) -> Result<P, Fail> {
     }
 }
 
-pub(super) fn points(v: &S<Vec<Pt>>, key: &str, what: &str) -> Result<Vec<P>, Fail> {
+pub(crate) fn points(v: &S<Vec<Pt>>, key: &str, what: &str) -> Result<Vec<P>, Fail> {
     for Pt(p) in v.get_ref() {
         if !p.iter().all(|x| x.is_finite()) {
             return Err(Fail::new(

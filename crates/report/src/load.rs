@@ -1,0 +1,322 @@
+//! Reading a finished run's folder: `scenario.json`, the trajectory
+//! (`trajectory.csv` or `trajectory.parquet`, read with the run folder
+//! crate's readers), `events.jsonl`, `metrics.json`, `diagnostics.csv` and
+//! `routes.csv`, each error naming the file and, where there is one, the
+//! line.
+
+use crate::RenderError;
+use crate::records::{BodyKind, BodyTrack, DiagnosticSample, Event, EventKind, Sample, Trajectory};
+use crate::run::RunData;
+use mrsim_runfolder::csv::{Columns, CsvError, numbered_lines, trajectory_rows};
+use mrsim_runfolder::trajectory::{TrajectoryError, TrajectoryRow, read_parquet_trajectory};
+use mrsim_runfolder::{
+    DIAGNOSTICS_FILE, EVENTS_FILE, METRICS_FILE, ROUTES_FILE, SCENARIO_FILE, TRAJECTORY_FILE,
+    TRAJECTORY_PARQUET_FILE,
+};
+use mrsim_scenario::{Scenario, TrajectoryFormat};
+use std::collections::{BTreeMap, HashMap};
+use std::path::Path;
+
+impl RunData {
+    /// Reads a run folder. `scenario.json`, the trajectory its `[output]`
+    /// names (`trajectory.csv`, `trajectory.parquet`, or none at all for
+    /// `trajectory = "none"`: then [`RunData::trajectory`] is empty) and
+    /// `events.jsonl` are required; `metrics.json` and `diagnostics.csv` are
+    /// read when present. Errors name the file and, for CSV and JSONL, the
+    /// line.
+    pub fn load(dir: &Path) -> Result<RunData, RenderError> {
+        if !dir.is_dir() {
+            return Err(RenderError::NotADirectory {
+                path: dir.to_path_buf(),
+            });
+        }
+        let scenario_path = dir.join(SCENARIO_FILE);
+        let scenario: Scenario =
+            serde_json::from_str(&read_required(&scenario_path)?).map_err(|source| {
+                RenderError::Json {
+                    path: scenario_path.clone(),
+                    source,
+                }
+            })?;
+        let trajectory = match scenario.output.trajectory {
+            TrajectoryFormat::Csv => {
+                let trajectory_path = dir.join(TRAJECTORY_FILE);
+                cut_short(
+                    &trajectory_path,
+                    &read_required(&trajectory_path)?,
+                    parse_trajectory,
+                )?
+            }
+            TrajectoryFormat::Parquet => load_parquet(&dir.join(TRAJECTORY_PARQUET_FILE))?,
+            // Nothing was recorded: the pictures show the scene alone.
+            TrajectoryFormat::None => Trajectory::default(),
+        };
+        let events_path = dir.join(EVENTS_FILE);
+        let events = cut_short(&events_path, &read_required(&events_path)?, parse_events)?;
+        let metrics_path = dir.join(METRICS_FILE);
+        let metrics = match read_optional(&metrics_path)? {
+            Some(text) => {
+                Some(
+                    serde_json::from_str(&text).map_err(|source| RenderError::Json {
+                        path: metrics_path.clone(),
+                        source,
+                    })?,
+                )
+            }
+            None => None,
+        };
+        let diagnostics_path = dir.join(DIAGNOSTICS_FILE);
+        let diagnostics = match read_optional(&diagnostics_path)? {
+            // An empty file (no header either) means no diagnostics, as no file.
+            Some(text) if text.trim().is_empty() => None,
+            Some(text) => Some(parse_diagnostics(&diagnostics_path, &text)?),
+            None => None,
+        };
+        let routes_path = dir.join(ROUTES_FILE);
+        let routes = match read_optional(&routes_path)? {
+            Some(text) => parse_routes(&routes_path, &text)?,
+            None => BTreeMap::new(),
+        };
+        let encounters_path = dir.join(mrsim_runfolder::ENCOUNTERS_FILE);
+        let encounters = read_optional(&encounters_path)?
+            .map(|text| mrsim_runfolder::metrics::parse_encounters(&text))
+            .unwrap_or_default();
+        Ok(RunData {
+            dir: dir.to_path_buf(),
+            scenario,
+            trajectory,
+            events,
+            metrics,
+            diagnostics,
+            routes,
+            encounters,
+        })
+    }
+}
+
+fn read_required(path: &Path) -> Result<String, RenderError> {
+    read_optional(path)?.ok_or_else(|| RenderError::Missing {
+        path: path.to_path_buf(),
+    })
+}
+
+fn read_optional(path: &Path) -> Result<Option<String>, RenderError> {
+    match std::fs::read_to_string(path) {
+        Ok(text) => Ok(Some(text)),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+        Err(source) => Err(RenderError::Io {
+            path: path.to_path_buf(),
+            source,
+        }),
+    }
+}
+
+/// A malformed line of the file at `path`.
+fn parse_error(path: &Path, e: CsvError) -> RenderError {
+    RenderError::Parse {
+        path: path.to_path_buf(),
+        line: e.line,
+        reason: e.reason,
+    }
+}
+
+/// Parses `text` with `parse`; if that fails on the last line and the text
+/// does not end with a newline, the line was cut by a writer that was
+/// killed (the world flushes its files about once a second): it is dropped
+/// and the rest parsed.
+fn cut_short<T>(
+    path: &Path,
+    text: &str,
+    parse: impl Fn(&Path, &str) -> Result<T, RenderError>,
+) -> Result<T, RenderError> {
+    match parse(path, text) {
+        Err(RenderError::Parse { line, .. })
+            if !text.ends_with('\n') && line == text.lines().count() =>
+        {
+            let whole = text.rfind('\n').map_or("", |i| &text[..=i]);
+            parse(path, whole)
+        }
+        r => r,
+    }
+}
+
+fn parse_trajectory(path: &Path, text: &str) -> Result<Trajectory, RenderError> {
+    let mut tracks = Tracks::default();
+    for row in trajectory_rows(text).map_err(|e| parse_error(path, e))? {
+        let (line_no, row) = row.map_err(|e| parse_error(path, e))?;
+        tracks.push_row(&row).map_err(|reason| {
+            parse_error(
+                path,
+                CsvError {
+                    line: line_no,
+                    reason,
+                },
+            )
+        })?;
+    }
+    Ok(tracks.finish())
+}
+
+/// Reads the Parquet trajectory at `path`.
+fn load_parquet(path: &Path) -> Result<Trajectory, RenderError> {
+    if !path.exists() {
+        return Err(RenderError::Missing {
+            path: path.to_path_buf(),
+        });
+    }
+    let table = read_parquet_trajectory(path).map_err(|e| match e {
+        TrajectoryError::Io { path, source } => RenderError::Io { path, source },
+        other => RenderError::Parquet(other),
+    })?;
+    let mut tracks = Tracks::default();
+    for (i, row) in table.rows().enumerate() {
+        tracks.push_row(&row).map_err(|reason| RenderError::Parse {
+            path: path.to_path_buf(),
+            line: i + 1,
+            reason,
+        })?;
+    }
+    Ok(tracks.finish())
+}
+
+/// A trajectory's rows grouped into tracks, whatever file they come from.
+#[derive(Default)]
+struct Tracks {
+    bodies: Vec<BodyTrack>,
+    index: HashMap<String, usize>,
+    tick_times: BTreeMap<u64, f64>,
+}
+
+impl Tracks {
+    /// Adds one row; the error says what is wrong with it.
+    fn push(&mut self, name: &str, kind: &str, sample: Sample) -> Result<(), String> {
+        if name.is_empty() {
+            return Err("column `body` is empty".into());
+        }
+        let kind = match kind {
+            "robot" => BodyKind::Robot,
+            "obstacle" => BodyKind::Obstacle,
+            other => {
+                return Err(format!(
+                    "column `kind`: `{other}` is neither robot nor obstacle"
+                ));
+            }
+        };
+        let i = match self.index.get(name) {
+            Some(&i) => i,
+            None => {
+                self.index.insert(name.to_string(), self.bodies.len());
+                self.bodies.push(BodyTrack {
+                    name: name.to_string(),
+                    kind,
+                    samples: Vec::new(),
+                });
+                self.bodies.len() - 1
+            }
+        };
+        if self.bodies[i].kind != kind {
+            return Err(format!(
+                "body `{name}` was a {:?} on an earlier line",
+                self.bodies[i].kind
+            )
+            .to_lowercase());
+        }
+        self.tick_times.entry(sample.tick).or_insert(sample.time);
+        self.bodies[i].samples.push(sample);
+        Ok(())
+    }
+
+    /// Adds a row read from either file.
+    fn push_row(&mut self, row: &TrajectoryRow) -> Result<(), String> {
+        let sample = Sample {
+            tick: row.tick,
+            time: row.time,
+            x: row.x,
+            y: row.y,
+            vx: row.vx,
+            vy: row.vy,
+        };
+        self.push(row.body, row.kind, sample)
+    }
+
+    /// The tracks, each sorted by tick without repeats.
+    fn finish(mut self) -> Trajectory {
+        for b in &mut self.bodies {
+            b.samples.sort_by_key(|s| s.tick);
+            b.samples.dedup_by_key(|s| s.tick);
+        }
+        Trajectory {
+            ticks: self.tick_times.keys().copied().collect(),
+            times: self.tick_times.values().copied().collect(),
+            bodies: self.bodies,
+        }
+    }
+}
+
+fn parse_events(path: &Path, text: &str) -> Result<Vec<Event>, RenderError> {
+    let mut events = Vec::new();
+    for (line_no, line) in numbered_lines(text) {
+        let event: Event = serde_json::from_str(line).map_err(|e| {
+            parse_error(
+                path,
+                CsvError {
+                    line: line_no,
+                    reason: e.to_string(),
+                },
+            )
+        })?;
+        if event.kind != EventKind::Unknown {
+            events.push(event);
+        }
+    }
+    Ok(events)
+}
+
+fn parse_diagnostics(path: &Path, text: &str) -> Result<Vec<DiagnosticSample>, RenderError> {
+    const COLUMNS: [&str; 5] = ["tick", "time", "robot", "name", "value"];
+    let mut lines = numbered_lines(text);
+    let csv =
+        Columns::new(lines.next().map(|(_, l)| l), &COLUMNS).map_err(|e| parse_error(path, e))?;
+    let row = |line_no: usize, line: &str| -> Result<DiagnosticSample, CsvError> {
+        let f = csv.fields(line_no, line)?;
+        Ok(DiagnosticSample {
+            tick: csv.tick(line_no, f[0])?,
+            time: csv.number(line_no, "time", f[1])?,
+            robot: f[2].to_string(),
+            name: f[3].to_string(),
+            value: csv.number(line_no, "value", f[4])?,
+        })
+    };
+    lines
+        .map(|(line_no, line)| row(line_no, line).map_err(|e| parse_error(path, e)))
+        .collect()
+}
+
+/// routes.csv (`robot,seq,x,y`): the points of each robot's route, in
+/// file order.
+fn parse_routes(path: &Path, text: &str) -> Result<BTreeMap<String, Vec<[f64; 2]>>, RenderError> {
+    let mut out: BTreeMap<String, Vec<[f64; 2]>> = BTreeMap::new();
+    for (n, line) in text.lines().enumerate().skip(1) {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let bad = |reason: &str| RenderError::Parse {
+            path: path.to_path_buf(),
+            line: n + 1,
+            reason: reason.to_string(),
+        };
+        let cols: Vec<&str> = line.rsplitn(4, ',').collect();
+        let [y, x, _seq, robot] = cols[..] else {
+            return Err(bad("expected robot,seq,x,y"));
+        };
+        let num = |v: &str| {
+            v.trim()
+                .parse::<f64>()
+                .map_err(|_| bad("x and y must be numbers"))
+        };
+        out.entry(robot.to_string())
+            .or_default()
+            .push([num(x)?, num(y)?]);
+    }
+    Ok(out)
+}
