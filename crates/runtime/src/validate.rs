@@ -4,7 +4,7 @@
 //! world and the in-process run take instead of checking again.
 
 use crate::error::Invalid;
-use mrsim_planners::{BuildError, EXTERNAL, Registry};
+use mrsim_planners::{BuildError, EXTERNAL, ROS2, Registry};
 use mrsim_scenario::{Loaded, Mode, Scenario};
 use mrsim_world::World;
 use std::ffi::OsString;
@@ -122,7 +122,17 @@ impl Validated {
         }
         .map_err(|e| Invalid(e.to_string()))?;
         for r in &loaded.scenario.robots {
-            if r.planner == EXTERNAL {
+            if r.planner == EXTERNAL || r.planner == ROS2 {
+                if r.planner == ROS2 && !mrsim_ros2::names::is_ros_token(&r.name) {
+                    return Err(Invalid(format!(
+                        "{}: robot `{}` has planner = \"ros2\": its name becomes its ROS 2 \
+                         namespace (/{}/cmd_vel), so it must be a letter or `_` followed by \
+                         letters, digits and `_`",
+                        loaded.origin(),
+                        r.name,
+                        r.name
+                    )));
+                }
                 continue;
             }
             let built = mrsim_agents::build_planner_in(&registry, r);
@@ -190,6 +200,12 @@ impl Validated {
     /// program, which joins the run as their agent).
     pub fn external_robots(&self) -> Vec<&str> {
         self.robots_where(|planner| planner == EXTERNAL)
+    }
+
+    /// The robots whose planner is `ros2` (driven by a ROS 2 node through
+    /// the ROS 2 agent, `mrsim ros2`, which `mrsim run` starts).
+    pub fn ros2_robots(&self) -> Vec<&str> {
+        self.robots_where(|planner| planner == ROS2)
     }
 
     /// The robots whose planner this program registered (not built in):
