@@ -447,7 +447,7 @@ mod tests {
         r.register_simple("still", "stands", || Still).expect("new");
         assert!(r.build("still", &Params::new()).is_ok());
         let names: Vec<&str> = r.entries().iter().map(Entry::name).collect();
-        assert_eq!(names.len(), PLANNERS.len() + 2);
+        assert_eq!(names.len(), PLANNERS.len() + 3);
         assert_eq!(names[names.len() - 3..], [EXTERNAL, ROS2, "still"]);
         assert!(!r.get("still").expect("still").is_builtin());
         assert!(r.get("orca").expect("orca").is_builtin());
