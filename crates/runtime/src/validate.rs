@@ -340,6 +340,36 @@ mod tests {
     }
 
     #[test]
+    fn a_ros2_robot_builds_nothing_and_needs_a_name_ros_accepts_as_a_namespace() {
+        let demo = |sets: &[&str]| {
+            Validated::new(ScenarioSource {
+                set: sets.iter().map(|s| s.to_string()).collect(),
+                ..Default::default()
+            })
+        };
+        let v = demo(&["robot.r0.planner=ros2"]).expect("ros2 is valid");
+        assert_eq!(v.ros2_robots(), ["r0"]);
+        assert!(v.external_robots().is_empty());
+        let dir = std::env::temp_dir().join(format!("mrsim-ros2-name-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let file = dir.join("dash.toml");
+        std::fs::write(
+            &file,
+            "name = \"dash\"\n[world]\ndt = 0.1\nduration = 1.0\n\n[[robot]]\n\
+             name = \"r-0\"\nplanner = \"ros2\"\nstart = [0.0, 0.0]\ngoal = [1.0, 0.0]\n",
+        )
+        .expect("write the scene");
+        let refused = Validated::new(ScenarioSource {
+            path: Some(file),
+            ..Default::default()
+        })
+        .expect_err("r-0 is no ROS name");
+        let _ = std::fs::remove_dir_all(&dir);
+        assert!(refused.to_string().contains("`r-0`"), "{refused}");
+        assert!(refused.to_string().contains("namespace"), "{refused}");
+    }
+
+    #[test]
     fn another_process_gets_the_same_scenario_from_the_arguments() {
         let s = ScenarioSource {
             path: Some("a.toml".into()),
