@@ -161,6 +161,13 @@ pub struct RunArgs {
     /// With --transport zenoh: the config file.
     #[command(flatten)]
     pub zenoh: ZenohArgs,
+    /// Robots with planner = "ros2": the Zenoh router of the ROS 2 side
+    /// (default tcp/localhost:7447), where `mrsim ros2` connects.
+    #[arg(long, value_name = "ENDPOINT")]
+    pub ros2_connect: Option<String>,
+    /// Robots with planner = "ros2": the ROS domain id.
+    #[arg(long, value_name = "ID")]
+    pub ros2_domain: Option<u32>,
     /// Scheduling: --cpus LIST, --rt.
     #[command(flatten)]
     pub sched: SchedArgs,
@@ -245,6 +252,57 @@ pub struct AgentArgs {
     /// end at once.
     #[arg(long, default_value_t = 30.0, value_name = "SECS")]
     pub reconnect: f64,
+    /// With --transport zenoh: the config file.
+    #[command(flatten)]
+    pub zenoh: ZenohArgs,
+}
+
+/// `mrsim ros2` options.
+#[derive(Debug, Clone, Args)]
+pub struct Ros2Args {
+    /// The robots (planner = "ros2"), comma-separated.
+    #[arg(long, value_delimiter = ',', value_name = "NAMES", required = true)]
+    pub robots: Vec<String>,
+    /// The run id of the world.
+    #[arg(long, default_value = "default")]
+    pub run: String,
+    /// ROS domain id (ROS_DOMAIN_ID of the ROS 2 nodes).
+    #[arg(long, default_value_t = 0)]
+    pub domain: u32,
+    /// The Zenoh router (or peer) the ROS 2 nodes use, e.g.
+    /// tcp/HOST:7447 (default tcp/localhost:7447, where `ros2 run
+    /// rmw_zenoh_cpp rmw_zenohd` listens).
+    #[arg(long = "ros2-connect", alias = "ros-connect", value_name = "ENDPOINT")]
+    pub ros2_connect: Option<String>,
+    /// A Zenoh JSON5 config file for the ROS 2 side (as
+    /// ZENOH_SESSION_CONFIG_URI is for rmw_zenoh).
+    #[arg(long, value_name = "FILE")]
+    pub ros2_config: Option<PathBuf>,
+    /// Put the robots' topics under this prefix (`sim` gives
+    /// /sim/a0/cmd_vel).
+    #[arg(long, default_value = "", value_name = "PREFIX")]
+    pub namespace_prefix: String,
+    /// Lockstep: seconds to wait for a robot's cmd_vel after each /clock
+    /// before it brakes for the tick (keep it below the scenario's
+    /// stall_timeout).
+    #[arg(long, default_value_t = 1.0, value_name = "SECS")]
+    pub wait: f64,
+    /// Publish this map (a ROS map_server YAML) on /map.
+    #[arg(long, value_name = "YAML")]
+    pub map: Option<PathBuf>,
+    /// Write the counts of what came in on cmd_vel (JSON) here at the end.
+    #[arg(long, value_name = "FILE")]
+    pub stats_out: Option<PathBuf>,
+    /// Seconds to wait for the world.
+    #[arg(long, default_value_t = 30.0)]
+    pub timeout: f64,
+    /// shm (the world on this machine) or zenoh (the world at --connect).
+    #[arg(long, value_enum, default_value = "shm")]
+    pub transport: LinkArg,
+    /// With --transport zenoh: the world's address (default
+    /// tcp/127.0.0.1:7447).
+    #[arg(long, value_name = "ENDPOINT")]
+    pub connect: Option<String>,
     /// With --transport zenoh: the config file.
     #[command(flatten)]
     pub zenoh: ZenohArgs,
@@ -411,6 +469,9 @@ pub enum Command {
     World(WorldArgs),
     /// Drive one robot of a running world.
     Agent(AgentArgs),
+    /// Drive robots of a running world from ROS 2 over rmw_zenoh: cmd_vel
+    /// in; odom, scan, tf, clock and map out (see docs/ros2.md).
+    Ros2(Ros2Args),
     /// Watch a running world: a live dashboard of its bodies and agents
     /// (read-only; never slows the world or counts as an agent).
     Top(WatchArgs),

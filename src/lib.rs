@@ -125,6 +125,7 @@ pub mod planners;
 pub mod progress;
 pub mod report;
 pub mod rerun;
+pub mod ros2;
 pub mod run;
 pub mod sweep;
 pub mod table;

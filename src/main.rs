@@ -11,6 +11,7 @@ fn main() {
         Command::Bench(args) => mrsim::bench::main(&args),
         Command::World(args) => mrsim::world::main(&args),
         Command::Agent(args) => mrsim::agent::main(&args),
+        Command::Ros2(args) => mrsim::ros2::main(&args),
         Command::Top(w) => mrsim::top::run(&w.run, w.timeout, w.zenoh()),
         Command::View { watch, live } => {
             mrsim::view::run(&watch.run, watch.timeout, watch.zenoh(), &live)

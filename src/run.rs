@@ -36,6 +36,10 @@ pub fn main(args: &RunArgs) -> Result<i32> {
             restart_agents: args.restart_agents,
             zenoh: args.zenoh.options(args.listen.clone()),
             plan_timeout: None,
+            ros2: mrsim_runtime::launch::Ros2Side {
+                connect: args.ros2_connect.clone(),
+                domain: args.ros2_domain.unwrap_or(0),
+            },
         },
     )
     .map_err(fail)?;

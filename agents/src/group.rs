@@ -41,6 +41,24 @@ pub fn join_group(
         .map(Some)
 }
 
+/// Joins the run as every robot of `opts` (one join request each, the
+/// setup read once) and tells the world they are ready: a [`Live`] whose
+/// ticks the caller answers ([`Live::next`], [`Live::reply`]) with commands
+/// of its own (the ROS 2 agent's: what a ROS 2 node sent). `None` if the
+/// process was asked to stop meanwhile.
+pub fn join_live(
+    link: &mut dyn AgentTransport,
+    opts: &[AgentOptions],
+) -> Result<Option<Live>, AgentError> {
+    let Some(seats) = join_seats(link, opts)? else {
+        return Ok(None);
+    };
+    let world_check_after = opts
+        .first()
+        .map_or(Duration::from_millis(300), |o| o.world_check_after);
+    Live::start(link, seats, world_check_after).map(Some)
+}
+
 /// Joins the run as every robot of `opts` and drives them until the world
 /// ends the run, the process is asked to stop, or something fails (the
 /// first robot's failure ends the group: its process is one agent).

@@ -30,7 +30,7 @@ pub mod observe;
 pub mod route;
 mod seat;
 
-pub use group::{join_group, run_group};
+pub use group::{join_group, join_live, run_group};
 pub use guard::{Halt, PlanFailure, PlanFault, plan_checked};
 pub use live::{Live, LiveAgent, Next, OwnedObservation, drive};
 

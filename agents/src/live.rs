@@ -352,6 +352,16 @@ impl Live {
         self.first().map_or(0, |s| s.me)
     }
 
+    /// Every joined robot: its id (index in the scenario, `me.id` of its
+    /// observations) and its name, in join order.
+    pub fn robots(&self) -> Vec<(usize, String)> {
+        self.seats
+            .seats
+            .iter()
+            .map(|s| (s.me, s.spec.name.clone()))
+            .collect()
+    }
+
     /// The robot's planner parameters as its scenario entry gives them
     /// (for a program that reads its own settings from the scenario).
     pub fn params(&self) -> Params {

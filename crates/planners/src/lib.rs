@@ -59,7 +59,7 @@ pub mod vdf;
 pub use lidar::LaserScan;
 pub use params::{ParamError, ParamReader, ParamValue, Params};
 pub use registry::{
-    BuildError, EXTERNAL, Entry, Factory, FromParams, PLANNERS, PlannerInfo, RegisterError,
+    BuildError, EXTERNAL, Entry, Factory, FromParams, PLANNERS, PlannerInfo, ROS2, RegisterError,
     Registry, build,
 };
 

@@ -125,6 +125,15 @@ pub const PLANNERS: &[PlannerInfo] = &[
 /// as its agent (`mrsim_agents::LiveAgent`).
 pub const EXTERNAL: &str = "external";
 
+/// The planner name of a robot driven by a ROS 2 node over rmw_zenoh: like
+/// [`EXTERNAL`] mrsim builds no planner for it; `mrsim run` starts the ROS 2
+/// agent (`mrsim ros2`), which joins as the robot and relays `cmd_vel` in
+/// and odometry, scans, tf, the clock and the map out.
+pub const ROS2: &str = "ros2";
+
+/// What [`ROS2`] means, in listings.
+const ROS2_SUMMARY: &str = "driven by a ROS 2 node over rmw_zenoh: cmd_vel in; odom, scan, tf, clock, map out (mrsim ros2)";
+
 /// What [`EXTERNAL`] means, in listings.
 const EXTERNAL_SUMMARY: &str =
     "driven by your own program, which joins the run as the robot's agent (mrsim::LiveAgent)";
@@ -255,6 +264,11 @@ impl Registry {
             summary: EXTERNAL_SUMMARY.to_string(),
             source: Source::External,
         });
+        entries.push(Entry {
+            name: ROS2.to_string(),
+            summary: ROS2_SUMMARY.to_string(),
+            source: Source::External,
+        });
         Self { entries }
     }
 
@@ -369,7 +383,7 @@ pub enum BuildError {
 /// [`PLANNERS`] of that name ([`EXTERNAL`] builds nothing).
 pub fn build(name: &str, params: &Params) -> Result<Box<dyn Planner>, BuildError> {
     let Some(info) = PLANNERS.iter().find(|p| p.name == name) else {
-        if name == EXTERNAL {
+        if name == EXTERNAL || name == ROS2 {
             return Err(BuildError::External);
         }
         return Err(BuildError::UnknownPlanner {
@@ -377,7 +391,7 @@ pub fn build(name: &str, params: &Params) -> Result<Box<dyn Planner>, BuildError
             known: PLANNERS
                 .iter()
                 .map(|p| p.name)
-                .chain([EXTERNAL])
+                .chain([EXTERNAL, ROS2])
                 .collect::<Vec<_>>()
                 .join(", "),
         });
@@ -433,8 +447,8 @@ mod tests {
         r.register_simple("still", "stands", || Still).expect("new");
         assert!(r.build("still", &Params::new()).is_ok());
         let names: Vec<&str> = r.entries().iter().map(Entry::name).collect();
-        assert_eq!(names.len(), PLANNERS.len() + 2);
-        assert_eq!(names[names.len() - 2..], [EXTERNAL, "still"]);
+        assert_eq!(names.len(), PLANNERS.len() + 3);
+        assert_eq!(names[names.len() - 3..], [EXTERNAL, ROS2, "still"]);
         assert!(!r.get("still").expect("still").is_builtin());
         assert!(r.get("orca").expect("orca").is_builtin());
         let err = r.build("nope", &Params::new()).err().expect("unknown");

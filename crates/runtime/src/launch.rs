@@ -75,6 +75,18 @@ pub struct RunRequest {
     /// far written. `None`: no limit (a planner that never returns holds
     /// the run).
     pub plan_timeout: Option<Duration>,
+    /// Robots with planner `ros2`: how the ROS 2 agent reaches ROS 2.
+    pub ros2: Ros2Side,
+}
+
+/// Where the ROS 2 agent (`mrsim ros2`) that `mrsim run` starts for the
+/// robots with planner `ros2` finds the ROS 2 nodes.
+#[derive(Debug, Clone, Default)]
+pub struct Ros2Side {
+    /// The Zenoh router of the ROS 2 side (`None`: tcp/localhost:7447).
+    pub connect: Option<String>,
+    /// The ROS domain id.
+    pub domain: u32,
 }
 
 /// What happens while a run goes on, for a caller that shows it.
@@ -310,10 +322,11 @@ fn write_source(dir: &Path, source: &crate::ScenarioSource) -> Result<(), Invali
 fn check_transport(validated: &Validated, transport: Transport) -> Result<(), Invalid> {
     let (robots, why) = match transport {
         Transport::Inproc => (
-            validated.external_robots(),
-            "has planner = \"external\": its own program joins the run over shared memory, \
-             which an in-process run (--transport inproc) does not offer; run it without \
-             --transport inproc, or register the program's planner for an in-process run",
+            [validated.external_robots(), validated.ros2_robots()].concat(),
+            "has planner = \"external\" or \"ros2\": its own program (or the ROS 2 agent) \
+             joins the run over shared memory or Zenoh, which an in-process run (--transport \
+             inproc) does not offer; run it without --transport inproc, or register the \
+             program's planner for an in-process run",
         ),
         Transport::Shm | Transport::Zenoh => (
             validated.robots_with_own_planners(),
@@ -517,7 +530,7 @@ impl Prepared {
         let names: Vec<&str> = scenario
             .robots
             .iter()
-            .filter(|r| r.planner != mrsim_planners::EXTERNAL)
+            .filter(|r| r.planner != mrsim_planners::EXTERNAL && r.planner != mrsim_planners::ROS2)
             .map(|r| r.name.as_str())
             .collect();
         let k = (scenario.world.robots_per_agent as usize).max(1);
@@ -546,7 +559,43 @@ impl Prepared {
         for g in &groups {
             agents.push((group_name(g), spawn(g)?));
         }
+        // The robots with planner `ros2` share one ROS 2 agent (not
+        // restarted: after `groups`, out of the restart loop's reach).
+        let ros2: Vec<&str> = scenario
+            .robots
+            .iter()
+            .filter(|r| r.planner == mrsim_planners::ROS2)
+            .map(|r| r.name.as_str())
+            .collect();
         let mut restarts = vec![0u32; agents.len()];
+        if !ros2.is_empty() {
+            // In lockstep the ROS 2 agent waits for a cmd_vel for less
+            // than the world waits for it, so the world never loses it.
+            let wait = (0.5 * scenario.world.stall_timeout).min(1.0);
+            let mut cmd = Command::new(&exe);
+            cmd.arg("ros2")
+                .arg("--robots")
+                .arg(ros2.join(","))
+                .args(["--run", run_id, "--timeout", &join_secs])
+                .args(["--domain", &self.request.ros2.domain.to_string()])
+                .args(["--wait", &wait.to_string(), "--stats-out"])
+                .arg(dir.join(crate::ros2::STATS_FILE));
+            if let Some(c) = &self.request.ros2.connect {
+                cmd.args(["--ros2-connect", c]);
+            }
+            if let Some(m) = &scenario.map {
+                cmd.arg("--map").arg(&m.file);
+            }
+            let child = cmd
+                .args(&agent_net)
+                .stdin(Stdio::null())
+                .spawn()
+                .map_err(|source| RunError::SpawnAgent {
+                    robot: group_name(&ros2),
+                    source,
+                })?;
+            agents.push((format!("ros2 agent ({})", ros2.join(",")), child));
+        }
 
         // Wait for the world; forward a signal to everything we started.
         let mut forwarded: Option<Instant> = None;

@@ -38,6 +38,7 @@ pub mod launch;
 pub mod memory;
 pub mod out;
 pub mod rerun;
+pub mod ros2;
 pub mod sched;
 pub mod sim;
 pub mod sweep;

@@ -4,7 +4,7 @@
 //! world and the in-process run take instead of checking again.
 
 use crate::error::Invalid;
-use mrsim_planners::{BuildError, EXTERNAL, Registry};
+use mrsim_planners::{BuildError, EXTERNAL, ROS2, Registry};
 use mrsim_scenario::{Loaded, Mode, Scenario};
 use mrsim_world::World;
 use std::ffi::OsString;
@@ -122,7 +122,17 @@ impl Validated {
         }
         .map_err(|e| Invalid(e.to_string()))?;
         for r in &loaded.scenario.robots {
-            if r.planner == EXTERNAL {
+            if r.planner == EXTERNAL || r.planner == ROS2 {
+                if r.planner == ROS2 && !mrsim_ros2::names::is_ros_token(&r.name) {
+                    return Err(Invalid(format!(
+                        "{}: robot `{}` has planner = \"ros2\": its name becomes its ROS 2 \
+                         namespace (/{}/cmd_vel), so it must be a letter or `_` followed by \
+                         letters, digits and `_`",
+                        loaded.origin(),
+                        r.name,
+                        r.name
+                    )));
+                }
                 continue;
             }
             let built = mrsim_agents::build_planner_in(&registry, r);
@@ -190,6 +200,12 @@ impl Validated {
     /// program, which joins the run as their agent).
     pub fn external_robots(&self) -> Vec<&str> {
         self.robots_where(|planner| planner == EXTERNAL)
+    }
+
+    /// The robots whose planner is `ros2` (driven by a ROS 2 node through
+    /// the ROS 2 agent, `mrsim ros2`, which `mrsim run` starts).
+    pub fn ros2_robots(&self) -> Vec<&str> {
+        self.robots_where(|planner| planner == ROS2)
     }
 
     /// The robots whose planner this program registered (not built in):
@@ -321,6 +337,36 @@ mod tests {
         assert!(v.robots_with_own_planners().is_empty());
         let refused = demo("robot.r0.params.gain=1", &own).expect_err("an unknown param");
         assert!(refused.to_string().contains("gain"), "{refused}");
+    }
+
+    #[test]
+    fn a_ros2_robot_builds_nothing_and_needs_a_name_ros_accepts_as_a_namespace() {
+        let demo = |sets: &[&str]| {
+            Validated::new(ScenarioSource {
+                set: sets.iter().map(|s| s.to_string()).collect(),
+                ..Default::default()
+            })
+        };
+        let v = demo(&["robot.r0.planner=ros2"]).expect("ros2 is valid");
+        assert_eq!(v.ros2_robots(), ["r0"]);
+        assert!(v.external_robots().is_empty());
+        let dir = std::env::temp_dir().join(format!("mrsim-ros2-name-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let file = dir.join("dash.toml");
+        std::fs::write(
+            &file,
+            "name = \"dash\"\n[world]\ndt = 0.1\nduration = 1.0\n\n[[robot]]\n\
+             name = \"r-0\"\nplanner = \"ros2\"\nstart = [0.0, 0.0]\ngoal = [1.0, 0.0]\n",
+        )
+        .expect("write the scene");
+        let refused = Validated::new(ScenarioSource {
+            path: Some(file),
+            ..Default::default()
+        })
+        .expect_err("r-0 is no ROS name");
+        let _ = std::fs::remove_dir_all(&dir);
+        assert!(refused.to_string().contains("`r-0`"), "{refused}");
+        assert!(refused.to_string().contains("namespace"), "{refused}");
     }
 
     #[test]

@@ -303,9 +303,9 @@ pub fn check(plan: &SweepPlan) -> Result<Checked, SweepError> {
                     .collect();
                 Invalid(format!("combination {} ({mode}): {e}", what.join(" ")))
             })?;
-            if let Some(r) = v.external_robots().first() {
+            if let Some(r) = [v.external_robots(), v.ros2_robots()].concat().first() {
                 return Err(Invalid(format!(
-                    "{}: robot `{r}` has planner = \"external\": a sweep starts its runs \
+                    "{}: robot `{r}` has planner = \"external\" or \"ros2\": a sweep starts its runs \
                      unattended, with no program of yours to join them",
                     v.origin()
                 ))
