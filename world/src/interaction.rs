@@ -168,6 +168,9 @@ pub struct Interaction {
     prev_time: Option<f64>,
     grid: NeighbourGrid,
     near: Vec<u32>,
+    /// Per robot, this tick's smallest gap and time to collision.
+    smallest: Vec<f64>,
+    ttc: Vec<f64>,
     open: HashMap<(u32, u32), Open>,
     /// Encounters ended and not yet taken.
     closed: Vec<(u32, u32, Open)>,
@@ -193,6 +196,8 @@ impl Interaction {
             prev_time: None,
             grid: NeighbourGrid::default(),
             near: Vec::new(),
+            smallest: Vec::new(),
+            ttc: Vec::new(),
             open: HashMap::new(),
             closed: Vec::new(),
         }
@@ -256,6 +261,16 @@ impl Interaction {
         let rmax = states.iter().map(|s| s.radius).fold(0.0, f64::max);
         let built = self.grid.build(discs, reach + rmax);
         let mut near = std::mem::take(&mut self.near);
+        // Each pair once (i < j), its gap and time to collision counted for
+        // both (they are symmetric): half the pairs of asking every robot.
+        let (mut smallest, mut ttc) = (
+            std::mem::take(&mut self.smallest),
+            std::mem::take(&mut self.ttc),
+        );
+        smallest.clear();
+        smallest.resize(n, f64::INFINITY);
+        ttc.clear();
+        ttc.resize(n, f64::INFINITY);
         for i in 0..n {
             let s = &states[i];
             if !built || !self.grid.near(s.position, reach + s.radius, &mut near) {
@@ -263,11 +278,9 @@ impl Interaction {
                 near.clear();
                 near.extend(0..states.len() as u32);
             }
-            let mut smallest = f64::INFINITY;
-            let mut ttc = f64::INFINITY;
             for &j in &near {
                 let j = j as usize;
-                if j == i {
+                if j <= i {
                     continue;
                 }
                 let q = &states[j];
@@ -276,14 +289,20 @@ impl Interaction {
                 if g.partial_cmp(&reach) != Some(std::cmp::Ordering::Less) {
                     continue;
                 }
-                smallest = smallest.min(g);
                 let t = time_to_collision(s, q);
-                ttc = ttc.min(t);
-                // Each pair once: a robot with a body after it.
-                if j > i && g < self.encounter_gap {
+                for k in [i, j] {
+                    if k < n {
+                        smallest[k] = smallest[k].min(g);
+                        ttc[k] = ttc[k].min(t);
+                    }
+                }
+                if g < self.encounter_gap {
                     self.meet(tick, (i, j), states, g, t);
                 }
             }
+        }
+        for i in 0..n {
+            let (smallest, ttc) = (smallest[i], ttc[i]);
             let r = &mut self.robots[i];
             if r.arrived || dt <= 0.0 {
                 continue;
@@ -299,6 +318,8 @@ impl Interaction {
                 }
             }
         }
+        self.smallest = smallest;
+        self.ttc = ttc;
         self.near = near;
         // Encounters not seen this tick have ended.
         let closed = &mut self.closed;

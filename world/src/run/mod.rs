@@ -91,6 +91,8 @@ struct Timed {
     deadline_ns: u64,
     substeps: u32,
     lockstep: bool,
+    /// The run writes timing.csv: realtime, or some robot has a model.
+    recorded: bool,
 }
 
 impl Timed {
@@ -103,6 +105,8 @@ impl Timed {
             deadline_ns: s_to_ns(w.dt * w.deadline),
             substeps: w.substeps,
             lockstep: w.mode == Mode::Lockstep,
+            recorded: w.mode != Mode::Lockstep
+                || scenario.robots.iter().any(|r| r.timing.is_some()),
         }
     }
 
@@ -119,7 +123,7 @@ impl Timed {
 
     /// True if the run writes timing.csv.
     fn recorded(&self) -> bool {
-        !self.lockstep || self.models.iter().any(Option::is_some)
+        self.recorded
     }
 }
 
