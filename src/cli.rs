@@ -379,7 +379,7 @@ pub struct SweepArgs {
     #[arg(long, value_enum, default_value = "lockstep")]
     pub mode: SweepModeArg,
     /// The swept key on sweep.svg's x axis (default: the first swept key
-    /// whose values are all numbers).
+    /// of more than one value whose values are all numbers).
     #[arg(long, value_name = "KEY")]
     pub x: Option<String>,
     /// The metrics sweep.svg draws, in this order (default: every one of

@@ -14,10 +14,15 @@ impl Sweep {
     pub fn x_axis(&self) -> Option<usize> {
         match &self.plan.x {
             Some(x) => numeric_axis(&self.axes, x).ok(),
-            None => self
-                .axes
-                .iter()
-                .position(|(_, vs)| vs.iter().all(|v| v.parse::<f64>().is_ok())),
+            // The first swept number with more than one value (a key
+            // given one value is a setting, not an axis), else the first.
+            None => {
+                let numeric = |vs: &Vec<String>| vs.iter().all(|v| v.parse::<f64>().is_ok());
+                self.axes
+                    .iter()
+                    .position(|(_, vs)| vs.len() > 1 && numeric(vs))
+                    .or_else(|| self.axes.iter().position(|(_, vs)| numeric(vs)))
+            }
         }
     }
 

@@ -60,7 +60,7 @@ pub struct SweepPlan {
     /// How the runs keep time.
     pub mode: SweepMode,
     /// The swept key on the figure's x axis (`None`: the first swept key
-    /// whose values are all numbers).
+    /// of more than one value whose values are all numbers).
     pub x: Option<String>,
     /// The metrics the figure draws, in this order (empty: every one of
     /// [`METRICS`]).
