@@ -400,6 +400,8 @@ impl<'a> Loop<'a> {
         // Commands before the first tick are from nobody we know yet.
         self.admission.got.iter_mut().for_each(|g| *g = None);
         self.check_pids();
+        // The joins' events reach events.jsonl while the world waits.
+        self.recording.rec.send_if_due();
         self.publish_stats(run_phase::JOINING, false);
         Ok(())
     }
