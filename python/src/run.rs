@@ -176,14 +176,6 @@ fn run_error(py: Python<'_>, e: RunError) -> PyErr {
             err
         }
         RunError::Invalid(i) => PyValueError::new_err(i.to_string()),
-        other => {
-            let mut text = other.to_string();
-            let mut src = std::error::Error::source(&other);
-            while let Some(s) = src {
-                text.push_str(&format!(": {s}"));
-                src = s.source();
-            }
-            PyRuntimeError::new_err(text)
-        }
+        other => PyRuntimeError::new_err(mrsim_runtime::error::in_words(&other)),
     }
 }

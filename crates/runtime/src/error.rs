@@ -27,3 +27,15 @@ impl Refusal for Invalid {
         Some(self)
     }
 }
+
+/// `e` and every error under it, as one line: `what: why: why...` (for
+/// callers that hand an error on as text: a sweep's row, Python).
+pub fn in_words(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut src = e.source();
+    while let Some(s) = src {
+        text.push_str(&format!(": {s}"));
+        src = s.source();
+    }
+    text
+}

@@ -95,6 +95,12 @@ struct Timed {
     recorded: bool,
 }
 
+/// True if a run of `scenario` writes timing.csv: realtime, or some robot
+/// has a timing model.
+fn records_calls(scenario: &mrsim_scenario::Scenario) -> bool {
+    scenario.world.mode != Mode::Lockstep || scenario.robots.iter().any(|r| r.timing.is_some())
+}
+
 impl Timed {
     fn new(scenario: &mrsim_scenario::Scenario) -> Self {
         let w = &scenario.world;
@@ -105,8 +111,7 @@ impl Timed {
             deadline_ns: s_to_ns(w.dt * w.deadline),
             substeps: w.substeps,
             lockstep: w.mode == Mode::Lockstep,
-            recorded: w.mode != Mode::Lockstep
-                || scenario.robots.iter().any(|r| r.timing.is_some()),
+            recorded: records_calls(scenario),
         }
     }
 
@@ -714,7 +719,7 @@ fn run_with_clock(
     let tracker = Tracker::new(&scenario, world.walls());
     let mut extras =
         crate::record::Extras::of(&dir, &scenario).map_err(out_err(TRAJECTORY_FILE))?;
-    if Timed::new(&scenario).recorded() {
+    if records_calls(&scenario) {
         let parquet = scenario.output.trajectory == mrsim_scenario::TrajectoryFormat::Parquet;
         let name = if parquet {
             TIMING_PARQUET_FILE

@@ -462,15 +462,7 @@ pub fn run_in_process(scenario: &Path, set: Vec<String>, out: &Path) -> JobResul
         render: false,
         plan_timeout: None,
     };
-    let r = crate::launch::run_in_process(&req).map_err(|e| {
-        let mut text = e.to_string();
-        let mut src = std::error::Error::source(&e);
-        while let Some(s) = src {
-            text.push_str(&format!(": {s}"));
-            src = s.source();
-        }
-        text
-    })?;
+    let r = crate::launch::run_in_process(&req).map_err(|e| crate::error::in_words(&e))?;
     read_run(&r.dir)
 }
 
