@@ -22,6 +22,7 @@
 pub mod bench;
 pub mod csv;
 pub mod metrics;
+mod parquet_out;
 pub mod timing;
 pub mod trajectory;
 pub mod usage;

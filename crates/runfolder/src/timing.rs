@@ -16,15 +16,12 @@
 //! `sent_ns` INT64, `status` UTF8 string): [`TimingSink`] writes either,
 //! [`read_timing`] reads whichever the folder holds.
 
-use parquet::basic::Compression;
-use parquet::data_type::{ByteArray, ByteArrayType, Int64Type};
-use parquet::file::properties::WriterProperties;
+use crate::parquet_out::{self, Column};
+use parquet::data_type::ByteArray;
 use parquet::file::reader::{FileReader, SerializedFileReader};
 use parquet::file::writer::SerializedFileWriter;
-use parquet::schema::parser::parse_message_type;
 use std::io::{BufRead, Write};
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 
 /// The file's name in the run folder.
 pub const TIMING_FILE: &str = "timing.csv";
@@ -182,16 +179,12 @@ impl ParquetTimingWriter {
             path: path.clone(),
             source,
         })?;
-        let pq = |source| TimingFileError::Parquet {
-            path: path.clone(),
-            source,
-        };
-        let schema = Arc::new(parse_message_type(PARQUET_SCHEMA).map_err(pq)?);
-        let props = WriterProperties::builder()
-            .set_compression(Compression::SNAPPY)
-            .set_created_by("mrsim".into())
-            .build();
-        let writer = SerializedFileWriter::new(file, schema, Arc::new(props)).map_err(pq)?;
+        let writer = parquet_out::writer(file, PARQUET_SCHEMA).map_err(|source| {
+            TimingFileError::Parquet {
+                path: path.clone(),
+                source,
+            }
+        })?;
         Ok(Self {
             path,
             writer,
@@ -224,45 +217,19 @@ impl ParquetTimingWriter {
         if self.tick.is_empty() {
             return Ok(());
         }
-        let path = self.path.clone();
-        let pq = |source| TimingFileError::Parquet {
-            path: path.clone(),
+        parquet_out::write_group(
+            &mut self.writer,
+            &[
+                Column::Int64(&self.tick),
+                Column::Bytes(&self.robot),
+                Column::Int64(&self.sent_ns),
+                Column::Bytes(&self.status),
+            ],
+        )
+        .map_err(|source| TimingFileError::Parquet {
+            path: self.path.clone(),
             source,
-        };
-        let mut group = self.writer.next_row_group().map_err(pq)?;
-        let mut index = 0;
-        while let Some(mut column) = group.next_column().map_err(pq)? {
-            match index {
-                0 | 2 => column
-                    .typed::<Int64Type>()
-                    .write_batch(
-                        if index == 0 {
-                            &self.tick
-                        } else {
-                            &self.sent_ns
-                        },
-                        None,
-                        None,
-                    )
-                    .map(drop),
-                _ => column
-                    .typed::<ByteArrayType>()
-                    .write_batch(
-                        if index == 1 {
-                            &self.robot
-                        } else {
-                            &self.status
-                        },
-                        None,
-                        None,
-                    )
-                    .map(drop),
-            }
-            .map_err(pq)?;
-            column.close().map_err(pq)?;
-            index += 1;
-        }
-        group.close().map_err(pq)?;
+        })?;
         self.tick.clear();
         self.robot.clear();
         self.sent_ns.clear();

@@ -20,17 +20,14 @@
 //! leaves an unreadable `trajectory.parquet`, where a CSV would keep the
 //! ticks up to the last flush.
 
-use parquet::basic::Compression;
-use parquet::data_type::{ByteArray, ByteArrayType, DoubleType, Int64Type};
+use crate::parquet_out::{self, Column};
+use parquet::data_type::ByteArray;
 use parquet::errors::ParquetError;
-use parquet::file::properties::WriterProperties;
 use parquet::file::reader::{FileReader, SerializedFileReader};
 use parquet::file::writer::SerializedFileWriter;
-use parquet::schema::parser::parse_message_type;
 use std::collections::HashMap;
 use std::fs::File;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 
 /// The columns every trajectory has, in file order (the CSV's header,
 /// split).
@@ -133,16 +130,12 @@ impl ParquetTrajectoryWriter {
             path: path.to_path_buf(),
             source,
         })?;
-        let pq = |source| TrajectoryError::Parquet {
-            path: path.to_path_buf(),
-            source,
-        };
-        let schema = Arc::new(parse_message_type(&schema(theta)).map_err(pq)?);
-        let props = WriterProperties::builder()
-            .set_compression(Compression::SNAPPY)
-            .set_created_by("mrsim".into())
-            .build();
-        let writer = SerializedFileWriter::new(file, schema, Arc::new(props)).map_err(pq)?;
+        let writer = parquet_out::writer(file, &schema(theta)).map_err(|source| {
+            TrajectoryError::Parquet {
+                path: path.to_path_buf(),
+                source,
+            }
+        })?;
         Ok(Self {
             path: path.to_path_buf(),
             writer,
@@ -187,48 +180,26 @@ impl ParquetTrajectoryWriter {
         if self.tick.is_empty() {
             return Ok(());
         }
-        let path = self.path.clone();
-        let pq = |source| TrajectoryError::Parquet {
-            path: path.clone(),
-            source,
-        };
-        let mut group = self.writer.next_row_group().map_err(pq)?;
-        let mut index = 0;
-        while let Some(mut column) = group.next_column().map_err(pq)? {
-            match index {
-                0 => column
-                    .typed::<Int64Type>()
-                    .write_batch(&self.tick, None, None)
-                    .map(drop),
-                2 => column
-                    .typed::<ByteArrayType>()
-                    .write_batch(&self.body, None, None)
-                    .map(drop),
-                3 => column
-                    .typed::<ByteArrayType>()
-                    .write_batch(&self.kind, None, None)
-                    .map(drop),
-                k => {
-                    let values = match k {
-                        1 => &self.time,
-                        4..=7 => &self.state[k - 4],
-                        _ => self.theta.as_ref().ok_or_else(|| {
-                            pq(ParquetError::General(
-                                "more columns than the schema's".into(),
-                            ))
-                        })?,
-                    };
-                    column
-                        .typed::<DoubleType>()
-                        .write_batch(values, None, None)
-                        .map(drop)
-                }
-            }
-            .map_err(pq)?;
-            column.close().map_err(pq)?;
-            index += 1;
+        let [x, y, vx, vy] = &self.state;
+        let mut columns = vec![
+            Column::Int64(&self.tick),
+            Column::Double(&self.time),
+            Column::Bytes(&self.body),
+            Column::Bytes(&self.kind),
+            Column::Double(x),
+            Column::Double(y),
+            Column::Double(vx),
+            Column::Double(vy),
+        ];
+        if let Some(theta) = &self.theta {
+            columns.push(Column::Double(theta));
         }
-        group.close().map_err(pq)?;
+        parquet_out::write_group(&mut self.writer, &columns).map_err(|source| {
+            TrajectoryError::Parquet {
+                path: self.path.clone(),
+                source,
+            }
+        })?;
         self.tick.clear();
         self.time.clear();
         self.body.clear();
