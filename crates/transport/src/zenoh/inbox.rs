@@ -328,11 +328,12 @@ impl AgentInbox {
             s.refused += 1;
             return;
         };
-        if r.accepted == 1 && Some(r.nonce) == s.nonce {
-            if let Some(key) = &key {
-                s.key = Some(key.clone());
-                s.newest_tick = None;
-            }
+        if let Some(key) = &key
+            && r.accepted == 1
+            && Some(r.nonce) == s.nonce
+        {
+            s.key = Some(key.clone());
+            s.newest_tick = None;
         }
         if s.replies.len() >= REPLY_MAX {
             s.replies.remove(0);
