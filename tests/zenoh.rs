@@ -1051,7 +1051,7 @@ fn a_flood_of_forged_commands_is_dropped_past_the_inbox_and_the_run_ends_as_undi
         .map(|i| {
             wire::encode(&mrsim_proto::CommandMsg {
                 robot_id: 0,
-                token: 0xf100d_0000 + i,
+                token: 0x000f_100d_0000 + i,
                 tick: 1_000_000 + i,
                 kind: mrsim_proto::command_kind::VELOCITY,
                 ..Default::default()
