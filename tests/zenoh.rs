@@ -294,6 +294,19 @@ fn with_user_and_password_auth_an_agent_without_the_credentials_cannot_join() {
     assert_eq!(m["agents_lost"], 0, "{m:#}");
 }
 
+/// Reads a child's piped stderr on a thread until it ends.
+fn read_stderr(child: &mut Child) -> std::thread::JoinHandle<String> {
+    let mut e = child.stderr.take();
+    std::thread::spawn(move || {
+        use std::io::Read;
+        let mut s = String::new();
+        if let Some(e) = &mut e {
+            let _ = e.read_to_string(&mut s);
+        }
+        s
+    })
+}
+
 /// What a finished child wrote on its piped stderr.
 fn child_stderr(child: &mut Child) -> String {
     use std::io::Read;
@@ -967,4 +980,478 @@ fn a_zenoh_run_shows_its_progress_like_a_shared_memory_run() {
         .collect();
     assert!(!lines.is_empty(), "no progress lines:\n{said}");
     assert!(lines.iter().any(|l| l.contains("/160 (")), "{said}");
+}
+
+/// A long lockstep run of two robots (r0, r1) whose agents take 50 ms a
+/// tick, so that everything a test sends arrives while it runs (160 ticks:
+/// at least 8 s, longer on a slower machine), and the world and its agents
+/// over Zenoh on a free loopback port: (run folder, run id, endpoint,
+/// world, agents), both agents joined.
+fn long_lockstep_pair(tag: &str) -> (PathBuf, String, String, Child, Vec<Child>) {
+    let dir = fresh_dir(tag);
+    let file = dir.join("row.toml");
+    std::fs::write(&file, long_lockstep_row()).expect("write");
+    let out = dir.join("out");
+    let id = run_id(tag);
+    let ep = free_endpoint();
+    let world = zenoh_world(&file, &out, &id, &ep, &[]);
+    let agents: Vec<Child> = ["r0", "r1"]
+        .iter()
+        .map(|r| {
+            zenoh_agent(r, &id, &ep)
+                .args(["--fault", "slow-ms=50"])
+                .stderr(Stdio::piped())
+                .spawn()
+                .expect("agent")
+        })
+        .collect();
+    for r in ["r0", "r1"] {
+        wait_for_event(&out, 60, &format!("{r} joined"), |e| {
+            e["type"] == "agent_joined" && e["robot"] == r
+        });
+    }
+    (out, id, ep, world, agents)
+}
+
+/// The scenario of [`long_lockstep_pair`]: two robots 25 m from their
+/// goals, 8 s of run.
+fn long_lockstep_row() -> String {
+    realtime_row(2, 25.0, 8.0).replace("mode = \"realtime\"", "mode = \"lockstep\"")
+}
+
+/// The same scenario in lockstep over shared memory, undisturbed: the
+/// trajectory a disturbed Zenoh run must still give.
+fn undisturbed_trajectory(tag: &str) -> Vec<u8> {
+    let dir = fresh_dir(tag);
+    let file = dir.join("row.toml");
+    std::fs::write(&file, long_lockstep_row()).expect("write");
+    trajectory_bytes(&lockstep_run(&file, "shm", tag))
+}
+
+#[test]
+fn a_flood_of_forged_commands_is_dropped_past_the_inbox_and_the_run_ends_as_undisturbed() {
+    use mrsim_transport::Namespace;
+    use mrsim_transport::zenoh::{ZenohOptions, keys::Keys, publish_raw, wire};
+    let expected = undisturbed_trajectory("zflood-shm");
+    let (out, id, ep, mut world, mut agents) = long_lockstep_pair("zflood");
+    let ns = Namespace::new(&id).expect("run id");
+    let opts = ZenohOptions {
+        endpoint: Some(ep),
+        config_file: None,
+    };
+    // 4,000 well-formed commands for r0 with tokens the world never gave,
+    // in one burst: ten times the world's inbox for two agents. The world
+    // drains its inbox at most once per wake-up, each drain handing every
+    // command to the tick loop (which records each refusal), while Zenoh's
+    // receive thread only decodes and queues: the inbox overflows, the
+    // more so the busier the machine. The agents' own commands carry the
+    // tokens they were given and are never crowded out.
+    const SENT: u64 = 4000;
+    let flood: Vec<Vec<u8>> = (0..SENT)
+        .map(|i| {
+            wire::encode(&mrsim_proto::CommandMsg {
+                robot_id: 0,
+                token: 0x000f_100d_0000 + i,
+                tick: 1_000_000 + i,
+                kind: mrsim_proto::command_kind::VELOCITY,
+                ..Default::default()
+            })
+        })
+        .collect();
+    // The world says how many it dropped after each drain: its stderr is
+    // read as it comes, so that a full pipe never stops it.
+    let said = read_stderr(&mut world);
+    publish_raw(&opts, &ns, &Keys::new(&ns).command, &flood).expect("flood");
+    let ws = wait_timeout(&mut world, 120).expect("world ended");
+    assert!(ws.success(), "the world ran to its end");
+    for a in &mut agents {
+        wait_timeout(a, 10);
+    }
+    let said = said.join().expect("world's stderr");
+    let m = metrics(&out);
+    let dropped = m["messages_dropped"].as_u64().unwrap_or(0);
+    let rejected = m["robots"]["r0"]["commands_rejected"].as_u64().unwrap_or(0);
+    // Every command of the flood is either dropped unread or refused by
+    // the tick loop, none of them lost or applied.
+    assert_eq!(dropped + rejected, SENT, "{m:#}");
+    assert!(
+        dropped > 0,
+        "a flood ten times the inbox was dropped in part: {m:#}"
+    );
+    assert!(
+        said.contains(&format!("dropped {dropped} over the inbox limit")),
+        "{said}"
+    );
+    // And the run is the one nobody disturbed, to the byte.
+    assert_eq!(m["agents_lost"], 0, "{m:#}");
+    assert_eq!(m["robots"]["r1"]["commands_rejected"], 0, "{m:#}");
+    assert_eq!(m["commands_rejected_unknown"], 0, "{m:#}");
+    assert!(
+        trajectory_bytes(&out) == expected,
+        "the flood changed the trajectory: {out:?}"
+    );
+}
+
+#[test]
+fn malformed_and_refused_joins_are_counted_and_recorded_while_honest_agents_join() {
+    use mrsim_proto::{FixedStr, JoinRequest, PROTOCOL_VERSION};
+    use mrsim_transport::Namespace;
+    use mrsim_transport::zenoh::{ZenohOptions, keys::Keys, publish_raw, wire};
+    let dir = fresh_dir("zjoin");
+    let file = dir.join("two.toml");
+    std::fs::write(&file, TWO).expect("write");
+    let out = dir.join("out");
+    let id = run_id("zjoin");
+    let ep = free_endpoint();
+    let mut world = zenoh_world(&file, &out, &id, &ep, &["--mode", "lockstep"]);
+    let ns = Namespace::new(&id).expect("run id");
+    let opts = ZenohOptions {
+        endpoint: Some(ep.clone()),
+        config_file: None,
+    };
+    // Before any agent: 30 join requests that do not decode (garbage of
+    // every length but the right one), one of another protocol version and
+    // one for a robot the scenario does not have. The world answers while
+    // it waits for its agents: nothing here depends on timing.
+    let garbage: Vec<Vec<u8>> = (0..30usize)
+        .map(|i| vec![0xA5; if i == 7 { 0 } else { i * 3 + 1 }])
+        .collect();
+    let request = |version: u32, robot: &str, nonce: u64| {
+        wire::encode(&JoinRequest {
+            protocol_version: version,
+            pid: 4_000_000 + nonce as u32,
+            nonce,
+            robot: FixedStr::new(robot),
+        })
+    };
+    let refused = vec![
+        request(PROTOCOL_VERSION + 1, "a", 11),
+        request(PROTOCOL_VERSION, "no-such-robot", 12),
+    ];
+    let join = Keys::new(&ns).join;
+    // The world's token comes once all its subscribers are declared.
+    mrsim_transport::zenoh::ZenohObserver::connect(&ns, &opts, false, Duration::from_secs(60))
+        .expect("the world is up");
+    publish_raw(&opts, &ns, &join, &garbage).expect("garbage joins");
+    publish_raw(&opts, &ns, &join, &refused).expect("refused joins");
+    for what in ["protocol version", "no-such-robot"] {
+        wait_for_event(&out, 60, what, |e| {
+            e["type"] == "join_refused" && e.to_string().contains(what)
+        });
+    }
+    let mut agents: Vec<Child> = ["a", "b"]
+        .iter()
+        .map(|r| zenoh_agent(r, &id, &ep).spawn().expect("agent"))
+        .collect();
+    let ws = wait_timeout(&mut world, 90).expect("world ended");
+    assert!(ws.success(), "world failed");
+    for a in &mut agents {
+        wait_timeout(a, 10);
+    }
+    let m = metrics(&out);
+    assert_eq!(m["joins_malformed"], 30, "{m:#}");
+    assert_eq!(m["messages_dropped"], 0, "{m:#}");
+    assert_eq!(m["success_rate"], 1.0, "{m:#}");
+    assert_eq!(m["agents_lost"], 0, "{m:#}");
+    let reasons: Vec<String> = events(&out)
+        .iter()
+        .filter(|e| e["type"] == "join_refused")
+        .map(|e| e.to_string())
+        .collect();
+    assert_eq!(reasons.len(), 2, "{reasons:?}");
+    assert!(
+        reasons
+            .iter()
+            .any(|r| r.contains(&format!("protocol version {}", PROTOCOL_VERSION + 1))),
+        "{reasons:?}"
+    );
+    assert!(
+        reasons.iter().any(|r| r.contains("no-such-robot")),
+        "{reasons:?}"
+    );
+    for r in ["a", "b"] {
+        assert_eq!(count_events(&out, "agent_joined", r), 1, "{r}");
+    }
+    let said = child_stderr(&mut world);
+    assert!(said.contains("refused 30 malformed message(s)"), "{said}");
+}
+
+#[test]
+fn forged_snapshots_are_counted_by_the_agents_and_never_planned_on() {
+    use mrsim_proto::{BodyState, SnapshotHeader};
+    use mrsim_transport::Namespace;
+    use mrsim_transport::zenoh::{ZenohOptions, keys::Keys, publish_raw, wire};
+    let expected = undisturbed_trajectory("zforge-shm");
+    let (out, id, ep, mut world, mut agents) = long_lockstep_pair("zforge");
+    let ns = Namespace::new(&id).expect("run id");
+    let opts = ZenohOptions {
+        endpoint: Some(ep),
+        config_file: None,
+    };
+    // Wait for the ticks to run: tick 0 goes out only once both agents are
+    // ready, and each is ready only after its join reply brought it the
+    // run's key. A watcher of the run's snapshots sees it.
+    {
+        use mrsim_transport::ObserverTransport;
+        use mrsim_transport::zenoh::ZenohObserver;
+        let mut watch =
+            ZenohObserver::connect(&ns, &opts, true, Duration::from_secs(30)).expect("observer");
+        let (mut header, mut bodies) = (SnapshotHeader::default(), Vec::new());
+        let start = Instant::now();
+        while !(watch
+            .latest_snapshot(&mut header, &mut bodies)
+            .expect("snapshot")
+            && header.tick >= 1)
+        {
+            assert!(start.elapsed() < Duration::from_secs(60), "no tick 1");
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+    // 25 snapshots of a tick far ahead with both robots elsewhere, each
+    // followed by a tag of the right length under a key of the forger's
+    // (or none): an agent that planned on one would answer a tick the
+    // world has not reached, a refused command, and drive elsewhere.
+    const FORGED: usize = 25;
+    let forged: Vec<Vec<u8>> = (0..FORGED)
+        .map(|i| {
+            let header = SnapshotHeader {
+                tick: 5_000 + i as u64,
+                body_count: 2,
+                ..Default::default()
+            };
+            let bodies: Vec<BodyState> = (0..2)
+                .map(|id| BodyState {
+                    id,
+                    position: [-3.0, id as f64],
+                    radius: 0.2,
+                    ..Default::default()
+                })
+                .collect();
+            let mut b = Vec::new();
+            wire::encode_slice(&header, &bodies, &mut b);
+            if i % 5 != 0 {
+                b.extend_from_slice(&[i as u8; 32]);
+            }
+            b
+        })
+        .collect();
+    publish_raw(&opts, &ns, &Keys::new(&ns).snapshot, &forged).expect("forged snapshots");
+    let ws = wait_timeout(&mut world, 120).expect("world ended");
+    assert!(ws.success(), "the world ran to its end");
+    // Every forged snapshot went through the world to each agent before
+    // the world's later snapshots on the same link: each agent saw them
+    // all before the last, and says so as it ends.
+    for (a, r) in agents.iter_mut().zip(["r0", "r1"]) {
+        wait_timeout(a, 10);
+        let said = child_stderr(a);
+        assert!(
+            said.contains(&format!(
+                "refused {FORGED} snapshot(s) that failed authentication and 0 replayed"
+            )),
+            "{r}: {said}"
+        );
+    }
+    let m = metrics(&out);
+    assert_eq!(
+        m["commands_rejected"], 0,
+        "nothing answered a forged tick: {m:#}"
+    );
+    assert_eq!(m["agents_lost"], 0, "{m:#}");
+    assert!(
+        trajectory_bytes(&out) == expected,
+        "a forged snapshot changed the trajectory: {out:?}"
+    );
+}
+
+/// Runs `openssl ARGS` in `dir`; the error says what failed.
+fn openssl(dir: &Path, args: &[&str]) -> Result<(), String> {
+    let o = Command::new("openssl")
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .map_err(|e| format!("cannot run openssl: {e}"))?;
+    if o.status.success() {
+        Ok(())
+    } else {
+        Err(format!(
+            "openssl {}: {}",
+            args.join(" "),
+            String::from_utf8_lossy(&o.stderr).trim()
+        ))
+    }
+}
+
+/// A certificate authority `NAME.pem` (key `NAME-key.pem`) made in `dir`.
+fn test_ca(dir: &Path, name: &str) -> Result<(), String> {
+    openssl(
+        dir,
+        &[
+            "req",
+            "-x509",
+            "-newkey",
+            "ec",
+            "-pkeyopt",
+            "ec_paramgen_curve:prime256v1",
+            "-nodes",
+            "-days",
+            "2",
+            "-subj",
+            &format!("/CN=mrsim test {name}"),
+            "-keyout",
+            &format!("{name}-key.pem"),
+            "-out",
+            &format!("{name}.pem"),
+        ],
+    )
+}
+
+/// In `dir`: a CA `ca.pem`, the world's certificate `world-cert.pem` for
+/// 127.0.0.1 signed by it (key `world-key.pem`), and another CA
+/// `stranger.pem` that signed nothing of the world's.
+fn test_certificates(dir: &Path) -> Result<(), String> {
+    test_ca(dir, "ca")?;
+    test_ca(dir, "stranger")?;
+    openssl(
+        dir,
+        &[
+            "req",
+            "-newkey",
+            "ec",
+            "-pkeyopt",
+            "ec_paramgen_curve:prime256v1",
+            "-nodes",
+            "-subj",
+            "/CN=127.0.0.1",
+            "-keyout",
+            "world-key.pem",
+            "-out",
+            "world.csr",
+        ],
+    )?;
+    std::fs::write(
+        dir.join("world.ext"),
+        "basicConstraints=CA:FALSE\nkeyUsage=digitalSignature\nextendedKeyUsage=serverAuth\nsubjectAltName=IP:127.0.0.1,DNS:localhost\n",
+    )
+    .map_err(|e| e.to_string())?;
+    openssl(
+        dir,
+        &[
+            "x509",
+            "-req",
+            "-in",
+            "world.csr",
+            "-CA",
+            "ca.pem",
+            "-CAkey",
+            "ca-key.pem",
+            "-CAcreateserial",
+            "-days",
+            "2",
+            "-extfile",
+            "world.ext",
+            "-out",
+            "world-cert.pem",
+        ],
+    )
+}
+
+#[test]
+fn over_tls_a_run_goes_through_and_an_agent_that_does_not_trust_the_worlds_ca_is_refused() {
+    const TEST: &str =
+        "over_tls_a_run_goes_through_and_an_agent_that_does_not_trust_the_worlds_ca_is_refused";
+    let dir = fresh_dir("ztls");
+    if let Err(why) = test_certificates(&dir) {
+        skip(
+            TEST,
+            "MRSIM_REQUIRE_OPENSSL",
+            &format!("cannot make test certificates ({why})"),
+        );
+        return;
+    }
+    let file = dir.join("two.toml");
+    std::fs::write(&file, TWO).expect("write");
+    let tls = |fields: &str| format!("{{ transport: {{ link: {{ tls: {{ {fields} }} }} }} }}");
+    let path = |name: &str| dir.join(name).display().to_string();
+    let world_cfg = dir.join("world.json5");
+    std::fs::write(
+        &world_cfg,
+        tls(&format!(
+            "listen_certificate: \"{}\", listen_private_key: \"{}\"",
+            path("world-cert.pem"),
+            path("world-key.pem")
+        )),
+    )
+    .expect("write");
+    let agent_cfg = dir.join("agent.json5");
+    std::fs::write(
+        &agent_cfg,
+        tls(&format!("root_ca_certificate: \"{}\"", path("ca.pem"))),
+    )
+    .expect("write");
+    let stranger_cfg = dir.join("stranger.json5");
+    std::fs::write(
+        &stranger_cfg,
+        tls(&format!(
+            "root_ca_certificate: \"{}\"",
+            path("stranger.pem")
+        )),
+    )
+    .expect("write");
+    let out = dir.join("out");
+    let id = run_id("ztls");
+    let port = free_endpoint()
+        .rsplit_once(':')
+        .map(|(_, p)| p.to_string())
+        .expect("port");
+    let ep = format!("tls/127.0.0.1:{port}");
+    let cfg = world_cfg.display().to_string();
+    let mut world = zenoh_world(
+        &file,
+        &out,
+        &id,
+        &ep,
+        &["--mode", "lockstep", "--zenoh-config", &cfg],
+    );
+    // An agent that trusts another CA never gets a session; nor does one
+    // that speaks plain TCP to the TLS port.
+    let o = zenoh_agent("a", &id, &ep)
+        .args(["--timeout", "3", "--zenoh-config"])
+        .arg(&stranger_cfg)
+        .output()
+        .expect("stranger");
+    assert!(!o.status.success(), "an agent trusting another CA joined");
+    assert!(stderr_of(&o).contains("cannot set up"), "{}", stderr_of(&o));
+    let plain = format!("tcp/127.0.0.1:{port}");
+    let o = zenoh_agent("a", &id, &plain)
+        .args(["--timeout", "3"])
+        .output()
+        .expect("plain tcp");
+    assert!(!o.status.success(), "a plain TCP agent joined a TLS world");
+    // Agents that trust the world's CA run the scenario to its end.
+    let mut agents: Vec<Child> = ["a", "b"]
+        .iter()
+        .map(|r| {
+            zenoh_agent(r, &id, &ep)
+                .arg("--zenoh-config")
+                .arg(&agent_cfg)
+                .spawn()
+                .expect("agent")
+        })
+        .collect();
+    let ws = wait_timeout(&mut world, 90).expect("world ended");
+    assert!(
+        ws.success(),
+        "the TLS world failed: {}",
+        child_stderr(&mut world)
+    );
+    for a in &mut agents {
+        wait_timeout(a, 10);
+    }
+    let m = metrics(&out);
+    assert_eq!(m["transport"], "zenoh");
+    assert_eq!(m["success_rate"], 1.0, "{m:#}");
+    assert_eq!(m["agents_lost"], 0, "{m:#}");
+    for r in ["a", "b"] {
+        assert_eq!(count_events(&out, "agent_joined", r), 1, "{r}");
+    }
 }

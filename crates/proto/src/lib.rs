@@ -23,8 +23,10 @@ use iceoryx2::prelude::ZeroCopySend;
 /// [`command_kind::UNICYCLE`] commands (forward speed, turn rate). Version
 /// 8: a robot under a timing model answers a lockstep tick it does not plan
 /// on with [`command_kind::NONE`], and a command its model lost arrives as
-/// [`command_kind::LOST`].
-pub const PROTOCOL_VERSION: u32 = 8;
+/// [`command_kind::LOST`]. Version 9: over Zenoh, an accepted join reply
+/// carries the key the world signs its snapshots with, and every snapshot
+/// its tag (`mrsim_transport::zenoh::seal`).
+pub const PROTOCOL_VERSION: u32 = 9;
 
 /// Longest robot name, in bytes, that fits a [`JoinRequest`].
 pub const MAX_NAME_LEN: usize = 64;

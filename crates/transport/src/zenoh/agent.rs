@@ -29,6 +29,8 @@ pub struct ZenohAgent {
     _token: LivelinessToken,
     max_bodies: usize,
     terminated: std::cell::Cell<bool>,
+    /// Forged and replayed snapshots already reported.
+    reported: (u64, u64),
 }
 
 /// The ports an agent joins with, closed once it has joined.
@@ -122,6 +124,7 @@ impl ZenohAgent {
             _token: token,
             max_bodies: MAX_BODIES,
             terminated: std::cell::Cell::new(false),
+            reported: (0, 0),
         };
         // The world of this run, not just something listening.
         while !lock(&agent.inbox.state).world_present {
@@ -141,6 +144,31 @@ impl ZenohAgent {
             what: what.to_string(),
             detail: "this agent has already joined (its join ports are closed)".to_string(),
         })
+    }
+
+    /// Snapshots refused so far: failed authentication, and replayed.
+    pub fn snapshots_refused(&self) -> (u64, u64) {
+        let s = lock(&self.inbox.state);
+        (s.forged, s.replayed)
+    }
+
+    /// Says on stderr when more snapshots were refused since the last
+    /// report (at most a line per snapshot taken).
+    fn report_refusals(&mut self) {
+        let now = self.snapshots_refused();
+        if now != self.reported {
+            eprintln!(
+                "agent: zenoh: refused {} snapshot(s) that failed authentication and {} replayed (so far)",
+                now.0, now.1
+            );
+            self.reported = now;
+        }
+    }
+}
+
+impl Drop for ZenohAgent {
+    fn drop(&mut self) {
+        self.report_refusals();
     }
 }
 
@@ -168,6 +196,8 @@ pub(super) fn query_setup(
 impl AgentTransport for ZenohAgent {
     fn request_join(&mut self, req: &JoinRequest) -> Result<(), TransportError> {
         let bytes = wire::encode(req);
+        // Its accepted reply brings the key of the run's snapshots.
+        lock(&self.inbox.state).nonce = Some(req.nonce);
         self.joining("join publisher")?
             .join_pub
             .put(bytes)
@@ -178,10 +208,17 @@ impl AgentTransport for ZenohAgent {
     fn poll_join_reply(&mut self, nonce: u64) -> Result<Option<JoinReply>, TransportError> {
         self.joining("join-reply subscriber")?;
         let mut s = lock(&self.inbox.state);
-        let found = s.replies.iter().position(|r| r.nonce == nonce);
-        let reply = found.map(|i| s.replies[i]);
+        let found = s.replies.iter().position(|(r, _)| r.nonce == nonce);
+        let reply = found.map(|i| s.replies[i].clone());
         s.replies.clear();
-        Ok(reply)
+        match reply {
+            Some((r, None)) if r.accepted == 1 => Err(TransportError::Setup {
+                what: "the world's join reply".to_string(),
+                detail: "it accepted this agent but sent no key for the run's snapshots (a world of another mrsim version?)".to_string(),
+            }),
+            Some((r, _)) => Ok(Some(r)),
+            None => Ok(None),
+        }
     }
 
     fn setup(&mut self) -> Result<Option<Vec<u8>>, TransportError> {
@@ -204,15 +241,14 @@ impl AgentTransport for ZenohAgent {
         bodies: &mut Vec<BodyState>,
     ) -> Result<bool, TransportError> {
         let mut s = lock(&self.inbox.state);
-        if !std::mem::take(&mut s.fresh_snapshot) {
-            return Ok(false);
-        }
-        if decode_slice(&s.snapshot, self.max_bodies, header, bodies) {
-            Ok(true)
-        } else {
+        let max = self.max_bodies;
+        let got = s.take_snapshot(|m| decode_slice(m, max, header, bodies));
+        if got == Some(false) {
             s.refused += 1;
-            Ok(false)
         }
+        drop(s);
+        self.report_refusals();
+        Ok(got == Some(true))
     }
 
     fn send_command(&mut self, cmd: &CommandMsg) -> Result<(), TransportError> {

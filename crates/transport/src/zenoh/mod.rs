@@ -8,9 +8,9 @@
 //! | key | what | from -> to |
 //! | --- | --- | --- |
 //! | `mrsim/<run>/setup` | queryable: the resolved scenario as JSON | world -> agents, observers |
-//! | `mrsim/<run>/snapshot` | `SnapshotHeader` + `[BodyState]`, one per tick | world -> agents |
+//! | `mrsim/<run>/snapshot` | `SnapshotHeader` + `[BodyState]` + tag ([`seal`]), one per tick | world -> agents |
 //! | `mrsim/<run>/join` | `JoinRequest` | agents -> world |
-//! | `mrsim/<run>/join-reply` | `JoinReply` (each agent keeps its nonce's) | world -> agents |
+//! | `mrsim/<run>/join-reply` | `JoinReply` (+ the run's snapshot key if accepted; each agent keeps its nonce's) | world -> agents |
 //! | `mrsim/<run>/command` | `CommandMsg` (and ready messages) | agents -> world |
 //! | `mrsim/<run>/stats` | `StatsHeader` + `[RobotStats]` | world -> observers |
 //! | `mrsim/<run>/alive/world` | liveliness token of the world | |
@@ -38,9 +38,12 @@
 //! side ([`inbox`]), which the world's and agents' loops drain.
 //!
 //! **Refusals** are counted by the world ([`NetworkCounts`], for
-//! metrics.json): messages that do not decode, a flood beyond the inbox,
-//! and connections Zenoh refused for failed authentication (which only
-//! Zenoh's log tells of: `auth` listens to it).
+//! metrics.json): messages that do not decode, a flood beyond the inbox
+//! (commands with a token the world gave have a share of their own, which
+//! forged ones cannot fill), and connections Zenoh refused for failed
+//! authentication (which only Zenoh's log tells of: `auth` listens to it).
+//! Snapshots are signed with a key of the run ([`seal`]); an agent counts
+//! and drops those whose tag does not check.
 //!
 //! One module per side: `world` ([`ZenohWorld`]), `agent`
 //! ([`ZenohAgent`]), `observer` ([`ZenohObserver`]); they share `keys`,
@@ -51,6 +54,7 @@ mod auth;
 mod inbox;
 pub mod keys;
 mod observer;
+pub mod seal;
 #[cfg(test)]
 mod tests;
 pub mod wire;

@@ -123,9 +123,10 @@ impl ObserverTransport for ZenohObserver {
         header: &mut SnapshotHeader,
         bodies: &mut Vec<BodyState>,
     ) -> Result<bool, TransportError> {
+        // The observer has no key (it never joins): it reads the
+        // snapshot's message without checking its tag, and acts on none.
         let mut s = lock(&self.inbox.state);
-        Ok(std::mem::take(&mut s.fresh_snapshot)
-            && decode_slice(&s.snapshot, MAX_ITEMS, header, bodies))
+        Ok(s.take_snapshot(|m| decode_slice(m, MAX_ITEMS, header, bodies)) == Some(true))
     }
 
     fn latest_stats(

@@ -4,8 +4,9 @@
 //! inbox.
 
 use super::auth::AuthWatch;
-use super::inbox::{WorldInbox, lock};
+use super::inbox::{WorldInbox, encode_reply, lock};
 use super::keys::Keys;
+use super::seal::{RunKey, TAG_LEN};
 use super::wire::{self, encode_slice};
 use super::{Role, ZenohOptions, declare_err, open, send_err, terminated};
 use crate::{Capacity, Namespace, NetworkCounts, TransportError, WorldTransport};
@@ -44,6 +45,8 @@ pub struct ZenohWorld {
     /// heard in this process).
     auth: Option<AuthWatch>,
     auth_lines: AuthLines,
+    /// The key every snapshot is signed with (agents get it when they join).
+    key: RunKey,
 }
 
 impl ZenohWorld {
@@ -65,9 +68,10 @@ impl ZenohWorld {
             );
         }
         use wire::Wire;
-        let largest_message = (SnapshotHeader::LEN + max_bodies * BodyState::LEN)
+        let largest_message = (SnapshotHeader::LEN + max_bodies * BodyState::LEN + TAG_LEN)
             .max(StatsHeader::LEN + cap.robots * RobotStats::LEN)
             .max(setup_len);
+        let key = RunKey::generate()?;
         let session = open(opts, Role::World { largest_message })?;
         let keys = Keys::new(ns);
         // Room for every agent's command of a few ticks, then a flood is
@@ -145,6 +149,7 @@ impl ZenohWorld {
             reported: (0, 0),
             auth,
             auth_lines: AuthLines::default(),
+            key,
         })
     }
 
@@ -208,6 +213,7 @@ impl WorldTransport for ZenohWorld {
     ) -> Result<(), TransportError> {
         let n = bodies.len().min(self.max_bodies);
         encode_slice(header, &bodies[..n], &mut self.buf);
+        self.key.seal(&mut self.buf);
         self.snap_pub
             .put(self.buf.clone())
             .wait()
@@ -221,7 +227,7 @@ impl WorldTransport for ZenohWorld {
     }
 
     fn drain_commands(&mut self, f: &mut dyn FnMut(CommandMsg, u64)) -> Result<(), TransportError> {
-        let taken = std::mem::take(&mut lock(&self.inbox.state).commands);
+        let taken = self.inbox.take_commands();
         for (c, at) in &taken {
             f(*c, *at);
         }
@@ -248,8 +254,11 @@ impl WorldTransport for ZenohWorld {
     }
 
     fn reply_join(&mut self, reply: &JoinReply) -> Result<(), TransportError> {
+        if reply.accepted == 1 {
+            self.inbox.issued(reply.token);
+        }
         self.reply_pub
-            .put(wire::encode(reply))
+            .put(encode_reply(reply, &self.key))
             .wait()
             .map_err(|e| send_err("join reply", e))
     }
