@@ -1039,14 +1039,14 @@ fn a_flood_of_forged_commands_is_dropped_past_the_inbox_and_the_run_ends_as_undi
         endpoint: Some(ep),
         config_file: None,
     };
-    // 4,000 well-formed commands for r0 with tokens the world never gave,
-    // in one burst: ten times the world's inbox for two agents. The world
+    // 20,000 well-formed commands for r0 with tokens the world never gave,
+    // in one burst: some seventy times the world's inbox for two agents. The world
     // drains its inbox at most once per wake-up, each drain handing every
     // command to the tick loop (which records each refusal), while Zenoh's
     // receive thread only decodes and queues: the inbox overflows, the
     // more so the busier the machine. The agents' own commands carry the
     // tokens they were given and are never crowded out.
-    const SENT: u64 = 4000;
+    const SENT: u64 = 20_000;
     let flood: Vec<Vec<u8>> = (0..SENT)
         .map(|i| {
             wire::encode(&mrsim_proto::CommandMsg {
@@ -1076,7 +1076,7 @@ fn a_flood_of_forged_commands_is_dropped_past_the_inbox_and_the_run_ends_as_undi
     assert_eq!(dropped + rejected, SENT, "{m:#}");
     assert!(
         dropped > 0,
-        "a flood ten times the inbox was dropped in part: {m:#}"
+        "a flood seventy times the inbox was dropped in part: {m:#}"
     );
     assert!(
         said.contains(&format!("dropped {dropped} over the inbox limit")),
