@@ -1,6 +1,7 @@
 //! mrsim, a multi-robot simulator: one rapier2d world, each robot driven by
 //! its own agent running a planner. This crate is what a program depends
-//! on to bring its own planner, and the `mrsim` command line.
+//! on to bring its own planner or to run scenarios from a program; the
+//! `mrsim` command line (src/bin/mrsim/) is built on it.
 //!
 //! # Your own planner
 //!
@@ -101,38 +102,7 @@
 //! // Or, with a `Planner`: `agent.drive(&mut my_planner)?`, the loop of `mrsim agent`.
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
-//!
-//! # The command line
-//!
-//! The modules below are the `mrsim` executable: `run` (a whole run: world
-//! process, one agent process per robot, outputs, summary), `world` and
-//! `agent` (the parts by hand), `sweep` and `bench` (experiments over many
-//! runs), `top` (a live view), `report`, `check` and `planners`. It is
-//! thin: [`cli`] holds the clap types, each subcommand's file turns them
-//! into the runtime's requests, calls `mrsim-runtime` and prints what comes
-//! back. They are not the library's stable surface; the re-exports above
-//! are.
 #![warn(missing_docs)]
-
-pub mod agent;
-pub mod bench;
-pub mod check;
-pub mod cli;
-pub mod exit;
-pub mod export;
-pub mod outcome;
-pub mod planners;
-pub mod progress;
-pub mod report;
-pub mod rerun;
-pub mod ros2;
-pub mod run;
-pub mod sweep;
-pub mod table;
-pub mod top;
-pub mod view;
-pub mod watch;
-pub mod world;
 
 pub use mrsim_agents::{AgentError, AgentExit, LiveAgent, Next, OwnedObservation};
 pub use mrsim_planners::{

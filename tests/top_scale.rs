@@ -6,7 +6,7 @@
 mod common;
 
 use common::*;
-use mrsim::top::{TableView, TopModel, draw_with};
+use mrsim_top::{TableView, TopModel, draw_with};
 use mrsim_proto::{RobotStats, StatsHeader, agent_state, run_phase};
 use ratatui::Terminal;
 use ratatui::backend::TestBackend;
