@@ -104,13 +104,26 @@
 //! ```
 #![warn(missing_docs)]
 
-pub use mrsim_agents::{AgentError, AgentExit, LiveAgent, Next, OwnedObservation};
+pub use mrsim_agents::{
+    AgentError, AgentExit, LiveAgent, Next, OwnedObservation, PlanFailure, PlanFault,
+};
 pub use mrsim_planners::{
     BodyKind, BuildError, Command, DesignatedPath, Diagnostic, EXTERNAL, Observation, ParamError,
     ParamReader, ParamValue, Params, Planner, RegisterError, Registry, Segment, SelfState, Sensed,
     Vec2,
 };
-pub use mrsim_runfolder::{RobotMetrics, RunMetrics};
-pub use mrsim_runtime::ScenarioSource;
-pub use mrsim_runtime::launch::{InProcess, RunError, RunResult, run_in_process};
+pub use mrsim_runfolder::{FileError, RobotMetrics, RunMetrics};
+pub use mrsim_runtime::finish::{AgentFailure, FinishError};
+pub use mrsim_runtime::inproc::InprocError;
+/// Why the world of a run in this process could not carry it out (its
+/// output files), as [`InprocError::Run`] holds it.
+pub use mrsim_runtime::inproc::WorldRunError;
+/// Why [`run_in_process`] failed: refused before anything ran
+/// ([`RunError::Invalid`]), a planner that failed in lockstep
+/// ([`RunError::Planner`]), the run or its ending ([`RunError::Run`],
+/// [`RunError::Finish`]). A run in this process starts no process, so no
+/// variant speaks of one.
+pub use mrsim_runtime::launch::InProcessError as RunError;
+pub use mrsim_runtime::launch::{InProcess, RunResult, run_in_process};
+pub use mrsim_runtime::{Invalid, ScenarioSource};
 pub use mrsim_scenario::Mode;

@@ -11,7 +11,6 @@
 //! on any ratatui backend, so the screen can be tested without a terminal.
 #![warn(missing_docs)]
 
-use anyhow::{Context, Result, anyhow, bail};
 use mrsim_proto::{
     BodyState, RobotStats, SnapshotHeader, StatsHeader, agent_state, body_kind, run_phase,
 };
@@ -31,6 +30,36 @@ pub use table::{Order, TableView, summary_lines, worst_first};
 
 mod table;
 use std::time::{Duration, Instant};
+
+/// Why the dashboard cannot follow a run.
+#[derive(Debug, thiserror::Error)]
+pub enum TopError {
+    /// The world's setup message is not JSON.
+    #[error("the world's setup is not JSON")]
+    SetupNotJson(#[source] serde_json::Error),
+    /// The world's setup holds no scenario this program can read.
+    #[error("the world's setup has no readable scenario")]
+    SetupScenario(#[source] serde_json::Error),
+    /// No world runs with this run id (or it cannot be reached).
+    #[error(
+        "no world is running with run id `{run_id}` (start one with `mrsim world --run {run_id}` or `mrsim run --run {run_id}`): {cause}"
+    )]
+    NoWorld {
+        /// The run id.
+        run_id: String,
+        /// Why it was not reached (in the message).
+        cause: TransportError,
+    },
+    /// Reading from the world failed.
+    #[error(transparent)]
+    Transport(#[from] TransportError),
+    /// The world published no setup in time.
+    #[error("the world did not publish its setup within {0:.0} s")]
+    NoSetup(f64),
+    /// The world ended before its setup arrived.
+    #[error("the world is gone")]
+    WorldGone,
+}
 
 /// Time between two screen updates.
 pub const REFRESH: Duration = Duration::from_millis(125);
@@ -59,11 +88,10 @@ pub struct TopModel {
 impl TopModel {
     /// A model from the world's setup message (JSON with `run_id`,
     /// `out_dir` and `scenario`).
-    pub fn from_setup(setup: &[u8]) -> Result<Self> {
-        let v: serde_json::Value =
-            serde_json::from_slice(setup).context("the world's setup is not JSON")?;
-        let scenario: Scenario = serde_json::from_value(v["scenario"].clone())
-            .context("the world's setup has no readable scenario")?;
+    pub fn from_setup(setup: &[u8]) -> Result<Self, TopError> {
+        let v: serde_json::Value = serde_json::from_slice(setup).map_err(TopError::SetupNotJson)?;
+        let scenario: Scenario =
+            serde_json::from_value(v["scenario"].clone()).map_err(TopError::SetupScenario)?;
         let mut points: Vec<[f64; 2]> = Vec::new();
         if let Some(a) = &scenario.world.arena {
             points.extend([a.min, a.max]);
@@ -378,20 +406,20 @@ pub fn draw_with(f: &mut Frame, m: &TopModel, view: &TableView) {
 }
 
 /// Waits until the world's setup arrives over `obs`.
-pub fn wait_for_setup(obs: &mut dyn ObserverTransport, timeout: Duration) -> Result<TopModel> {
+pub fn wait_for_setup(
+    obs: &mut dyn ObserverTransport,
+    timeout: Duration,
+) -> Result<TopModel, TopError> {
     let start = Instant::now();
     loop {
         if let Some(setup) = obs.setup()? {
             return TopModel::from_setup(&setup);
         }
         if start.elapsed() >= timeout {
-            bail!(
-                "the world did not publish its setup within {:.0} s",
-                timeout.as_secs_f64()
-            );
+            return Err(TopError::NoSetup(timeout.as_secs_f64()));
         }
         if !obs.world_alive() {
-            bail!("the world is gone");
+            return Err(TopError::WorldGone);
         }
         std::thread::sleep(Duration::from_millis(20));
     }
@@ -405,15 +433,15 @@ pub fn connect_observer(
     who: &str,
     zenoh: Option<&ZenohOptions>,
     timeout: Duration,
-) -> Result<Box<dyn ObserverTransport>> {
+) -> Result<Box<dyn ObserverTransport>, TopError> {
     let node = format!("mrsim-{who}-{}", std::process::id());
     let obs: Result<Box<dyn ObserverTransport>, _> = match zenoh {
         None => ShmObserver::connect(ns, &node, true, timeout).map(|o| Box::new(o) as _),
         Some(z) => ZenohObserver::connect(ns, z, true, timeout).map(|o| Box::new(o) as _),
     };
     let run_id = ns.run_id();
-    obs.map_err(|e| {
-        anyhow!("no world is running with run id `{run_id}` (start one with `mrsim world --run {run_id}` or `mrsim run --run {run_id}`): {e}")
+    obs.map_err(|cause| TopError::NoWorld {
+        run_id: run_id.to_string(),
+        cause,
     })
 }
-

@@ -15,6 +15,7 @@ mod report;
 mod rerun;
 mod ros2;
 mod run;
+mod start;
 mod sweep;
 mod table;
 mod top;
