@@ -1,6 +1,7 @@
 //! mrsim, a multi-robot simulator: one rapier2d world, each robot driven by
 //! its own agent running a planner. This crate is what a program depends
-//! on to bring its own planner, and the `mrsim` command line.
+//! on to bring its own planner or to run scenarios from a program; the
+//! `mrsim` command line (src/bin/mrsim/) is built on it.
 //!
 //! # Your own planner
 //!
@@ -101,46 +102,28 @@
 //! // Or, with a `Planner`: `agent.drive(&mut my_planner)?`, the loop of `mrsim agent`.
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
-//!
-//! # The command line
-//!
-//! The modules below are the `mrsim` executable: `run` (a whole run: world
-//! process, one agent process per robot, outputs, summary), `world` and
-//! `agent` (the parts by hand), `sweep` and `bench` (experiments over many
-//! runs), `top` (a live view), `report`, `check` and `planners`. It is
-//! thin: [`cli`] holds the clap types, each subcommand's file turns them
-//! into the runtime's requests, calls `mrsim-runtime` and prints what comes
-//! back. They are not the library's stable surface; the re-exports above
-//! are.
 #![warn(missing_docs)]
 
-pub mod agent;
-pub mod bench;
-pub mod check;
-pub mod cli;
-pub mod exit;
-pub mod export;
-pub mod outcome;
-pub mod planners;
-pub mod progress;
-pub mod report;
-pub mod rerun;
-pub mod ros2;
-pub mod run;
-pub mod sweep;
-pub mod table;
-pub mod top;
-pub mod view;
-pub mod watch;
-pub mod world;
-
-pub use mrsim_agents::{AgentError, AgentExit, LiveAgent, Next, OwnedObservation};
+pub use mrsim_agents::{
+    AgentError, AgentExit, LiveAgent, Next, OwnedObservation, PlanFailure, PlanFault,
+};
 pub use mrsim_planners::{
     BodyKind, BuildError, Command, DesignatedPath, Diagnostic, EXTERNAL, Observation, ParamError,
     ParamReader, ParamValue, Params, Planner, RegisterError, Registry, Segment, SelfState, Sensed,
     Vec2,
 };
-pub use mrsim_runfolder::{RobotMetrics, RunMetrics};
-pub use mrsim_runtime::ScenarioSource;
-pub use mrsim_runtime::launch::{InProcess, RunError, RunResult, run_in_process};
+pub use mrsim_runfolder::{FileError, RobotMetrics, RunMetrics};
+pub use mrsim_runtime::finish::{AgentFailure, FinishError};
+pub use mrsim_runtime::inproc::InprocError;
+/// Why the world of a run in this process could not carry it out (its
+/// output files), as [`InprocError::Run`] holds it.
+pub use mrsim_runtime::inproc::WorldRunError;
+/// Why [`run_in_process`] failed: refused before anything ran
+/// ([`RunError::Invalid`]), a planner that failed in lockstep
+/// ([`RunError::Planner`]), the run or its ending ([`RunError::Run`],
+/// [`RunError::Finish`]). A run in this process starts no process, so no
+/// variant speaks of one.
+pub use mrsim_runtime::launch::InProcessError as RunError;
+pub use mrsim_runtime::launch::{InProcess, RunResult, run_in_process};
+pub use mrsim_runtime::{Invalid, ScenarioSource};
 pub use mrsim_scenario::Mode;

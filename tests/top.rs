@@ -10,7 +10,7 @@
 mod common;
 
 use common::*;
-use mrsim::top::{TopModel, draw, wait_for_setup};
+use mrsim_top::{TopModel, draw, wait_for_setup};
 use mrsim_transport::{Namespace, ObserverTransport};
 use ratatui::Terminal;
 use ratatui::backend::TestBackend;
@@ -179,7 +179,7 @@ fn dashboard_of_a_real_world(zenoh: Option<&str>) {
         config_file: None,
     });
     let mut obs =
-        mrsim::top::connect_observer(&ns, "test", options.as_ref(), Duration::from_secs(30))
+        mrsim_top::connect_observer(&ns, "test", options.as_ref(), Duration::from_secs(30))
             .expect("observer attaches");
     let mut model = wait_for_setup(obs.as_mut(), Duration::from_secs(30)).expect("setup");
     assert_eq!(model.run_id, id);

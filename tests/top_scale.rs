@@ -6,8 +6,8 @@
 mod common;
 
 use common::*;
-use mrsim::top::{TableView, TopModel, draw_with};
 use mrsim_proto::{RobotStats, StatsHeader, agent_state, run_phase};
+use mrsim_top::{TableView, TopModel, draw_with};
 use ratatui::Terminal;
 use ratatui::backend::TestBackend;
 use std::process::Command;

@@ -86,6 +86,27 @@ impl FromStr for Fault {
     }
 }
 
+impl std::fmt::Display for Fault {
+    /// The `--fault` value that parses back to this fault.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Fault::Nan => f.write_str("nan"),
+            Fault::Inf => f.write_str("inf"),
+            Fault::Huge => f.write_str("huge"),
+            Fault::OtherRobot => f.write_str("other-robot"),
+            Fault::PastTick => f.write_str("past-tick"),
+            Fault::FutureTick => f.write_str("future-tick"),
+            Fault::Double => f.write_str("double"),
+            Fault::SentLate => f.write_str("sent-late"),
+            Fault::JoinTwice => f.write_str("join-twice"),
+            Fault::HangAt(n) => write!(f, "hang-at-tick={n}"),
+            Fault::DieAt(n) => write!(f, "die-at-tick={n}"),
+            Fault::StopAt(n) => write!(f, "stop-at-tick={n}"),
+            Fault::SlowMs(n) => write!(f, "slow-ms={n}"),
+        }
+    }
+}
+
 /// What the agent loop must do at a tick before planning.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Before {

@@ -5,7 +5,7 @@
 use crate::planner::{PyPlanner, describe};
 use mrsim_planners::{BuildError, ParamValue, Params, Registry};
 use mrsim_runtime::ScenarioSource;
-use mrsim_runtime::launch::{self, InProcess, RunError};
+use mrsim_runtime::launch::{self, InProcess, InProcessError as RunError};
 use mrsim_scenario::Mode;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;

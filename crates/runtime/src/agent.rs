@@ -20,6 +20,10 @@ pub struct Misbehave {
     pub protocol_version: Option<u32>,
 }
 
+/// How long an agent over Zenoh that lost its world keeps trying to reach
+/// it again ([`AgentRequest::reconnect`]) unless asked otherwise.
+pub const RECONNECT: Duration = Duration::from_secs(30);
+
 /// Which robots of which run, and how.
 #[derive(Debug, Clone, Default)]
 pub struct AgentRequest {

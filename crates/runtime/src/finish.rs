@@ -1,6 +1,7 @@
 //! The end of a run, one function for every path (agent processes, the
 //! in-process pool, a world started by hand): the agents' diagnostics merged
-//! into diagnostics.csv, usage.json written, metrics.json read, the plots and
+//! into diagnostics.csv, usage.json written, metrics.json taken from the
+//! world that ran in this process or read from the folder, the plots and
 //! replay drawn, and all of it handed back as an [`Outcome`] for the caller
 //! to present.
 
@@ -117,6 +118,9 @@ pub struct Ending<'a> {
     pub usage: Option<(&'a str, &'a [AgentUsage])>,
     /// Draw plot.svg/png and replay.html.
     pub render: bool,
+    /// metrics.json as the world that wrote it holds it, when it ran in
+    /// this process (then it is not read back); `None`: read the file.
+    pub metrics: Option<RunMetrics>,
 }
 
 /// The pictures (`render`) and run.mcap (`mcap`) of the run folder `dir`,
@@ -178,12 +182,13 @@ pub fn finish(end: Ending<'_>) -> Result<Outcome, FinishError> {
             }
         })?;
     }
-    outcome.metrics = Some(
-        mrsim_runfolder::read_metrics(&outcome.dir).map_err(|e| match e {
+    outcome.metrics = Some(match end.metrics {
+        Some(m) => m,
+        None => mrsim_runfolder::read_metrics(&outcome.dir).map_err(|e| match e {
             FileError::Io { path, source } => FinishError::ReadMetrics { path, source },
             FileError::Json { source, .. } => FinishError::ParseMetrics(source),
         })?,
-    );
+    });
     let routes = write_routes(&outcome.dir)?;
     if let Some(m) = outcome.metrics.as_mut()
         && !routes.is_empty()

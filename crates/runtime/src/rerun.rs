@@ -14,7 +14,7 @@
 //! random state: the rerun names them as the reason a replay may differ.
 
 use crate::error::{Invalid, Refusal};
-use crate::launch::{RunError, RunResult, run_validated_in_process};
+use crate::launch::{InProcessError, RunResult, run_validated_in_process};
 use crate::validate::{ScenarioSource, Validated};
 use mrsim_planners::Registry;
 use mrsim_runfolder::timing::{Status, read_timing};
@@ -59,7 +59,7 @@ pub enum RerunError {
     Invalid(#[from] Invalid),
     /// The rerun itself failed.
     #[error(transparent)]
-    Run(#[from] RunError),
+    Run(#[from] InProcessError),
 }
 
 impl Refusal for RerunError {

@@ -7,7 +7,6 @@ use crate::error::Invalid;
 use mrsim_planners::{BuildError, EXTERNAL, ROS2, Registry};
 use mrsim_scenario::{Loaded, Mode, Scenario};
 use mrsim_world::World;
-use std::ffi::OsString;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -50,24 +49,6 @@ impl ScenarioSource {
             overrides.push(("world.mode".to_string(), format!("\"{}\"", mode_name(mode))));
         }
         Ok(overrides)
-    }
-
-    /// Command-line arguments that give another `mrsim` process (`mrsim
-    /// world`) this same scenario: the file, each `--set`, `--mode`.
-    pub fn to_args(&self) -> Vec<OsString> {
-        let mut v: Vec<OsString> = Vec::new();
-        if let Some(p) = &self.path {
-            v.push(p.clone().into());
-        }
-        for s in &self.set {
-            v.push("--set".into());
-            v.push(s.into());
-        }
-        if let Some(m) = self.mode {
-            v.push("--mode".into());
-            v.push(mode_name(m).into());
-        }
-        v
     }
 }
 
@@ -367,23 +348,5 @@ mod tests {
         let _ = std::fs::remove_dir_all(&dir);
         assert!(refused.to_string().contains("`r-0`"), "{refused}");
         assert!(refused.to_string().contains("namespace"), "{refused}");
-    }
-
-    #[test]
-    fn another_process_gets_the_same_scenario_from_the_arguments() {
-        let s = ScenarioSource {
-            path: Some("a.toml".into()),
-            mode: Some(Mode::Realtime),
-            set: vec!["world.dt=0.1".into()],
-        };
-        let args: Vec<String> = s
-            .to_args()
-            .into_iter()
-            .map(|a| a.to_string_lossy().into_owned())
-            .collect();
-        assert_eq!(
-            args,
-            ["a.toml", "--set", "world.dt=0.1", "--mode", "realtime"]
-        );
     }
 }

@@ -155,6 +155,7 @@ pub fn serve(
         agent_failures: Vec::new(),
         usage: None,
         render: true,
+        metrics: Some(outcome.metrics),
     })?;
     Ok(WorldOutcome {
         interrupted,

@@ -47,13 +47,15 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Duration;
 
+pub use mrsim_world::run::RunError as WorldRunError;
+
 /// Why an in-process run failed. (The messages hold their causes: none is
 /// a `source`, so a chain printed by a caller says each thing once.)
 #[derive(Debug, thiserror::Error)]
 pub enum InprocError {
     /// The world loop failed.
     #[error("world: {0}")]
-    Run(mrsim_world::run::RunError),
+    Run(WorldRunError),
     /// A thread of the run panicked.
     #[error("{0} panicked")]
     Panicked(&'static str),

@@ -3,9 +3,9 @@
 
 use std::path::Path;
 
-/// One run's metrics, as sweep.csv reports them.
+/// One run's row of sweep.csv: its metrics boiled down to the columns.
 #[derive(Debug, Clone, Default, PartialEq)]
-pub struct RunMetrics {
+pub struct SweepRow {
     /// Fraction of robots that reached their goals.
     pub success_rate: f64,
     /// Contacts started, all robots.
@@ -58,7 +58,7 @@ pub const ROBOT_MEANS: [RobotColumn; 9] = [
 ];
 
 /// How a metric column is read from a run's metrics.
-pub type Column = (&'static str, fn(&RunMetrics) -> Option<f64>);
+pub type Column = (&'static str, fn(&SweepRow) -> Option<f64>);
 
 /// The metric columns of sweep.csv, in order, with how to get each.
 pub const METRICS: [Column; 23] = [
@@ -104,7 +104,7 @@ fn file_error(e: mrsim_runfolder::FileError) -> String {
 
 /// Reads a run folder's metrics.json and scenario.json (with the run
 /// folder's schema and the scenario's own type).
-pub fn read_run(dir: &Path) -> Result<RunMetrics, String> {
+pub fn read_run(dir: &Path) -> Result<SweepRow, String> {
     let m = mrsim_runfolder::read_metrics(dir).map_err(file_error)?;
     let sc: mrsim_scenario::Scenario =
         mrsim_runfolder::read_json(dir, mrsim_runfolder::SCENARIO_FILE).map_err(file_error)?;
@@ -146,7 +146,7 @@ pub fn read_run(dir: &Path) -> Result<RunMetrics, String> {
             .sum::<f64>()
             / slots
     });
-    Ok(RunMetrics {
+    Ok(SweepRow {
         miss_rate,
         spl: m.spl,
         flowtime: m.flowtime.flatten(),

@@ -28,7 +28,7 @@ mod figure;
 mod metrics;
 mod stats;
 
-pub use metrics::{Column, METRICS, ROBOT_MEANS, RobotColumn, RunMetrics};
+pub use metrics::{Column, METRICS, ROBOT_MEANS, RobotColumn, SweepRow};
 pub use stats::{largest_allowable, mean_ci};
 
 use crate::error::{Invalid, Refusal};
@@ -119,7 +119,7 @@ impl Refusal for SweepError {
 /// gave the same metrics: the scene has nothing random (no `jitter`, no
 /// noise, no random obstacles), so its intervals say nothing.
 pub fn seeds_change_nothing(jobs: &[Job], results: &[JobResult]) -> bool {
-    let mut first: std::collections::BTreeMap<(usize, bool), &RunMetrics> = Default::default();
+    let mut first: std::collections::BTreeMap<(usize, bool), &SweepRow> = Default::default();
     let mut repeated = false;
     for (job, r) in jobs.iter().zip(results) {
         let Ok(m) = r else { continue };
@@ -170,7 +170,7 @@ pub struct Sweep {
 }
 
 /// One run's result: its metrics, or why there are none.
-pub type JobResult = Result<RunMetrics, String>;
+pub type JobResult = Result<SweepRow, String>;
 
 /// A run of a sweep has ended.
 #[derive(Debug)]
@@ -487,7 +487,7 @@ impl Sweep {
         let mut out = Vec::new();
         for &mode in self.plan.mode.modes() {
             for combo in 0..self.combos.len() {
-                let runs: Vec<&RunMetrics> = self
+                let runs: Vec<&SweepRow> = self
                     .jobs
                     .iter()
                     .zip(results)
@@ -542,7 +542,7 @@ mod tests {
         };
         let jobs = [job(0, 1), job(0, 2), job(1, 1), job(1, 2)];
         let run = |s: f64| -> JobResult {
-            Ok(RunMetrics {
+            Ok(SweepRow {
                 success_rate: s,
                 ..Default::default()
             })

@@ -17,14 +17,75 @@
 //! `allowable.csv`): our reading of Zhu & Loh's "average allowable maximum
 //! speed" when KEY is the robot's speed limit.
 
-use crate::cli::SweepArgs;
 use crate::exit::fail;
 use anyhow::{Context, Result, anyhow};
+use clap::{Args, ValueEnum};
 use mrsim_runfolder::{ALLOWABLE_FILE, SUMMARY_FILE, SWEEP_FILE};
 use mrsim_runtime::sweep::{
     Job, JobDone, JobResult, METRICS, SweepPlan, largest_allowable, mean_ci,
 };
 use std::io::IsTerminal;
+use std::path::PathBuf;
+
+/// What `mrsim sweep` was asked.
+#[derive(Debug, Clone, Args)]
+pub struct SweepArgs {
+    /// Scenario file (TOML).
+    pub scenario: PathBuf,
+    /// Values to sweep: KEY=V1,V2,... (KEY as for `run --set`; values
+    /// split at commas outside brackets, braces and quotes).
+    #[arg(long = "set", value_name = "KEY=V1,V2,...")]
+    pub set: Vec<String>,
+    /// Repeat each combination with world.seed = 1..=N.
+    #[arg(long, default_value_t = 1)]
+    pub seeds: u64,
+    /// Output folder (default: a fresh folder under runs/).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Runs at once (default: the number of cores).
+    #[arg(long)]
+    pub jobs: Option<usize>,
+    /// Also report, per seed and other combination, the largest value of
+    /// this swept key whose run had no collision.
+    #[arg(long, value_name = "KEY")]
+    pub allowable: Option<String>,
+    /// lockstep (the modelled curve, runs in parallel), realtime (the
+    /// measured curve, one run at a time) or both (lockstep, then realtime,
+    /// on one figure).
+    #[arg(long, value_enum, default_value = "lockstep")]
+    pub mode: SweepModeArg,
+    /// The swept key on sweep.svg's x axis (default: the first swept key
+    /// of more than one value whose values are all numbers).
+    #[arg(long, value_name = "KEY")]
+    pub x: Option<String>,
+    /// The metrics sweep.svg draws, in this order (default: every one of
+    /// sweep.csv's)
+    #[arg(long, value_name = "METRIC,...", value_delimiter = ',')]
+    pub metrics: Vec<String>,
+}
+
+/// How a sweep's runs keep time.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ValueEnum)]
+pub enum SweepModeArg {
+    /// Lockstep, several runs at once.
+    #[default]
+    Lockstep,
+    /// Realtime, one run at a time.
+    Realtime,
+    /// Lockstep, then realtime.
+    Both,
+}
+
+impl From<SweepModeArg> for mrsim_runtime::sweep::SweepMode {
+    fn from(m: SweepModeArg) -> Self {
+        use mrsim_runtime::sweep::SweepMode;
+        match m {
+            SweepModeArg::Lockstep => SweepMode::Lockstep,
+            SweepModeArg::Realtime => SweepMode::Realtime,
+            SweepModeArg::Both => SweepMode::Both,
+        }
+    }
+}
 
 fn csv_field(s: &str) -> String {
     if s.contains([',', '"', '\n']) {
@@ -67,9 +128,9 @@ pub fn main(args: &SweepArgs) -> Result<i32> {
         None
     };
     let at_once = match args.mode {
-        crate::cli::SweepModeArg::Lockstep => format!("{} at once", sweep.workers),
-        crate::cli::SweepModeArg::Realtime => "one at a time".to_string(),
-        crate::cli::SweepModeArg::Both => format!(
+        SweepModeArg::Lockstep => format!("{} at once", sweep.workers),
+        SweepModeArg::Realtime => "one at a time".to_string(),
+        SweepModeArg::Both => format!(
             "lockstep {} at once, then realtime one at a time",
             sweep.workers
         ),

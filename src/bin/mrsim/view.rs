@@ -45,7 +45,7 @@ pub fn run(run_id: &str, timeout: f64, zenoh: Option<ZenohOptions>, addr: &str) 
     let feed = Feed::new();
     let server = serve(addr, feed.clone())?;
     let timeout = Duration::from_secs_f64(timeout.max(0.0));
-    let mut obs = crate::top::connect_observer(&ns, "view", zenoh.as_ref(), timeout)?;
+    let mut obs = mrsim_top::connect_observer(&ns, "view", zenoh.as_ref(), timeout)?;
     mrsim_sys::signal::catch_termination();
     let mut pump = Pump::new(feed.clone());
     let started = Instant::now();

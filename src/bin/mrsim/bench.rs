@@ -2,14 +2,59 @@
 //! `mrsim_runtime::bench` for what is measured); progress on stderr, the
 //! table on stdout.
 
-use crate::cli::BenchArgs;
+use crate::cli::{SchedArgs, TransportArg};
 use crate::exit::fail;
 use crate::table::{num, text};
 use anyhow::Result;
+use clap::Args;
 use mrsim_runfolder::bench::{BenchRow, Overhead};
 use mrsim_runtime::bench::{BenchPlan, BenchStep};
 use std::io::{IsTerminal, Write};
+use std::path::PathBuf;
 use std::time::Instant;
+
+/// `mrsim bench` options.
+#[derive(Debug, Clone, Args)]
+pub struct BenchArgs {
+    /// Agent counts, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "8,32,64,128,256")]
+    pub agents: Vec<usize>,
+    /// Tick rate, Hz.
+    #[arg(long, default_value_t = 100.0)]
+    pub rate: f64,
+    /// Seconds of each run.
+    #[arg(long, default_value_t = 10.0)]
+    pub duration: f64,
+    /// Transports, comma-separated.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "shm,inproc")]
+    pub transport: Vec<TransportArg>,
+    /// Planner of every robot.
+    #[arg(long, default_value = "chung-1")]
+    pub planner: String,
+    /// Deadline as a fraction of the tick (the scenario's world.deadline).
+    #[arg(long, default_value_t = 1.0)]
+    pub deadline: f64,
+    /// Also measure the bare iceoryx2 fan-out for each agent count (the
+    /// `mrsim-baseline` program next to this one).
+    #[arg(long)]
+    pub baseline: bool,
+    /// Output folder (default: runs/bench-<time>).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// CPUs to pin everything to (default: the first two, or all if fewer),
+    /// and --rt for SCHED_FIFO.
+    #[command(flatten)]
+    pub sched: SchedArgs,
+    /// Loads, comma-separated: measure everything beside that many
+    /// CPU-bound processes on the same CPUs (e.g. 0,1,2), one table and
+    /// stress.svg/png.
+    #[arg(long, value_delimiter = ',', value_name = "N,N,...")]
+    pub stress: Vec<usize>,
+    /// Make each measurement N times, interleaved with its baseline: with
+    /// --baseline, the median overhead ratio and its spread.
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    pub repeat: usize,
+}
 
 struct Progress {
     total: usize,

@@ -1,11 +1,29 @@
 //! `mrsim rerun RUN_DIR [--out DIR] [--set KEY=VALUE]...`: a recorded run
 //! again in lockstep with its recorded timing (`mrsim_runtime::rerun`).
 
-use crate::cli::RerunArgs;
 use anyhow::Result;
+use clap::Args;
 use mrsim_planners::Registry;
 use mrsim_runtime::rerun::{Rerun, rerun};
+use std::path::PathBuf;
 use std::sync::Arc;
+
+/// What `mrsim rerun` was asked.
+#[derive(Debug, Clone, Args)]
+pub struct RerunArgs {
+    /// The recorded run's folder (with timing.csv, source.json, scenario.json).
+    pub run: PathBuf,
+    /// Output folder (default: a fresh folder under runs/).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// A counterfactual: override a scenario value on top of the run's own
+    /// overrides (KEY=VALUE as for `run --set`); the timing stays as recorded.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Skip plot.svg, plot.png and replay.html.
+    #[arg(long)]
+    pub no_report: bool,
+}
 
 /// Runs `mrsim rerun`; returns the exit status.
 pub fn main(args: &RerunArgs) -> Result<i32> {

@@ -9,8 +9,8 @@
 //!
 //! [`TopModel`] holds what is known about the run and [`draw`] renders it
 //! on any ratatui backend, so the screen can be tested without a terminal.
+#![warn(missing_docs)]
 
-use anyhow::{Context, Result, anyhow, bail};
 use mrsim_proto::{
     BodyState, RobotStats, SnapshotHeader, StatsHeader, agent_state, body_kind, run_phase,
 };
@@ -25,12 +25,41 @@ use ratatui::symbols::Marker;
 use ratatui::text::{Line, Span};
 use ratatui::widgets::canvas::{Canvas, Circle, Line as Segment, Points};
 use ratatui::widgets::{Block, Borders, Paragraph};
-use std::io::IsTerminal;
 use table::table_width;
 pub use table::{Order, TableView, summary_lines, worst_first};
 
 mod table;
 use std::time::{Duration, Instant};
+
+/// Why the dashboard cannot follow a run.
+#[derive(Debug, thiserror::Error)]
+pub enum TopError {
+    /// The world's setup message is not JSON.
+    #[error("the world's setup is not JSON")]
+    SetupNotJson(#[source] serde_json::Error),
+    /// The world's setup holds no scenario this program can read.
+    #[error("the world's setup has no readable scenario")]
+    SetupScenario(#[source] serde_json::Error),
+    /// No world runs with this run id (or it cannot be reached).
+    #[error(
+        "no world is running with run id `{run_id}` (start one with `mrsim world --run {run_id}` or `mrsim run --run {run_id}`): {cause}"
+    )]
+    NoWorld {
+        /// The run id.
+        run_id: String,
+        /// Why it was not reached (in the message).
+        cause: TransportError,
+    },
+    /// Reading from the world failed.
+    #[error(transparent)]
+    Transport(#[from] TransportError),
+    /// The world published no setup in time.
+    #[error("the world did not publish its setup within {0:.0} s")]
+    NoSetup(f64),
+    /// The world ended before its setup arrived.
+    #[error("the world is gone")]
+    WorldGone,
+}
 
 /// Time between two screen updates.
 pub const REFRESH: Duration = Duration::from_millis(125);
@@ -59,11 +88,10 @@ pub struct TopModel {
 impl TopModel {
     /// A model from the world's setup message (JSON with `run_id`,
     /// `out_dir` and `scenario`).
-    pub fn from_setup(setup: &[u8]) -> Result<Self> {
-        let v: serde_json::Value =
-            serde_json::from_slice(setup).context("the world's setup is not JSON")?;
-        let scenario: Scenario = serde_json::from_value(v["scenario"].clone())
-            .context("the world's setup has no readable scenario")?;
+    pub fn from_setup(setup: &[u8]) -> Result<Self, TopError> {
+        let v: serde_json::Value = serde_json::from_slice(setup).map_err(TopError::SetupNotJson)?;
+        let scenario: Scenario =
+            serde_json::from_value(v["scenario"].clone()).map_err(TopError::SetupScenario)?;
         let mut points: Vec<[f64; 2]> = Vec::new();
         if let Some(a) = &scenario.world.arena {
             points.extend([a.min, a.max]);
@@ -377,30 +405,21 @@ pub fn draw_with(f: &mut Frame, m: &TopModel, view: &TableView) {
     );
 }
 
-/// Restores the terminal however `top` ends.
-struct TerminalGuard;
-
-impl Drop for TerminalGuard {
-    fn drop(&mut self) {
-        ratatui::restore();
-    }
-}
-
 /// Waits until the world's setup arrives over `obs`.
-pub fn wait_for_setup(obs: &mut dyn ObserverTransport, timeout: Duration) -> Result<TopModel> {
+pub fn wait_for_setup(
+    obs: &mut dyn ObserverTransport,
+    timeout: Duration,
+) -> Result<TopModel, TopError> {
     let start = Instant::now();
     loop {
         if let Some(setup) = obs.setup()? {
             return TopModel::from_setup(&setup);
         }
         if start.elapsed() >= timeout {
-            bail!(
-                "the world did not publish its setup within {:.0} s",
-                timeout.as_secs_f64()
-            );
+            return Err(TopError::NoSetup(timeout.as_secs_f64()));
         }
         if !obs.world_alive() {
-            bail!("the world is gone");
+            return Err(TopError::WorldGone);
         }
         std::thread::sleep(Duration::from_millis(20));
     }
@@ -414,89 +433,15 @@ pub fn connect_observer(
     who: &str,
     zenoh: Option<&ZenohOptions>,
     timeout: Duration,
-) -> Result<Box<dyn ObserverTransport>> {
+) -> Result<Box<dyn ObserverTransport>, TopError> {
     let node = format!("mrsim-{who}-{}", std::process::id());
     let obs: Result<Box<dyn ObserverTransport>, _> = match zenoh {
         None => ShmObserver::connect(ns, &node, true, timeout).map(|o| Box::new(o) as _),
         Some(z) => ZenohObserver::connect(ns, z, true, timeout).map(|o| Box::new(o) as _),
     };
     let run_id = ns.run_id();
-    obs.map_err(|e| {
-        anyhow!("no world is running with run id `{run_id}` (start one with `mrsim world --run {run_id}` or `mrsim run --run {run_id}`): {e}")
+    obs.map_err(|cause| TopError::NoWorld {
+        run_id: run_id.to_string(),
+        cause,
     })
-}
-
-/// `mrsim top`: attaches to run `run_id` (over Zenoh with `zenoh`) and
-/// shows the dashboard until `q`, Ctrl-C, or the end of the run. Returns
-/// the exit status.
-pub fn run(run_id: &str, timeout: f64, zenoh: Option<ZenohOptions>) -> Result<i32> {
-    let ns = Namespace::new(run_id).map_err(|e| crate::exit::invalid(e.to_string()))?;
-    if !std::io::stdout().is_terminal() {
-        return Err(crate::exit::invalid(
-            "mrsim top draws on a terminal, and stdout is not one",
-        ));
-    }
-    let timeout = Duration::from_secs_f64(timeout.max(0.0));
-    let mut obs = connect_observer(&ns, "top", zenoh.as_ref(), timeout)?;
-    let mut model =
-        wait_for_setup(obs.as_mut(), timeout).with_context(|| format!("run `{run_id}`"))?;
-
-    mrsim_sys::signal::catch_termination();
-    let mut terminal = ratatui::try_init().context("cannot take over the terminal")?;
-    let guard = TerminalGuard;
-    let mut view = TableView::default();
-    use ratatui::crossterm::event::{self, Event, KeyCode, KeyEventKind, KeyModifiers};
-    let end = loop {
-        model.poll(obs.as_mut())?;
-        terminal
-            .draw(|f| draw_with(f, &model, &view))
-            .context("cannot draw on the terminal")?;
-        if model.finished() {
-            break Ok(0);
-        }
-        if !obs.world_alive() {
-            break Err(anyhow!(
-                "the world of run `{run_id}` is gone without finishing the run (tick {})",
-                model.tick()
-            ));
-        }
-        if mrsim_sys::signal::received().is_some() {
-            break Ok(0);
-        }
-        if event::poll(REFRESH).context("cannot read the keyboard")?
-            && let Event::Key(k) = event::read().context("cannot read the keyboard")?
-            && k.kind == KeyEventKind::Press
-        {
-            let quit = matches!(k.code, KeyCode::Char('q') | KeyCode::Esc)
-                || (k.code == KeyCode::Char('c') && k.modifiers.contains(KeyModifiers::CONTROL));
-            if quit {
-                break Ok(0);
-            }
-            let n = model.scenario.robots.len();
-            let page = terminal.size().map_or(20, |s| s.height.saturating_sub(10)) as isize;
-            match k.code {
-                KeyCode::PageDown | KeyCode::Char(' ') => view.scroll(page.max(1), n),
-                KeyCode::PageUp => view.scroll(-page.max(1), n),
-                KeyCode::Down | KeyCode::Char('j') => view.scroll(1, n),
-                KeyCode::Up | KeyCode::Char('k') => view.scroll(-1, n),
-                KeyCode::Home | KeyCode::Char('g') => view.offset = 0,
-                KeyCode::End | KeyCode::Char('G') => view.scroll(n as isize, n),
-                KeyCode::Char('s') => {
-                    let worst = match view.order {
-                        Order::Auto => n as isize > page,
-                        Order::Scenario => false,
-                        Order::Worst => true,
-                    };
-                    view.toggle_order(worst);
-                }
-                _ => {}
-            }
-        }
-    };
-    drop(guard);
-    drop(terminal);
-    if model.finished() {
-        println!("{}", model.summary());
-    }
-    end
 }

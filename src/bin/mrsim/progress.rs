@@ -117,20 +117,6 @@ impl Progress {
         }
     }
 
-    /// Advances by `n` steps.
-    pub fn inc(&mut self, n: u64) {
-        self.set_position(self.pos.saturating_add(n));
-    }
-
-    /// Prints `line` on stderr without breaking the bar.
-    pub fn println(&self, line: &str) {
-        match &self.bar {
-            Some(b) => b.println(line),
-            None if self.style != Style::Off => eprintln!("{line}"),
-            None => {}
-        }
-    }
-
     /// Ends the indicator: the bar stays on screen with its last state; in
     /// plain-lines mode a last line is printed if any line was.
     pub fn finish(&mut self) {

@@ -1,12 +1,66 @@
 //! `mrsim run`: a whole run, with its progress on stderr and its summary
 //! on stdout.
 
-use crate::cli::RunArgs;
+use crate::cli::{ScenarioArgs, SchedArgs, TransportArg, ZenohArgs};
 use crate::exit::fail;
 use crate::watch::RunWatch;
 use anyhow::Result;
+use clap::Args;
 use mrsim_runtime::Validated;
 use mrsim_runtime::launch::{Event, MAX_RESTARTS, RunRequest};
+
+/// `mrsim run` options.
+#[derive(Debug, Clone, Default, Args)]
+pub struct RunArgs {
+    /// Scenario and overrides.
+    #[command(flatten)]
+    pub scenario: ScenarioArgs,
+    /// Run id (iceoryx2 namespace); default: a fresh one.
+    #[arg(long)]
+    pub run: Option<String>,
+    /// Print only the output folder, not the table.
+    #[arg(long)]
+    pub quiet: bool,
+    /// Restart an agent process that dies while the world runs (same
+    /// command line); it rejoins and drives its robot from where it is.
+    #[arg(long)]
+    pub restart_agents: bool,
+    /// Robots each agent process drives (shm; the scenario's
+    /// `[world] robots_per_agent`, default 1).
+    #[arg(long, value_name = "K")]
+    pub robots_per_agent: Option<u32>,
+    /// World and agents as processes over iceoryx2 (shm), as threads
+    /// of one process over crossbeam channels (inproc), or as processes
+    /// over Zenoh on loopback (zenoh).
+    #[arg(long, value_enum, default_value = "shm")]
+    pub transport: TransportArg,
+    /// With --transport zenoh: where the world listens (default: a free
+    /// loopback port), e.g. tcp/127.0.0.1:7447.
+    #[arg(long, value_name = "ENDPOINT")]
+    pub listen: Option<String>,
+    /// With --transport zenoh: the config file.
+    #[command(flatten)]
+    pub zenoh: ZenohArgs,
+    /// Robots with planner = "ros2": the Zenoh router of the ROS 2 side
+    /// (default tcp/localhost:7447), where `mrsim ros2` connects.
+    #[arg(long, value_name = "ENDPOINT")]
+    pub ros2_connect: Option<String>,
+    /// Robots with planner = "ros2": the ROS domain id.
+    #[arg(long, value_name = "ID")]
+    pub ros2_domain: Option<u32>,
+    /// Scheduling: --cpus LIST, --rt.
+    #[command(flatten)]
+    pub sched: SchedArgs,
+    /// Do not draw plot.svg/png and replay.html.
+    #[arg(long, hide = true)]
+    pub no_report: bool,
+    /// Show the run in a browser while it ticks: serve the live page on
+    /// ADDR (default 127.0.0.1 on a free port; the URL is printed). Another
+    /// address than loopback exposes the page, which has no
+    /// authentication, to the network.
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:0")]
+    pub live: Option<String>,
+}
 
 /// Runs `mrsim run`; returns the exit status.
 pub fn main(args: &RunArgs) -> Result<i32> {
@@ -60,7 +114,7 @@ pub fn main(args: &RunArgs) -> Result<i32> {
     }
     let mut watch = None;
     let outcome = prepared
-        .start(&mut |event| match event {
+        .start(&crate::start::ThisExe, &mut |event| match event {
             Event::Waiting => watch
                 .get_or_insert_with(|| RunWatch::new(&ns, max_ticks, zenoh.clone(), feed.clone()))
                 .update(),
