@@ -516,9 +516,21 @@ pub(crate) fn drive_each(
                       woke: u64,
                       send: &mut SendFn<'_>| {
         let gridded = seats.index(bodies);
+        // One clock read per robot: its work is counted from the wake-up
+        // (the first) or from the end of the robot before it, as the
+        // in-process pool counts it ([`crate::Driver::on_snapshot_among`]).
+        let mut start = woke;
         for (i, planner) in planners.iter_mut().enumerate().take(seats.seats.len()) {
             let (seat, near) = seats.near(i, gridded, bodies);
-            seat.answer(&mut **planner, header, bodies, near, woke, None, send)?;
+            start = seat.answer(
+                &mut **planner,
+                header,
+                bodies,
+                near,
+                woke,
+                Some(start),
+                send,
+            )?;
         }
         Ok(false)
     };

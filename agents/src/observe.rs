@@ -273,6 +273,69 @@ impl NearWalls {
     }
 }
 
+/// What one robot's scan of a snapshot's bodies needs, the same for every
+/// body: which bodies it senses ([`Scan::sense`]).
+struct Scan {
+    me: usize,
+    position: Vec2,
+    sensing_range: f64,
+    radius: f64,
+    /// The heading and the cosine of half the field of view, when it is
+    /// narrower than a full turn.
+    fov: Option<(Vec2, f64)>,
+}
+
+impl Scan {
+    /// Appends to `out` every body of `bodies` (but the robot itself)
+    /// within the sensing range, surface to surface, and the field of view.
+    fn sense<'b>(&self, bodies: impl Iterator<Item = &'b BodyState>, out: &mut Vec<Sensed>) {
+        // The reach of a body of radius zero, for the test below without a
+        // square root.
+        let base = self.sensing_range + self.radius;
+        for b in bodies {
+            // Clearly out of range (centre distance squared well beyond the
+            // range plus both radii): skipped without a square root. Bodies
+            // near the limit go through the exact test below, so what is
+            // sensed does not change. Most bodies end here, before the test
+            // of whether the body is the robot itself.
+            let (dx, dy) = (
+                b.position[0] - self.position.x,
+                b.position[1] - self.position.y,
+            );
+            let reach = (base + b.radius) * (1.0 + 1e-9) + 1e-9;
+            if dx * dx + dy * dy > reach * reach || b.id as usize == self.me {
+                continue;
+            }
+            let p = Vec2::new(b.position[0], b.position[1]);
+            let d = p - self.position;
+            let dist = d.norm();
+            // Sensing range, surface to surface.
+            if dist - b.radius - self.radius > self.sensing_range {
+                continue;
+            }
+            // Field of view around the heading (360 degrees sees all).
+            if let Some((heading, cos_half)) = self.fov
+                && dist > 1e-12
+                && d.dot(&heading) / dist < cos_half
+            {
+                continue;
+            }
+            out.push(Sensed {
+                id: b.id,
+                kind: if b.kind == body_kind::ROBOT {
+                    BodyKind::Robot
+                } else {
+                    BodyKind::Obstacle
+                },
+                position: p,
+                velocity: Vec2::new(b.velocity[0], b.velocity[1]),
+                acceleration: Vec2::zeros(),
+                radius: b.radius,
+            });
+        }
+    }
+}
+
 impl Observer {
     /// An observer for robot `me` of `scenario`, among its walls and
     /// arena ([`walls_of`]).
@@ -359,52 +422,26 @@ impl Observer {
         } else {
             Vec2::new(1.0, 0.0)
         };
-        let half_fov = (spec.field_of_view_deg.min(360.0) / 2.0).to_radians();
-        let cos_half = half_fov.cos();
+        // The field of view's test, only when it is narrower than a full
+        // turn (the cosine is not computed at all otherwise).
+        let fov = (spec.field_of_view_deg < 360.0).then(|| {
+            let half_fov = (spec.field_of_view_deg / 2.0).to_radians();
+            (heading, half_fov.cos())
+        });
+        let scan = Scan {
+            me: self.me,
+            position,
+            sensing_range: spec.sensing_range,
+            radius: spec.radius,
+            fov,
+        };
         self.others.clear();
-        let count = near.map_or(bodies.len(), <[u32]>::len);
-        for k in 0..count {
-            let Some(b) = (match near {
-                None => bodies.get(k),
-                Some(near) => bodies.get(near[k] as usize),
-            }) else {
-                continue;
-            };
-            if b.id as usize == self.me {
-                continue;
-            }
-            // Clearly out of range (centre distance squared well beyond the
-            // range plus both radii): skipped without a square root. Bodies
-            // near the limit go through the exact test below, so what is
-            // sensed does not change.
-            let (dx, dy) = (b.position[0] - position.x, b.position[1] - position.y);
-            let reach = (spec.sensing_range + b.radius + spec.radius) * (1.0 + 1e-9) + 1e-9;
-            if dx * dx + dy * dy > reach * reach {
-                continue;
-            }
-            let p = Vec2::new(b.position[0], b.position[1]);
-            let d = p - position;
-            let dist = d.norm();
-            // Sensing range, surface to surface.
-            if dist - b.radius - spec.radius > spec.sensing_range {
-                continue;
-            }
-            // Field of view around the heading (360 degrees sees all).
-            if spec.field_of_view_deg < 360.0 && dist > 1e-12 && d.dot(&heading) / dist < cos_half {
-                continue;
-            }
-            self.others.push(Sensed {
-                id: b.id,
-                kind: if b.kind == body_kind::ROBOT {
-                    BodyKind::Robot
-                } else {
-                    BodyKind::Obstacle
-                },
-                position: p,
-                velocity: Vec2::new(b.velocity[0], b.velocity[1]),
-                acceleration: Vec2::zeros(),
-                radius: b.radius,
-            });
+        match near {
+            None => scan.sense(bodies.iter(), &mut self.others),
+            Some(near) => scan.sense(
+                near.iter().filter_map(|&k| bodies.get(k as usize)),
+                &mut self.others,
+            ),
         }
         if self.noise > 0.0 {
             for o in &mut self.others {

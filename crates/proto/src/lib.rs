@@ -136,7 +136,10 @@ pub struct CommandMsg {
     /// Force (N in scenario units), velocity, or (v, omega) for
     /// [`command_kind::UNICYCLE`].
     pub value: [f64; 2],
-    /// Time the agent spent in its planner, ns.
+    /// Time the agent spent on the answer, ns: the observation and the
+    /// planner (an agent that plans as it wakes counts from its wake-up
+    /// for the snapshot, or, for a robot after another of the same
+    /// process, from the end of that one's).
     pub compute_ns: u64,
     /// When the agent woke for this tick (CLOCK_MONOTONIC, ns).
     pub woke_ns: u64,

@@ -512,10 +512,16 @@ impl<'a> Loop<'a> {
             let drain_start = self.clock.now();
             self.drain()?;
             own += self.clock.now().saturating_duration_since(drain_start);
+            // All in: nothing else before the tick goes on (the caller
+            // checks the agents' processes and sends the batches, off the
+            // path from the last answer to its taking in).
+            if self.admission.all_answered() || self.link.termination_requested() {
+                return Ok(own);
+            }
             self.check_pids();
             self.recording.rec.send_if_due();
             self.recording.timings.send_if_due();
-            if self.admission.all_answered() || self.link.termination_requested() {
+            if self.admission.all_answered() {
                 return Ok(own);
             }
             let waited = self.clock.now().saturating_duration_since(published);
@@ -609,6 +615,12 @@ impl<'a> Loop<'a> {
                 .jitter
                 .record_ns(pub_instant.saturating_duration_since(at).as_nanos() as u64);
         }
+        // The bodies as they are about to be published, recorded before
+        // the publish (after it the world would do it only once the agents
+        // it wakes are done, see below).
+        self.recording
+            .rec
+            .tick(tick, self.world.time(), self.world.states());
         self.window = self.schedule.window(tick, now_ns());
         let header = SnapshotHeader {
             tick,
@@ -624,18 +636,18 @@ impl<'a> Loop<'a> {
         };
         self.link.expect_answers(tick, self.admission.live());
         self.link.publish_snapshot(&header, self.world.states())?;
-        self.recording
-            .rec
-            .tick(tick, self.world.time(), self.world.states());
-        // Under SCHED_FIFO the agents the doorbell wakes preempt the world
-        // while it publishes: the publish's cost is then the thread's CPU
-        // time, not the wall time.
-        let mut own = if fifo {
-            Duration::from_secs_f64((thread_usage().0 - pub_cpu).max(0.0))
-        } else {
-            self.clock.now().saturating_duration_since(pub_instant)
+        // Straight to the answers. Under SCHED_FIFO the agents the doorbell
+        // wakes preempt the world as it rings, so whatever it did between
+        // the ring and the collecting would wait for them and then delay
+        // the taking in of the last answer; the cost of the publish is then
+        // the thread's CPU time over the publish and the collecting (the
+        // waits' sleep is no CPU time), read once they are over.
+        let published = (!fifo).then(|| self.clock.now().saturating_duration_since(pub_instant));
+        let collected = self.collect(pub_instant)?;
+        let mut own = match published {
+            Some(publish) => publish + collected,
+            None => Duration::from_secs_f64((thread_usage().0 - pub_cpu).max(0.0)),
         };
-        own += self.collect(pub_instant)?;
         // All in: published -> the last command in, on ticks where every
         // live agent answered in time.
         if self.admission.all_answered() && self.admission.got.iter().any(Option::is_some) {
@@ -643,6 +655,9 @@ impl<'a> Loop<'a> {
             self.recording.costs.allin.record_ns(allin);
         }
         let work_start = self.clock.now();
+        self.check_pids();
+        self.recording.rec.send_if_due();
+        self.recording.timings.send_if_due();
         self.apply_commands();
         self.world.step(contacts);
         self.recording
