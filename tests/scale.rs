@@ -431,7 +431,7 @@ fn a_million_robot_scene_is_checked_and_a_run_past_the_memory_available_is_refus
     assert_eq!(o.status.code(), Some(2), "{stderr}");
     for words in [
         "million.toml: this run needs about",
-        "1000000 robots x 53 KB, 1000000 of them sensing the whole scene",
+        "1000000 robots x 20 KB, 1000000 of them sensing the whole scene",
         "MemAvailable",
         "To make it fit: run fewer robots",
         "`sensing_range` shorter than the scene",

@@ -62,11 +62,18 @@ pub(crate) fn join_seats(
     let mut waiting: Vec<usize> = (0..opts.len()).collect();
     let start = Instant::now();
     let mut last_ask: Option<Instant> = None;
+    // Unanswered requests are asked again after half a second, then after
+    // twice as long each time (up to 8 s): a world busy answering 100,000
+    // robots' requests is not sent every one of them again twice a second.
+    let mut ask_every = Duration::from_millis(500);
     loop {
         if link.termination_requested() {
             return Ok(None);
         }
-        if last_ask.is_none_or(|t| t.elapsed() > Duration::from_millis(500)) {
+        if last_ask.is_none_or(|t| t.elapsed() > ask_every) {
+            if last_ask.is_some() {
+                ask_every = (ask_every * 2).min(Duration::from_secs(8));
+            }
             for &i in &waiting {
                 if last_ask.is_none() && opts[i].fault == Some(fault::Fault::JoinTwice) {
                     link.request_join(&reqs[i])?;

@@ -176,7 +176,12 @@ impl NearWalls {
             }
         }
         let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-9);
-        let cell = reach.max(extent / Self::MAX_CELLS).max(1e-9);
+        // No more cells across than about twice the root of the segments:
+        // the grid's memory follows the walls (every robot out of reach of
+        // some wall keeps an index: four arena sides must not cost each of
+        // 100,000 robots a grid of 64 x 64 cells).
+        let across = ((walls.len() as f64).sqrt().ceil() * 2.0).clamp(1.0, Self::MAX_CELLS);
+        let cell = reach.max(extent / across).max(1e-9);
         let dims = [
             ((hi[0] - lo[0]) / cell) as usize + 1,
             ((hi[1] - lo[1]) / cell) as usize + 1,
@@ -363,7 +368,7 @@ impl Observer {
             dt: world.dt,
             // Grown to what the robot senses, not sized for every body: a
             // run of n robots would hold n such buffers.
-            others: Vec::with_capacity(bodies.min(64)),
+            others: Vec::with_capacity(bodies.min(16)),
             estimator: spec
                 .is_some_and(|r| r.velocity_source == VelocitySource::Differenced)
                 .then(VelocityEstimator::new),

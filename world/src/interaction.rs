@@ -273,16 +273,18 @@ impl Interaction {
         ttc.resize(n, f64::INFINITY);
         for i in 0..n {
             let s = &states[i];
-            if !built || !self.grid.near(s.position, reach + s.radius, &mut near) {
+            let after = i as u32 + 1;
+            if !built
+                || !self
+                    .grid
+                    .near_from(s.position, reach + s.radius, after, &mut near)
+            {
                 // No grid (a position not finite): every body.
                 near.clear();
-                near.extend(0..states.len() as u32);
+                near.extend(after..states.len() as u32);
             }
             for &j in &near {
                 let j = j as usize;
-                if j <= i {
-                    continue;
-                }
                 let q = &states[j];
                 let g = gap(s, q);
                 // Farther than the social distance, or not a number.

@@ -25,9 +25,10 @@ use mrsim_scenario::Scenario;
 /// recording thread's buffers), bytes.
 pub const BASE: u64 = 64 << 20;
 /// Each robot: its body, driver, planner and observation, its share of the
-/// snapshot and of the recording, bytes (30 KB measured in a sparse random
-/// scene, 51-55 KB in crowded ones; the larger is taken).
-pub const PER_ROBOT: u64 = 53 << 10;
+/// snapshot and of the recording, bytes (17.5 KB measured in the crowded
+/// crossing: the slope of the peak from 30,000 to 100,000 robots; rounded
+/// up).
+pub const PER_ROBOT: u64 = 20 << 10;
 /// Each body a robot senses and keeps room for (`mrsim_planners::Sensed`).
 pub const SENSED: u64 = 64;
 /// Each agent process's own memory (its proportional set size: its heap,

@@ -269,6 +269,13 @@ impl NeighbourGrid {
     /// ascending; false, with `out` empty, if the grid cannot answer
     /// (none built, `reach` wider than it was built for, `p` not finite).
     pub fn near(&self, p: [f64; 2], reach: f64, out: &mut Vec<u32>) -> bool {
+        self.near_from(p, reach, 0, out)
+    }
+
+    /// [`Self::near`], keeping only the discs of index `first` or more: a
+    /// caller that visits each pair once (i < j) skips the other half
+    /// before it is sorted.
+    pub fn near_from(&self, p: [f64; 2], reach: f64, first: u32, out: &mut Vec<u32>) -> bool {
         out.clear();
         let Some(g) = self.grid else {
             return false;
@@ -298,7 +305,7 @@ impl NeighbourGrid {
             let (idx, _) = self.buckets.bucket(b);
             for (k, &j) in idx.iter().enumerate() {
                 let (x, y) = self.cells[start + k];
-                if (x - cx).abs() <= 1 && (y - cy).abs() <= 1 {
+                if j >= first && (x - cx).abs() <= 1 && (y - cy).abs() <= 1 {
                     out.push(j);
                 }
             }
@@ -388,6 +395,21 @@ mod tests {
                     assert!(out.contains(&(j as u32)));
                 }
             }
+        }
+    }
+
+    #[test]
+    fn neighbours_from_an_index_are_the_neighbours_of_that_index_or_more() {
+        let discs = scatter(300, 9, 20.0);
+        let mut grid = NeighbourGrid::default();
+        assert!(grid.build(discs.iter().copied(), 2.0));
+        let (mut all, mut from) = (Vec::new(), Vec::new());
+        for (i, me) in discs.iter().enumerate() {
+            let first = i as u32 + 1;
+            assert!(grid.near([me[0], me[1]], 2.0, &mut all));
+            assert!(grid.near_from([me[0], me[1]], 2.0, first, &mut from));
+            all.retain(|&j| j >= first);
+            assert_eq!(from, all, "disc {i}");
         }
     }
 

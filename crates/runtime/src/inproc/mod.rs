@@ -187,7 +187,7 @@ pub fn run_scenario(
         out_dir: out_dir.to_path_buf(),
         run_id: run_id.to_string(),
         transport: "inproc".to_string(),
-        start_timeout: Some(Duration::from_secs(60)),
+        start_timeout: Some(start_timeout(n)),
         verbose: std::env::var_os("MRSIM_VERBOSE").is_some(),
     };
     // The world loop in a thread of its own, and this one shows progress
@@ -288,6 +288,15 @@ pub fn run_scenario(
         agent_errors,
         agent_usage,
     })
+}
+
+/// How long the world waits for every in-process robot to join: a minute,
+/// and a millisecond more per robot. Joining costs CPU time per robot
+/// (about 0.1 ms each at 100,000 robots), and on a machine whose CPUs
+/// other work shares a flat minute of wall time ran out before 100,000
+/// robots were in.
+fn start_timeout(robots: usize) -> Duration {
+    Duration::from_secs(60) + Duration::from_millis(robots as u64)
 }
 
 /// The robots each join thread joins: consecutive ranges, a few per CPU
