@@ -131,15 +131,16 @@ def yaw_of(q):
     return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
 
 
-def write_scene(tmp_path, robots, duration=30.0, extra="", arena="arena = { min = [-5.0, -5.0], max = [5.0, 5.0] }"):
+def write_scene(tmp_path, robots, duration=30.0, extra="", arena="arena = { min = [-5.0, -5.0], max = [5.0, 5.0] }",
+                mode="lockstep", dt=0.1):
     body = f"""name = "ros2-test"
 length_unit = "m"
 
 [world]
-dt = 0.1
+dt = {dt}
 substeps = 10
 duration = {duration}
-mode = "lockstep"
+mode = "{mode}"
 seed = 1
 stall_timeout = 5.0
 {arena}
@@ -492,3 +493,56 @@ def test_bad_cmd_vel_is_counted_the_robot_brakes_and_the_world_runs_on(repo, tmp
     for k in ["undecodable", "non_finite", "absurd", "wrong_type", "flooded", "bad_attachment"]:
         assert s[k] > 0, (k, s)
     assert "not a geometry_msgs/msg/Twist" in err and "NaN" in err and "another type" in err, err
+
+
+@pytest.mark.parametrize("mode", ["lockstep", "realtime"])
+def test_one_ros2_agent_drives_ten_robots_every_one_joining_and_answering_every_tick(repo, tmp_path, mode):
+    # Ten robots, one ROS 2 agent: it sends ten join requests, ten ready
+    # commands and, each tick, ten commands to the world at once; every one
+    # must arrive (none lost to a buffer sized for one robot per agent).
+    port = free_port()
+    node = RosNode(port)
+    names = [f"r{i}" for i in range(10)]
+    robots = [
+        {"name": f'"{n}"', "planner": '"ros2"', "radius": 0.2, "max_speed": 1.0, "max_accel": 4.0,
+         "start": f"[{-4.5 + i}, -3.0]", "goal": f"[{-4.5 + i}, 4.0]"}
+        for i, n in enumerate(names)
+    ]
+    duration = 2.0
+    dt = 0.1 if mode == "lockstep" else 0.05
+    scene = write_scene(tmp_path, robots, duration=duration, mode=mode, dt=dt)
+    cmds = {n: node.publisher(f"/{n}/cmd_vel", TYPES["twist"]) for n in names}
+    answered = {n: 0 for n in names}
+
+    def answer(n):
+        def on(k, p, a):
+            # Every odom answered at once: holonomic, 0.5 m/s along +y.
+            cmds[n](twist(0.0, 0.0, 0.5))
+            answered[n] += 1
+        return on
+
+    for n in names:
+        node.subscribe(f"/{n}/odom", TYPES["odom"], answer(n))
+    out = tmp_path / "out"
+    proc = start_run(repo, scene, out, port)
+    code, _, err = finish(proc, timeout=240)
+    node.close()
+    assert code == 0, err
+    metrics = json.loads((out / "metrics.json").read_text())
+    ticks = round(duration / dt)
+    assert metrics["agents_lost"] == 0, err
+    assert all(metrics["robots"][n]["lost"] == 0 for n in names), metrics["robots"]
+    events = [json.loads(line) for line in (out / "events.jsonl").open()]
+    joined = {e["robot"] for e in events if e["type"] == "agent_joined"}
+    assert joined == set(names), events[:20]
+    stats = json.loads((out / "ros2.json").read_text())["robots"]
+    rows = list(csv.DictReader((out / "trajectory.csv").open()))
+    for n in names:
+        s = stats[n]
+        assert s["accepted"] > 0 and s["undecodable"] == s["wrong_type"] == 0, (n, s)
+        if mode == "lockstep":
+            # Every tick answered, each with a cmd_vel sent after its /clock.
+            assert s["ticks"] == ticks and s["missed"] == 0, (n, s)
+        mine = [r for r in rows if r["body"] == n]
+        assert float(mine[-1]["y"]) > -3.0 + 0.2, (n, mine[-1])
+        assert answered[n] > 0
