@@ -11,8 +11,12 @@ node receiving that robot's next odom: in lockstep, the world's step plus
 both hops; in realtime, the node answers at once, so the next odom comes
 with the next tick: one period plus the lateness of the tick's odom
 (printed as well, as the trip minus one period). Printed: count, median,
-90th and 99th percentile, max, in ms.
+90th and 99th percentile, max, in ms; then whether the run was whole: the
+robots that joined, the agents the world lost, and the ROS 2 agent's
+counts (cmd_vel taken, lockstep ticks missed, realtime ticks stale).
 """
+
+import json
 
 import argparse
 import pathlib
@@ -107,6 +111,11 @@ radius = 0.2
         )
         if r.returncode != 0:
             sys.exit(f"mrsim run failed:\n{r.stderr}")
+        out = pathlib.Path(d) / "out"
+        metrics = json.loads((out / "metrics.json").read_text())
+        counts = json.loads((out / "ros2.json").read_text())["robots"].values()
+        joined = {json.loads(line).get("robot") for line in (out / "events.jsonl").open()
+                  if '"agent_joined"' in line}
     del subs
     session.close()
     t = sorted(x * 1e3 for x in trips)
@@ -119,6 +128,11 @@ radius = 0.2
         p = 1e3 / a.hz
         print(f"  minus one period ({p:.1f} ms): median {q(0.5) - p:.2f} ms, "
               f"p99 {q(0.99) - p:.2f} ms, max {t[-1] - p:.2f} ms")
+    ticks = metrics["ticks"]
+    print(f"  {len(joined)} of {a.robots} robots joined, {metrics['agents_lost']} agents lost; "
+          f"{ticks} ticks, {len(t)} of {a.robots * (ticks - 1)} odoms answered and followed by the next; "
+          f"cmd_vel taken {sum(c['accepted'] for c in counts)}, "
+          f"ticks missed {sum(c['missed'] for c in counts)}, stale {sum(c['stale'] for c in counts)}")
 
 
 if __name__ == "__main__":

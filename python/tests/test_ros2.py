@@ -1,11 +1,12 @@
 """ROS 2 over rmw_zenoh without a ROS install: this file plays a ROS 2 node
 the way rmw_zenoh_cpp makes one, with implementations nobody on mrsim wrote:
 `eclipse-zenoh` (the transport, and zenoh.ext's serializer for the 33-byte
-attachment) and `rosbags` (CDR of the ROS 2 Jazzy message definitions and
-their RIHS01 type hashes). Against a real `mrsim run` of robots with
+attachment and advanced subscriber for transient-local topics), `rosbags`
+(CDR of the ROS 2 Jazzy message definitions and their RIHS01 type hashes)
+and `xxhash` (XXH3-128, from which rmw_zenoh takes a publisher's GID). Against a real `mrsim run` of robots with
 planner = "ros2".
 
-Both packages are required (CI installs them): a missing one fails here,
+These packages are required (CI installs them): a missing one fails here,
 it is never skipped.
 """
 
@@ -20,6 +21,7 @@ import threading
 import time
 
 import pytest
+import xxhash
 import zenoh
 from rosbags.typesys import Stores, get_typestore
 from zenoh.ext import Int64, z_deserialize, z_serialize
@@ -131,15 +133,16 @@ def yaw_of(q):
     return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
 
 
-def write_scene(tmp_path, robots, duration=30.0, extra="", arena="arena = { min = [-5.0, -5.0], max = [5.0, 5.0] }"):
+def write_scene(tmp_path, robots, duration=30.0, extra="", arena="arena = { min = [-5.0, -5.0], max = [5.0, 5.0] }",
+                mode="lockstep", dt=0.1):
     body = f"""name = "ros2-test"
 length_unit = "m"
 
 [world]
-dt = 0.1
+dt = {dt}
 substeps = 10
 duration = {duration}
-mode = "lockstep"
+mode = "{mode}"
 seed = 1
 stall_timeout = 5.0
 {arena}
@@ -334,12 +337,24 @@ def test_every_message_mrsim_sends_decodes_with_rosbags_to_the_values_of_traject
     assert k == key(0, "/r0/scan", TYPES["scan"])
     assert len(scan.ranges) == 36 and scan.range_max == pytest.approx(3.0)
     assert scan.angle_max == pytest.approx(scan.angle_min + 35 * scan.angle_increment, rel=1e-5)
-    # Every sample carries rmw_zenoh's attachment: seq from 1 per publisher.
+    # Every sample carries rmw_zenoh's attachment: seq from 1 per publisher,
+    # the GID XXH3-128 of the publisher's liveliness token (low 64 bits
+    # first, each half little-endian: the 128-bit value little-endian).
+    tokens = json.loads((out / "ros2.json").read_text())["tokens"]
+
+    def gid_of(k):
+        parts = k.split("/")
+        topic = "%".join(parts[1:-2])
+        mine = [t for t in tokens if f"/MP/%/%/mrsim_r0/%{topic}/{parts[-2]}/{parts[-1]}/" in t]
+        assert len(mine) == 1, (k, tokens)
+        return xxhash.xxh3_128_intdigest(mine[0].encode()).to_bytes(16, "little")
+
     firsts = {}
     for k, a in atts:
         assert a is not None and len(a) == 33, (k, a)
         seq, stamp, gid = z_deserialize(tuple[Int64, Int64, bytes], zenoh.ZBytes(a))
         assert len(gid) == 16 and stamp > 1.6e18
+        assert gid == gid_of(k), k
         firsts.setdefault(k, seq)
     assert 1 in firsts.values()
 
@@ -492,3 +507,188 @@ def test_bad_cmd_vel_is_counted_the_robot_brakes_and_the_world_runs_on(repo, tmp
     for k in ["undecodable", "non_finite", "absurd", "wrong_type", "flooded", "bad_attachment"]:
         assert s[k] > 0, (k, s)
     assert "not a geometry_msgs/msg/Twist" in err and "NaN" in err and "another type" in err, err
+
+
+@pytest.mark.parametrize("mode", ["lockstep", "realtime"])
+def test_one_ros2_agent_drives_ten_robots_every_one_joining_and_answering_every_tick(repo, tmp_path, mode):
+    # Ten robots, one ROS 2 agent: it sends ten join requests, ten ready
+    # commands and, each tick, ten commands to the world at once; every one
+    # must arrive (none lost to a buffer sized for one robot per agent).
+    port = free_port()
+    node = RosNode(port)
+    names = [f"r{i}" for i in range(10)]
+    robots = [
+        {"name": f'"{n}"', "planner": '"ros2"', "radius": 0.2, "max_speed": 1.0, "max_accel": 4.0,
+         "start": f"[{-4.5 + i}, -3.0]", "goal": f"[{-4.5 + i}, 4.0]"}
+        for i, n in enumerate(names)
+    ]
+    duration = 2.0
+    dt = 0.1 if mode == "lockstep" else 0.05
+    scene = write_scene(tmp_path, robots, duration=duration, mode=mode, dt=dt)
+    cmds = {n: node.publisher(f"/{n}/cmd_vel", TYPES["twist"]) for n in names}
+    answered = {n: 0 for n in names}
+
+    def answer(n):
+        def on(k, p, a):
+            # Every odom answered at once: holonomic, 0.5 m/s along +y.
+            cmds[n](twist(0.0, 0.0, 0.5))
+            answered[n] += 1
+        return on
+
+    for n in names:
+        node.subscribe(f"/{n}/odom", TYPES["odom"], answer(n))
+    out = tmp_path / "out"
+    proc = start_run(repo, scene, out, port)
+    code, _, err = finish(proc, timeout=240)
+    node.close()
+    assert code == 0, err
+    metrics = json.loads((out / "metrics.json").read_text())
+    ticks = round(duration / dt)
+    assert metrics["agents_lost"] == 0, err
+    assert all(metrics["robots"][n]["lost"] == 0 for n in names), metrics["robots"]
+    events = [json.loads(line) for line in (out / "events.jsonl").open()]
+    joined = {e["robot"] for e in events if e["type"] == "agent_joined"}
+    assert joined == set(names), events[:20]
+    stats = json.loads((out / "ros2.json").read_text())["robots"]
+    rows = list(csv.DictReader((out / "trajectory.csv").open()))
+    for n in names:
+        s = stats[n]
+        assert s["accepted"] > 0 and s["undecodable"] == s["wrong_type"] == 0, (n, s)
+        if mode == "lockstep":
+            # Every tick answered, each with a cmd_vel sent after its /clock.
+            assert s["ticks"] == ticks and s["missed"] == 0, (n, s)
+        mine = [r for r in rows if r["body"] == n]
+        assert float(mine[-1]["y"]) > -3.0 + 0.2, (n, mine[-1])
+        assert answered[n] > 0
+
+
+BAD_KINDS = ["undecodable", "non_finite", "absurd", "wrong_type", "flooded"]
+
+
+@pytest.mark.parametrize("kind", BAD_KINDS)
+def test_each_kind_of_bad_cmd_vel_alone_makes_the_robot_brake_while_the_world_runs_on(repo, tmp_path, kind):
+    # Realtime: each tick the agent sends the robot's last cmd_vel. From
+    # t = 1 s every odom is answered by a good twist (0.6 m/s) and right
+    # after it one bad sample of `kind` (a flood: 300 good twists without
+    # attachments a tick); if that sample were ignored the robot would go on
+    # at 0.6 m/s, so its stopping is this kind's doing.
+    port = free_port()
+    node = RosNode(port)
+    duration = 4.0
+    scene = write_scene(
+        tmp_path, [dict(UNICYCLE, name='"r0"', start="[-4.0, 0.0]", goal="[4.0, 0.0]")],
+        duration=duration, mode="realtime",
+    )
+    cmd = node.publisher("/r0/cmd_vel", TYPES["twist"])
+    other = node.publisher("/r0/cmd_vel", TYPES["clock"])
+    Clock = TS.types["rosgraph_msgs/msg/Clock"]
+    Time = TS.types["builtin_interfaces/msg/Time"]
+    bad = {
+        "undecodable": lambda: cmd(b"\x00\x01\x00\x00garbage"),
+        "non_finite": lambda: cmd(twist(float("nan"), 0.0)),
+        "absurd": lambda: cmd(twist(1e12, 0.0)),
+        "wrong_type": lambda: other(bytes(TS.serialize_cdr(Clock(clock=Time(sec=1, nanosec=0)), TYPES["clock"]))),
+        "flooded": lambda: [cmd(twist(0.6, 0.0), attachment=False) for _ in range(300)],
+    }[kind]
+
+    def on_odom(k, p, a):
+        o = TS.deserialize_cdr(p, TYPES["odom"])
+        t = o.header.stamp.sec + o.header.stamp.nanosec * 1e-9
+        cmd(twist(0.6, 0.0))
+        if t >= 1.0:
+            bad()
+
+    node.subscribe("/r0/odom", TYPES["odom"], on_odom)
+    out = tmp_path / "out"
+    proc = start_run(repo, scene, out, port)
+    code, _, err = finish(proc)
+    node.close()
+    assert code == 0, err
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["agents_lost"] == 0, metrics
+    rows = [r for r in csv.DictReader((out / "trajectory.csv").open()) if r["body"] == "r0"]
+    # The world ran to the end of the scene.
+    assert float(rows[-1]["time"]) == pytest.approx(duration, abs=0.11), rows[-1]
+    speed = {round(float(r["time"]), 6): math.hypot(float(r["vx"]), float(r["vy"])) for r in rows}
+    before = [v for t, v in speed.items() if 0.5 <= t < 1.0]
+    after = [v for t, v in speed.items() if t >= 2.5]
+    assert before and max(before) > 0.5, speed
+    assert after and max(after) < 0.05, speed
+    s = json.loads((out / "ros2.json").read_text())["robots"]["r0"]
+    assert s[kind] > 0, s
+    assert all(s[k] == 0 for k in BAD_KINDS if k != kind), s
+    assert s["accepted"] > 0, s
+
+
+def test_a_subscriber_that_comes_after_the_map_was_published_still_gets_it(repo, tmp_path):
+    # /map is transient local: published once, kept in the publisher's
+    # cache. A subscriber declared later gets it the way rmw_zenoh's
+    # transient-local subscriber does (eclipse-zenoh's AdvancedSubscriber
+    # with history and late-publisher detection, as rmw_zenoh declares
+    # it), while a volatile subscriber declared at the same time gets
+    # nothing (the map is not published again).
+    port = free_port()
+    node = RosNode(port)
+    maps = (repo / "scenarios" / "maps" / "office.yaml").resolve()
+    scene = write_scene(
+        tmp_path,
+        [dict(UNICYCLE, name='"r0"', start="[-7.5, 5.5]", goal="[-7.0, 5.5]")],
+        duration=6.0,
+        extra=f'\n[map]\nfile = "{maps}"\n',
+        arena="",
+        mode="realtime",
+    )
+    clocks = []
+    node.subscribe("/clock", TYPES["clock"], lambda k, p, a: clocks.append(1))
+    out = tmp_path / "out"
+    proc = start_run(repo, scene, out, port)
+    late, volatile, tokens = [], [], set()
+    try:
+        # The run is under way: the map went out before its first tick.
+        deadline = time.monotonic() + 60
+        while len(clocks) < 10:
+            assert proc.poll() is None and time.monotonic() < deadline, proc.poll()
+            time.sleep(0.05)
+        mk = key(0, "/map", TYPES["map"])
+        for reply in node.session.liveliness().get(f"{mk}/@adv/**", timeout=2.0):
+            if reply.ok is not None:
+                tokens.add(str(reply.ok.key_expr))
+        # Held: dropping a subscriber undeclares it.
+        keep = [
+            node.session.declare_subscriber(mk, lambda s: volatile.append(1)),
+            zenoh.ext.declare_advanced_subscriber(
+                node.session, mk,
+                lambda s: late.append((str(s.key_expr), s.payload.to_bytes(),
+                                       s.attachment.to_bytes() if s.attachment is not None else None)),
+                history=zenoh.ext.HistoryConfig(detect_late_publishers=True, max_samples=1),
+                recovery=zenoh.ext.RecoveryConfig(heartbeat=True),
+                subscriber_detection=True,
+            ),
+        ]
+        until = time.monotonic() + 10
+        while not late and proc.poll() is None and time.monotonic() < until:
+            time.sleep(0.05)
+    except BaseException:
+        stop(proc)
+        node.close()
+        raise
+    code, _, err = finish(proc)
+    node.close()
+    assert code == 0, err
+    assert late, err
+    k, payload, att = late[0]
+    assert k == mk
+    g = TS.deserialize_cdr(payload, TYPES["map"])
+    assert g.header.frame_id == "map" and len(g.data) == g.info.width * g.info.height > 0
+    # rmw_zenoh's attachment: the first sample of the publisher.
+    seq, stamp, gid = z_deserialize(tuple[Int64, Int64, bytes], zenoh.ZBytes(att))
+    assert seq == 1 and len(gid) == 16
+    assert volatile == [], "the map was published again"
+    # The cache's token: zenoh-ext's form, under the map's key.
+    assert len(tokens) == 1, tokens
+    t = tokens.pop()
+    assert t.startswith(f"{mk}/@adv/pub/") and t.endswith("/_"), t
+    stats = json.loads((out / "ros2.json").read_text())
+    assert t in stats["tokens"]
+    assert any(x.endswith("%map/nav_msgs::msg::dds_::OccupancyGrid_/"
+                          f"{TS.hash_rihs01(TYPES['map'])}/:1:,1:,:,:,,") for x in stats["tokens"]), stats["tokens"]

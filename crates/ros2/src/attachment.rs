@@ -73,20 +73,24 @@ impl Attachment {
     }
 }
 
-/// A publisher's GID: 16 bytes that differ between publishers. rmw_zenoh
-/// hashes the publisher's liveliness token (XXH3-128); any 16 bytes unique
-/// to the publisher serve, and mrsim takes the FNV-1a 128-bit hash of the
-/// token (Fowler, Noll, Vo, "The FNV Non-Cryptographic Hash Algorithm",
-/// IETF draft-eastlake-fnv).
+/// A publisher's GID, as rmw_zenoh computes it: the XXH3-128 hash (seed
+/// 0, the default secret) of the publisher's liveliness token, its low 64
+/// bits then its high 64 bits, each little-endian (`memcpy` of
+/// `XXH128_hash_t::low64` and `::high64` on a little-endian host).
+///
+/// From rmw_zenoh (<https://github.com/ros2/rmw_zenoh>),
+/// `rmw_zenoh_cpp/src/detail/liveliness_utils.cpp`, `Entity::Entity` (at
+/// commit 3411fdec149fe0c932f24d4d79ef908eb81d7482: "we hash the complete
+/// std::string that comprises the liveliness keyexpression into a GID"),
+/// with `simplified_xxhash3.cpp` (xxHash's XXH3_128bits, extracted); the
+/// attachment carries it (`rmw_publisher_data.cpp` at commit
+/// 3e19ec730c529035a648aec80c0ae0a056943b8c: `entity_->copy_gid()`). The
+/// hash came in with "Add the GID hash" (#298, commit
+/// 97aed4819677b9825b20bb44a01707f42843e06a); some releases in between
+/// put a random GID in the attachment instead (`generate_random_gid`),
+/// which no subscriber can check, so the hash is the form to match.
 pub fn gid_of(token: &str) -> [u8; 16] {
-    const OFFSET: u128 = 0x6c62272e07bb014262b821756295c58d;
-    const PRIME: u128 = 0x0000000001000000000000000000013B;
-    let mut h = OFFSET;
-    for b in token.bytes() {
-        h ^= u128::from(b);
-        h = h.wrapping_mul(PRIME);
-    }
-    h.to_le_bytes()
+    twox_hash::XxHash3_128::oneshot(token.as_bytes()).to_le_bytes()
 }
 
 #[cfg(test)]
@@ -120,10 +124,15 @@ mod tests {
     #[test]
     fn gids_of_different_tokens_differ() {
         assert_ne!(gid_of("@ros2_lv/0/a/0/1/MP"), gid_of("@ros2_lv/0/a/0/2/MP"));
-        // FNV-1a 128 of the empty string is its offset basis.
-        assert_eq!(
-            gid_of(""),
-            0x6c62272e07bb014262b821756295c58du128.to_le_bytes()
-        );
+    }
+
+    #[test]
+    fn a_gid_is_xxh3_128_of_the_token_low_half_first() {
+        // XXH3-128 of the empty input (seed 0) is
+        // 0x99aa06d3014798d86001c324468d497f (xxHash's own test vector):
+        // low64 0x6001c324468d497f first, then high64, each little-endian.
+        let g = gid_of("");
+        assert_eq!(&g[..8], &0x6001c324468d497fu64.to_le_bytes());
+        assert_eq!(&g[8..], &0x99aa06d3014798d8u64.to_le_bytes());
     }
 }

@@ -2,6 +2,26 @@
 //! token for the node and one for each publisher and subscriber; samples
 //! under the topic's key expression with the 33-byte attachment.
 //!
+//! A transient-local publisher keeps its last `depth` samples for
+//! subscribers that come later, as rmw_zenoh's does: rmw_zenoh
+//! (`rmw_zenoh_cpp/src/detail/rmw_publisher_data.cpp` at commit
+//! 3e19ec730c529035a648aec80c0ae0a056943b8c, `PublisherData::make`)
+//! declares a Zenoh `AdvancedPublisher` with a cache of `depth` samples and
+//! publisher detection, and its transient-local subscribers
+//! (`rmw_subscription_data.cpp`, `SubscriptionData::init`) an
+//! `AdvancedSubscriber` with history (`max_samples` = depth) that detects
+//! late publishers. On the wire (zenoh-ext 1.10, `advanced_publisher.rs`,
+//! `advanced_cache.rs`) that publisher is a queryable and a liveliness
+//! token on `<key>/@adv/pub/<zid>/<eid>/_`, answering a query with the
+//! cached samples under `<key>`; the subscriber queries `<key>/@adv/**`
+//! when it starts and each publisher's key when its token appears. mrsim
+//! declares the same queryable and token with the zenoh crate's stable API
+//! (no zenoh-ext, whose advanced publisher needs zenoh's `unstable`
+//! feature): what it cannot add is zenoh's source info (publisher id and
+//! sequence number, an unstable API) on each sample, so a late subscriber
+//! may be handed the cached sample twice (once per query) and there is no
+//! miss-detection heartbeat.
+//!
 //! The session is a Zenoh peer that connects where it is told (a router,
 //! `rmw_zenohd`, by default `tcp/localhost:7447` as rmw_zenoh's own
 //! sessions do) with multicast scouting off, as in rmw_zenoh's
@@ -10,7 +30,9 @@
 
 use crate::attachment::{Attachment, gid_of};
 use crate::names::{EntityKind, MsgType, NodeInfo, Qos, endpoint_token, node_token, topic_key};
+use std::collections::VecDeque;
 use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
 use std::time::{SystemTime, UNIX_EPOCH};
 use zenoh::Wait;
 use zenoh::liveliness::LivelinessToken;
@@ -115,6 +137,19 @@ pub fn config(opts: &NodeOptions) -> Result<zenoh::Config, NodeError> {
     Ok(cfg)
 }
 
+/// The samples a transient-local publisher keeps: (payload, attachment),
+/// the newest last.
+type Cached = Arc<Mutex<VecDeque<(Vec<u8>, Vec<u8>)>>>;
+
+/// A transient-local publisher's cache and what serves it.
+struct Cache {
+    samples: Cached,
+    depth: usize,
+    key: String,
+    _queryable: zenoh::query::Queryable<()>,
+    _token: LivelinessToken,
+}
+
 /// A publisher of one topic.
 pub struct Publisher {
     publisher: zenoh::pubsub::Publisher<'static>,
@@ -122,6 +157,7 @@ pub struct Publisher {
     seq: i64,
     gid: [u8; 16],
     token: String,
+    cache: Option<Cache>,
     _token: LivelinessToken,
 }
 
@@ -146,9 +182,18 @@ impl Publisher {
             gid: self.gid,
         };
         self.seq += 1;
+        let att = att.encode().to_vec();
+        if let Some(c) = &self.cache
+            && let Ok(mut q) = c.samples.lock()
+        {
+            while q.len() >= c.depth {
+                q.pop_front();
+            }
+            q.push_back((payload.clone(), att.clone()));
+        }
         self.publisher
             .put(payload)
-            .attachment(att.encode().to_vec())
+            .attachment(att)
             .wait()
             .map_err(|e| NodeError::Put {
                 topic: self.topic.clone(),
@@ -160,6 +205,25 @@ impl Publisher {
     pub fn token(&self) -> &str {
         &self.token
     }
+
+    /// Its GID (as its samples' attachments carry it).
+    pub fn gid(&self) -> [u8; 16] {
+        self.gid
+    }
+
+    /// A transient-local publisher's cache key expression
+    /// (`<key>/@adv/pub/<zid>/<eid>/_`), where late subscribers query it and
+    /// its cache's liveliness token sits; `None` for a volatile one.
+    pub fn cache_key(&self) -> Option<&str> {
+        self.cache.as_ref().map(|c| c.key.as_str())
+    }
+}
+
+/// The key expression of a transient-local publisher's cache, as zenoh-ext
+/// 1.10's `AdvancedPublisher` forms it (sequenced by number, no metadata):
+/// `<key>/@adv/pub/<zid>/<eid>/_`.
+pub fn cache_key(key: &str, zid: &str, eid: u32) -> String {
+    format!("{key}/@adv/pub/{zid}/{eid}/_")
 }
 
 /// A subscriber: dropping it undeclares it.
@@ -253,9 +317,14 @@ impl Node {
         let token = endpoint_token(&self.info, id, EntityKind::Publisher, topic, ty, &qos);
         let publisher = self
             .session
-            .declare_publisher(key)
+            .declare_publisher(key.clone())
             .wait()
             .map_err(|e| declare_err(&format!("publisher of {topic}"), e))?;
+        let cache = if qos.transient_local {
+            Some(self.cache(&key, id, qos.depth.max(1) as usize, topic)?)
+        } else {
+            None
+        };
         let lv = self
             .session
             .liveliness()
@@ -270,7 +339,54 @@ impl Node {
             seq: 1,
             gid: gid_of(&token),
             token,
+            cache,
             _token: lv,
+        })
+    }
+
+    /// The cache of a transient-local publisher of `key` (entity `eid`):
+    /// a queryable that answers with the kept samples under `key`, and a
+    /// liveliness token by which subscribers detect it.
+    fn cache(&self, key: &str, eid: u32, depth: usize, topic: &str) -> Result<Cache, NodeError> {
+        let at = cache_key(key, &self.info.zid, eid);
+        let samples: Cached = Arc::default();
+        let kept = samples.clone();
+        let reply_key = key.to_string();
+        let queryable = self
+            .session
+            .declare_queryable(at.clone())
+            .complete(true)
+            .callback(move |q: zenoh::query::Query| {
+                // Copied out: a reply may wait on the network, a put must not
+                // wait on it.
+                let Ok(all) = kept.lock().map(|q| q.clone()) else {
+                    return;
+                };
+                for (payload, att) in all {
+                    // A query that does not accept replies under another
+                    // key than its own is refused by zenoh: nothing to do.
+                    let _ = q.reply(reply_key.clone(), payload).attachment(att).wait();
+                }
+            })
+            .wait()
+            .map_err(|e| declare_err(&format!("cache of the publisher of {topic}"), e))?;
+        let token = self
+            .session
+            .liveliness()
+            .declare_token(at.clone())
+            .wait()
+            .map_err(|e| {
+                declare_err(
+                    &format!("liveliness token of the cache of the publisher of {topic}"),
+                    e,
+                )
+            })?;
+        Ok(Cache {
+            samples,
+            depth,
+            key: at,
+            _queryable: queryable,
+            _token: token,
         })
     }
 
@@ -334,6 +450,18 @@ mod tests {
         );
         assert!(cfg.get_json("mode").unwrap().contains("peer"));
         assert_eq!(cfg.get_json("scouting/multicast/enabled").unwrap(), "false");
+    }
+
+    #[test]
+    fn a_transient_local_publishers_cache_sits_under_its_key_as_zenoh_ext_puts_it() {
+        assert_eq!(
+            cache_key(
+                "0/map/nav_msgs::msg::dds_::OccupancyGrid_/RIHS01_ab",
+                "1f2e",
+                3
+            ),
+            "0/map/nav_msgs::msg::dds_::OccupancyGrid_/RIHS01_ab/@adv/pub/1f2e/3/_"
+        );
     }
 
     #[test]

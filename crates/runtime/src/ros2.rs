@@ -55,9 +55,6 @@ pub const STALE_AFTER: Duration = Duration::from_millis(500);
 /// folder.
 pub const STATS_FILE: &str = "ros2.json";
 
-/// How often the map is published again (for late subscribers).
-const MAP_EVERY: Duration = Duration::from_secs(1);
-
 /// What `mrsim ros2` is asked to do.
 #[derive(Debug, Clone, Default)]
 pub struct Ros2Request {
@@ -441,6 +438,9 @@ impl Declared {
     ) -> Result<Publisher, Ros2Error> {
         let p = node.publisher(topic, ty, qos)?;
         self.tokens.push(p.token().to_string());
+        if let Some(cache) = p.cache_key() {
+            self.tokens.push(cache.to_string());
+        }
         self.keys.push(names::topic_key(self.domain, topic, ty));
         Ok(p)
     }
@@ -453,7 +453,8 @@ pub struct Ros2Stats {
     /// Per robot name.
     pub robots: std::collections::BTreeMap<String, CmdCounts>,
     /// The node's liveliness token and every publisher's and
-    /// subscriber's, as declared.
+    /// subscriber's (and a transient-local publisher's cache's), as
+    /// declared.
     pub tokens: Vec<String>,
     /// The key expression of every topic, as published or subscribed.
     pub keys: Vec<String>,
@@ -508,17 +509,23 @@ pub fn run(req: &Ros2Request) -> Result<Ros2Stats, Ros2Error> {
         },
     )?;
     let mut tf = declared.publisher(&mut node, "/tf", &names::TF_MESSAGE, Qos::reliable(100))?;
-    let mut map_pub = match &grid {
-        Some(_) => Some(declared.publisher(
-            &mut node,
-            "/map",
-            &names::OCCUPANCY_GRID,
-            Qos {
-                best_effort: false,
-                transient_local: true,
-                depth: 1,
-            },
-        )?),
+    // Transient local: published once, kept in the publisher's cache for
+    // the subscribers that come later (as rmw_zenoh's does).
+    let _map_pub = match &grid {
+        Some(g) => {
+            let mut p = declared.publisher(
+                &mut node,
+                "/map",
+                &names::OCCUPANCY_GRID,
+                Qos {
+                    best_effort: false,
+                    transient_local: true,
+                    depth: 1,
+                },
+            )?;
+            p.put(g.encode())?;
+            Some(p)
+        }
         None => None,
     };
     let inbox = Arc::new(Inbox {
@@ -574,19 +581,8 @@ pub fn run(req: &Ros2Request) -> Result<Ros2Stats, Ros2Error> {
         .filter_map(|(id, name)| req.robots.iter().position(|r| *r == name).map(|i| (id, i)))
         .collect();
 
-    let mut map_sent: Option<Instant> = None;
-    let mut publish_map = |map_pub: &mut Option<Publisher>| -> Result<(), Ros2Error> {
-        if let (Some(p), Some(g)) = (map_pub.as_mut(), &grid)
-            && map_sent.is_none_or(|t| t.elapsed() >= MAP_EVERY)
-        {
-            p.put(g.encode())?;
-            map_sent = Some(Instant::now());
-        }
-        Ok(())
-    };
     let mut last_tick = None;
     let exit = loop {
-        publish_map(&mut map_pub)?;
         let obs = match live.next(link.as_mut(), Duration::from_millis(100))? {
             Next::Observation(o) => o,
             Next::Idle => continue,

@@ -89,6 +89,12 @@ pub fn serve(
         // earlier world of the same run id left behind.
         crate::launch::claim_namespace(&ns)?;
     }
+    // The ROS 2 agent drives every robot with planner `ros2` from one
+    // process: it sends that many join requests, ready commands and
+    // commands at once, and the world's buffers for one agent's must hold
+    // them all (else the surplus is overwritten: robots that never join,
+    // lockstep ticks that wait out the stall timeout).
+    let ros2_group = validated.ros2_robots().len();
     let (scenario, world) = validated.into_world();
     let setup_len = serde_json::to_vec(&serde_json::json!({
         "run_id": run_id, "out_dir": dir, "scenario": scenario
@@ -98,7 +104,9 @@ pub fn serve(
     let bodies = scenario.robots.len() + scenario.obstacles.len();
     let cap = Capacity {
         robots: scenario.robots.len(),
-        group: scenario.world.robots_per_agent.max(1) as usize,
+        group: (scenario.world.robots_per_agent as usize)
+            .max(ros2_group)
+            .max(1),
     };
     let create = |source| WorldError::Create {
         run_id: run_id.to_string(),
