@@ -1,9 +1,10 @@
 //! Robots that arrive in maps: the shipped office scene of TurtleBot3-like
 //! differential drives with `route = "shortest"` and dwa from the scan, the
 //! same with dwa on true states and with orca; two robots started touching
-//! get apart and arrive; the route is written and drawn; unreachable goals,
-//! a look-ahead at the goal tolerance and a scan planner without a scanner
-//! are refused with the file, the line and why (exit 2).
+//! get apart and arrive; two passing close keep their padding; the route
+//! is written and drawn; unreachable goals, a look-ahead at the goal
+//! tolerance and a scan planner without a scanner are refused with the
+//! file, the line and why (exit 2).
 
 mod common;
 use common::*;
@@ -201,6 +202,52 @@ fn two_differential_drives_started_touching_get_apart_and_arrive() {
                 "{obstacles}: {r}: {m:#}"
             );
         }
+    }
+}
+
+#[test]
+fn two_differential_drives_grazing_past_each_other_keep_the_padding() {
+    // Pioneer-like, head-on on lines 0.5 m apart: going straight, their
+    // discs (radius 0.25) would just touch. dwa keeps its padding (a
+    // quarter of the radius, 0.0625 m) from the other, from true states
+    // and from the scan alike, and both arrive.
+    for obstacles in ["truth", "scan"] {
+        let src = format!(
+            "[world]\nduration = 40.0\narena = {{ min = [-4.0, -3.0], max = [4.0, 3.0] }}\n\
+             [defaults]\nplanner = \"dwa\"\nparams = {{ obstacles = \"{obstacles}\" }}\n\
+             kinematics = \"unicycle\"\nradius = 0.25\nmax_speed = 0.6\nmax_accel = 1.0\n\
+             max_angular_speed = 1.8\nmax_angular_accel = 3.0\ngoal_tolerance = 0.2\n\
+             sensor = {{ kind = \"lidar\", beams = 180, range = 8.0 }}\n\
+             [[robot]]\nname = \"a\"\nstart = [-3.0, 0.25]\ngoal = [3.0, 0.25]\n\
+             [[robot]]\nname = \"b\"\nstart = [3.0, -0.25]\ngoal = [-3.0, -0.25]\n"
+        );
+        let file = scenario_file(&format!("graze-{obstacles}"), &src);
+        let out = run_lockstep(&file, &format!("grz-{obstacles}"), &[]);
+        let m = metrics(&out);
+        for r in ["a", "b"] {
+            assert_eq!(
+                m["robots"][r]["reached_goal"], true,
+                "{obstacles}: {r}: {m:#}"
+            );
+        }
+        // Per tick, the two centres (trajectory.csv: tick, time, body,
+        // kind, x, y, ...).
+        let text = std::fs::read_to_string(out.join("trajectory.csv")).expect("trajectory.csv");
+        let mut at: std::collections::BTreeMap<u64, [Option<[f64; 2]>; 2]> = Default::default();
+        for line in text.lines().skip(1) {
+            let f: Vec<&str> = line.split(',').collect();
+            let k = ["a", "b"].iter().position(|n| *n == f[2]);
+            if let Some(k) = k {
+                let p = [f[4].parse().expect("x"), f[5].parse().expect("y")];
+                at.entry(f[0].parse().expect("tick")).or_default()[k] = Some(p);
+            }
+        }
+        let gap = at
+            .values()
+            .filter_map(|[a, b]| Some((a.as_ref()?, b.as_ref()?)))
+            .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]) - 0.5)
+            .fold(f64::INFINITY, f64::min);
+        assert!(gap >= 0.0625, "{obstacles}: the discs came within {gap}");
     }
 }
 

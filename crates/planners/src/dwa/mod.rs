@@ -106,7 +106,17 @@
 //! return may be another robot coming the other way, which the scan cannot
 //! tell, so on a unicycle an arc is admissible only if both could stop in
 //! the gap, each after a tick's delay: v^2 / a <= v (t_c - 2 dt), t_c the
-//! time to contact with the return standing still.
+//! time to contact with the return standing still. That covers a robot
+//! coming along the arc, not one that swerves into it: two robots meeting
+//! head-on, each bending its arc away from where the other stands, can
+//! bend to the same side and meet (the arcs are checked against still
+//! points). So, from the scan, the robot also closes on every return only
+//! as fast as it can stop within half the gap to its padded disc after a
+//! tick, (v cos phi)^2 / (2 a) + v cos phi dt <= gap / 2, phi the return's
+//! bearing off the heading (what is beside it does not slow it): two
+//! robots that each keep to their half stop apart whatever the other does
+//! (the responsibility shared as ORCA shares it). On true states the
+//! others' velocities are known and the arcs are checked against them.
 
 mod contact;
 mod planner;

@@ -116,6 +116,23 @@ fn arc_points(points: &[Vec2], r: f64, v: f64, omega: f64, horizon: f64) -> f64 
     if best > horizon { f64::INFINITY } else { best }
 }
 
+/// Whether driving off at `v` leaves the robot able to stop within half
+/// the gap to each of `ahead` (the cosine of its direction off the
+/// heading, and the gap), after a tick's delay: (v cos)^2 / (2 a) +
+/// v cos dt <= gap / 2. Arcs are checked against where things are; a robot
+/// there moves too, and two robots each bending away from where the other
+/// stands can bend into each other (meeting head-on, each swerving to the
+/// same side). Closing on it only as fast as it can stop in its half of
+/// the gap keeps the two apart whatever the other does, as long as it
+/// keeps its half too. Along the heading only: what is beside the robot
+/// does not limit its speed.
+fn reciprocal_stop(ahead: &[(f64, f64)], v: f64, a: f64, dt: f64) -> bool {
+    ahead.iter().all(|&(cos, gap)| {
+        let u = v * cos;
+        u <= 0.0 || u * u / (2.0 * a) + u * dt <= gap / 2.0
+    })
+}
+
 /// Angle `a` wrapped to (-pi, pi].
 fn wrap(a: f64) -> f64 {
     let w = a.rem_euclid(2.0 * PI);
@@ -266,6 +283,14 @@ pub(super) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
         (w_c - alpha_max * dt).max(-w_max),
         (w_c + alpha_max * dt).min(w_max),
     );
+    // From a scan, any return may be a robot coming this way: the robot
+    // keeps to half the gap to each (its direction's cosine off the
+    // heading, and the gap to the padded disc). On true states the arcs
+    // are checked against the others moving, which covers them.
+    let ahead: Vec<(f64, f64)> = points
+        .iter()
+        .map(|q| (q.x / q.norm().max(1e-12), q.norm() - padded))
+        .collect();
     let n = dwa.samples;
     let at = |k: usize, lo: f64, hi: f64| lo + (hi - lo) * k as f64 / (n - 1) as f64;
     let mut best: Option<(f64, f64, f64)> = None;
@@ -288,6 +313,9 @@ pub(super) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
                 2.0 * a * t_c
             };
             if t_c.is_finite() && v > brake {
+                continue;
+            }
+            if !reciprocal_stop(&ahead, v, a, dt) {
                 continue;
             }
             let score = if at_goal {
@@ -432,5 +460,51 @@ mod tests {
         // Free, it would keep 0.6 or speed up; the wall makes it brake
         // (the hidden body, in contact, would have made it back off).
         assert!((0.0..0.6).contains(&v), "{v}");
+    }
+
+    #[test]
+    fn from_the_scan_a_robot_closing_on_a_return_keeps_to_half_the_gap() {
+        // At 0.6 m/s (top speed 1, a = 2), another robot's disc ahead, a
+        // gap of 0.3 to the padded disc at its nearest return: arcs
+        // bending away from where it stands meet nothing up to 0.8 m/s,
+        // but it may come on and swerve the same way. The robot keeps to
+        // a speed at which it can stop in half the gap after a tick:
+        // v^2 / 4 + v / 10 <= 0.15, v <= 0.6.
+        let mut s = me(0.0);
+        s.velocity = Vec2::new(0.6, 0.0);
+        let (centre, r) = (0.25 + 0.0625 + 0.3 + 0.25, 0.25);
+        let ranges: Vec<f64> = (0..360)
+            .map(|k| {
+                let a = -PI + 2.0 * PI * k as f64 / 360.0;
+                // The near side of the disc at `centre` along x.
+                let (along, off) = (centre * a.cos(), centre * a.sin());
+                let under = r * r - off * off;
+                if a.cos() > 0.0 && under >= 0.0 {
+                    along - under.sqrt()
+                } else {
+                    f64::INFINITY
+                }
+            })
+            .collect();
+        let scan = crate::lidar::LaserScan {
+            angle_min: -PI,
+            angle_increment: 2.0 * PI / 360.0,
+            range_max: 8.0,
+            ranges,
+        };
+        let mut obs = observation(s, Vec2::new(5.0, 0.0), &[]);
+        obs.scan = Some(&scan);
+        let mut dwa = Dwa {
+            obstacles: Obstacles::Scan,
+            ..Dwa::default()
+        };
+        let Command::Unicycle { v, .. } = crate::Planner::plan(&mut dwa, &obs) else {
+            panic!("unicycle command expected");
+        };
+        assert!((0.4 - 1e-9..=0.6 + 1e-9).contains(&v), "{v}");
+        // Beside the robot, the same return does not limit its speed.
+        assert!(reciprocal_stop(&[(0.0, 0.3)], 1.0, 2.0, 0.1));
+        assert!(!reciprocal_stop(&[(1.0, 0.3)], 1.0, 2.0, 0.1));
+        assert!(reciprocal_stop(&[(1.0, 0.3)], 0.6, 2.0, 0.1));
     }
 }
