@@ -117,6 +117,12 @@ impl Progress {
         }
     }
 
+    /// Advances by `n` steps.
+    #[cfg(test)]
+    pub fn inc(&mut self, n: u64) {
+        self.set_position(self.pos.saturating_add(n));
+    }
+
     /// Ends the indicator: the bar stays on screen with its last state; in
     /// plain-lines mode a last line is printed if any line was.
     pub fn finish(&mut self) {
