@@ -3,7 +3,7 @@
 
 Each scene given is run three times, in lockstep in-process (deterministic:
 the table measures outcomes, not speed, so a busy machine gives the same
-numbers): dwa on true states, dwa from the laser scan, and orca, all on
+numbers): dwa from the laser scan, orca, and dwa on true states, all on
 unicycles following their `route = "shortest"`. The scene's `[defaults]`
 must hold a `planner = ...` line (and may hold a `params = ...` line),
 which are replaced for each run. A comment line `# source: ...` in the
@@ -31,9 +31,9 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 MRSIM = os.path.join(ROOT, "target", "release", "mrsim")
 # (label, planner, params line)
 VARIANTS = [
-    ("dwa (truth)", "dwa", 'params = { obstacles = "truth" }'),
     ("dwa (scan)", "dwa", 'params = { obstacles = "scan" }'),
     ("orca", "orca", ""),
+    ("dwa (truth)", "dwa", 'params = { obstacles = "truth" }'),
 ]
 CELL = 1.0  # wall buckets, in the scene's length unit
 
