@@ -144,7 +144,13 @@ impl Prepared {
             if forwarded.is_some_and(|t| t.elapsed() > Duration::from_secs(5)) {
                 mrsim_sys::process::kill(world.id(), mrsim_sys::signal::SIGKILL);
             }
+            // One system call a round while no agent has ended (asking
+            // each of hundreds would be as many, at the agents' priority).
+            let ended = mrsim_sys::process::a_child_ended();
             for (((name, a), n), g) in agents.iter_mut().zip(restarts.iter_mut()).zip(&groups) {
+                if !ended {
+                    break;
+                }
                 let Ok(Some(status)) = a.try_wait() else {
                     continue;
                 };
