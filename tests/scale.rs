@@ -400,8 +400,11 @@ fn a_million_robot_scene_is_checked_and_a_run_past_the_memory_available_is_refus
     let said = String::from_utf8_lossy(&o.stdout);
     assert!(said.contains("ok (1000000 robots"), "{said}");
     // Refused only where it does not fit: on a machine with the memory the
-    // run would start, which this test does not do.
-    let need = mrsim_runtime::memory::BASE + 1_000_000 * mrsim_runtime::memory::PER_ROBOT;
+    // run would start, which this test does not do. Every robot senses the
+    // whole scene (no `sensing_range`), so each keeps room for every other.
+    use mrsim_runtime::memory::{BASE, PER_ROBOT, SENSED};
+    let n: u64 = 1_000_000;
+    let need = BASE + n * PER_ROBOT + n * (n - 1) * SENSED;
     let available = std::fs::read_to_string("/proc/meminfo")
         .ok()
         .and_then(|t| {

@@ -206,7 +206,7 @@ mod tests {
             err.starts_with("big.toml: this run needs about 0.1 GiB"),
             "{err}"
         );
-        assert!(err.contains("1000 robots x 53 KB, plus 64 MB"), "{err}");
+        assert!(err.contains("1000 robots x 20 KB, plus 64 MB"), "{err}");
         assert!(err.contains("MemAvailable"), "{err}");
         assert!(err.contains("run fewer robots"), "{err}");
         assert!(!err.contains("sensing_range"), "{err}");
