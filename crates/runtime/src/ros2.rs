@@ -45,7 +45,8 @@ pub const ABSURD: f64 = 1.0e3;
 
 /// More `cmd_vel` samples than this for one robot within one second (of
 /// wall time: a tick of lockstep may be far shorter) are a flood: the rest
-/// of that second's are dropped and the robot brakes.
+/// of that second's, and every one of the next second's, are dropped and
+/// the robot brakes; it takes commands again after a second of no flood.
 pub const FLOOD: u64 = 200;
 
 /// In realtime, a robot whose last `cmd_vel` is older than this brakes.
@@ -162,6 +163,9 @@ struct CmdState {
     /// Samples in the current second, and when it began.
     this_second: u64,
     second_began: Option<Instant>,
+    /// The second before this one was a flood: this one's samples are
+    /// dropped too, so that a flood's tail never drives the robot.
+    flood_held: bool,
     counts: CmdCounts,
     /// Kinds already logged.
     logged: u8,
@@ -222,10 +226,11 @@ impl Inbox {
             .is_none_or(|t| now.duration_since(t) >= Duration::from_secs(1))
         {
             s.second_began = Some(now);
+            s.flood_held = s.this_second > FLOOD;
             s.this_second = 0;
         }
         s.this_second += 1;
-        if s.this_second > FLOOD {
+        if s.this_second > FLOOD || s.flood_held {
             s.counts.flooded += 1;
             s.latest = Some(Twist::default());
             s.at = Some(now);
