@@ -52,7 +52,7 @@ const NO_GOAL_HOLONOMIC: &[(&str, &str)] = &[
         "Ko & Choi's eq (11) and (19) dynamics are undamped and never settle: the \
          robots circle their goals at top speed (vdf.rs); with its cm defaults scaled \
          to metres (alpha = beta = 0.05, eta = 1e-5, eps_vd = 0.4) they pass within \
-         0.03 m of their goals and end 2.1-3.1 m off (BENCHMARKS.md)",
+         0.03 m of their goals and end 2.1-3.1 m off (docs/maps.md)",
     ),
     (
         "khatib",

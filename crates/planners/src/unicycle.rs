@@ -60,7 +60,7 @@
 //! with every planner, that scaling (against the speed limits alone, or
 //! also against what the acceleration limits reach in one tick) made
 //! robots slower and no planner's goals more reachable, and gave more
-//! contacts (BENCHMARKS.md, "Unicycle robots"), so the controller leaves
+//! contacts (docs/maps.md, "Unicycle robots: every planner"), so the controller leaves
 //! the limits to the world.
 //!
 //! **4. Planners that know the model.** A planner that plans (v, omega)
