@@ -1,19 +1,27 @@
 //! Planner diagnostics from the agent to the run folder's `diagnostics.csv`.
 //!
-//! Each agent writes the named per-tick values its planner reports
-//! ([`Planner::diagnostics`](mrsim_planners::Planner::diagnostics)) into its
-//! own part file in the run's folder (`out_dir` of the world's setup), so
+//! Each agent hands the named per-tick values its planner reports
+//! ([`Planner::diagnostics`](mrsim_planners::Planner::diagnostics)) to its
+//! process's one writer thread, which appends them to the process's part
+//! file in the run's folder (`out_dir` of the world's setup), so
 //! hand-started agents on the same machine do it too and the command message
-//! stays fixed-size. The values are handed to a writer thread after the
-//! command has been sent, so the control loop never waits on the disk; the
-//! thread flushes about once a second. A planner that reports nothing leaves
-//! no file.
+//! stays fixed-size. A process drives one robot (an agent process) or many
+//! (a group, the in-process pool): one part file per process, not per
+//! robot, so 100,000 robots in one process create one file and keep one
+//! open, not 100,000. The values are handed over after the command has been
+//! sent, so the control loop never waits on the disk, in batches per robot
+//! (at most [`BATCH_ROWS`] rows or about half a second old); the thread
+//! writes whatever has come and then flushes, so a killed agent loses at
+//! most its last half second. A planner that reports nothing leaves no file.
 //!
 //! When every agent has ended, [`merge`] joins the part files into
 //! `diagnostics.csv` (`tick,time,robot,name,value`), sorted by tick, then by
 //! robot in scenario order, each robot's values in the order its planner
-//! gave them, and removes the part files. A run in which no planner reported
-//! anything has no `diagnostics.csv`.
+//! gave them, and removes the part files. A part file holds the rows of its
+//! robots as they were handed over, so the merge sorts: in memory up to
+//! [`RUN_ROWS`] rows, beyond that in sorted runs on disk merged at the end
+//! (memory bounded whatever the run's length). A run in which no planner
+//! reported anything has no `diagnostics.csv`.
 //!
 //! Values are written with Rust's shortest round-trip formatting; a
 //! non-finite value (`vdf`'s virtual distance to an obstacle that is no
@@ -26,6 +34,7 @@ use std::collections::BinaryHeap;
 use std::fs::File;
 use std::io::{BufRead, BufReader, BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::sync::mpsc::{Receiver, Sender, channel};
 use std::time::{Duration, Instant};
 
@@ -36,19 +45,20 @@ pub const HEADER: &str = "tick,time,robot,name,value";
 const PART_PREFIX: &str = "diagnostics-";
 const PART_SUFFIX: &str = ".part";
 
-/// Name of the part file of robot `robot_id` written by process `pid` (one
-/// per process, so an agent that restarts does not overwrite its
-/// predecessor's values).
-pub fn part_file_name(robot_id: usize, pid: u32) -> String {
-    format!("{PART_PREFIX}{robot_id}-{pid}{PART_SUFFIX}")
+/// Name of the part file written by process `pid` (one per process, so an
+/// agent that restarts does not overwrite its predecessor's values). Each
+/// of its lines is a row of `diagnostics.csv` preceded by the robot's id
+/// (`id,tick,time,robot,name,value`).
+pub fn part_file_name(pid: u32) -> String {
+    format!("{PART_PREFIX}{pid}{PART_SUFFIX}")
 }
 
-/// The robot id of a part file's name, or `None` for any other file.
-fn part_file_robot(name: &str) -> Option<usize> {
-    let rest = name.strip_prefix(PART_PREFIX)?.strip_suffix(PART_SUFFIX)?;
-    let (id, pid) = rest.split_once('-')?;
-    pid.parse::<u32>().ok()?;
-    id.parse().ok()
+/// The process id of a part file's name, or `None` for any other file.
+fn part_file_pid(name: &str) -> Option<u32> {
+    name.strip_prefix(PART_PREFIX)?
+        .strip_suffix(PART_SUFFIX)?
+        .parse()
+        .ok()
 }
 
 struct Row {
@@ -57,19 +67,24 @@ struct Row {
     values: Vec<Diagnostic>,
 }
 
-/// One robot's part file, written by the process's one writer thread
-/// (started with the first values anywhere in the process): a process
-/// driving thousands of robots (a group, the in-process pool) would
-/// otherwise start a thread per robot.
+/// One robot's values, handed in batches to the process's one writer
+/// thread (started with the first values anywhere in the process): a
+/// process driving thousands of robots (a group, the in-process pool)
+/// would otherwise start a thread per robot.
 pub struct DiagnosticsWriter {
-    path: PathBuf,
-    robot: std::sync::Arc<str>,
-    /// Some values were handed to the writer (the file exists).
+    /// The process's part file in the run's folder.
+    path: Arc<Path>,
+    robot_id: usize,
+    robot: Arc<str>,
+    /// Some values were handed to the writer (the robot counts among the
+    /// file's writers until it closes).
     started: bool,
     /// Rows not yet handed over: the thread gets them in batches, so it
     /// wakes about twice a second per robot rather than every tick (with
     /// hundreds of agents a wake-up per agent per tick was a context
-    /// switch each).
+    /// switch each). Empty, it holds no memory: a batch handed over leaves
+    /// none behind (100,000 robots each keeping room for 64 rows held
+    /// 250 MB).
     batch: Vec<Row>,
     batch_started: Instant,
     /// Why the writer could not take the rows, told at `finish`.
@@ -77,24 +92,25 @@ pub struct DiagnosticsWriter {
 }
 
 /// Rows per batch handed to the writer thread, at most.
-const BATCH_ROWS: usize = 64;
+pub const BATCH_ROWS: usize = 64;
 /// Age of the oldest queued row after which the batch is handed over.
 const BATCH_AGE: Duration = Duration::from_millis(500);
-/// Part files the writer keeps open at most (more are closed and opened
-/// again to append): far below any limit on open files.
-const OPEN_FILES: usize = 256;
 
 /// What the process's writer thread is asked.
 enum Job {
-    /// Append these rows of `robot` to `path` (created by the first).
+    /// Append these rows of robot `robot_id` (named `robot`) to `path`;
+    /// `first`: its first rows (it now writes to `path` until it closes).
     Rows {
-        path: PathBuf,
-        robot: std::sync::Arc<str>,
+        path: Arc<Path>,
+        robot_id: usize,
+        robot: Arc<str>,
+        first: bool,
         rows: Vec<Row>,
     },
-    /// Close `path` and say whether all of it was written.
+    /// A robot writing to `path` is done: flush it (close it when it was
+    /// the last) and say whether all of it was written.
     Close {
-        path: PathBuf,
+        path: Arc<Path>,
         done: Sender<std::io::Result<()>>,
     },
 }
@@ -120,11 +136,13 @@ fn writer() -> std::io::Result<Sender<Job>> {
 }
 
 impl DiagnosticsWriter {
-    /// A writer of robot `robot` (id `robot_id`)'s values into its part
-    /// file in `dir`. The file is created with the first values.
+    /// A writer of robot `robot` (id `robot_id`)'s values into the
+    /// process's part file in `dir`. The file is created with the first
+    /// values.
     pub fn start(dir: &Path, robot_id: usize, robot: &str) -> std::io::Result<Self> {
         Ok(Self {
-            path: dir.join(part_file_name(robot_id, std::process::id())),
+            path: dir.join(part_file_name(std::process::id())).into(),
+            robot_id,
             robot: robot.into(),
             started: false,
             batch: Vec::new(),
@@ -151,11 +169,12 @@ impl DiagnosticsWriter {
         if self.batch.is_empty() || self.error.is_some() {
             return;
         }
-        let rows = std::mem::replace(&mut self.batch, Vec::with_capacity(BATCH_ROWS));
         let job = Job::Rows {
             path: self.path.clone(),
+            robot_id: self.robot_id,
             robot: self.robot.clone(),
-            rows,
+            first: !self.started,
+            rows: std::mem::take(&mut self.batch),
         };
         match writer().and_then(|tx| {
             tx.send(job)
@@ -166,7 +185,8 @@ impl DiagnosticsWriter {
         }
     }
 
-    /// Writes what is queued, flushes, and closes the file.
+    /// Writes what is queued, flushes, and closes the file (when this
+    /// robot was the last of the process writing to it).
     pub fn finish(mut self) -> std::io::Result<()> {
         self.stop()
     }
@@ -198,72 +218,123 @@ impl Drop for DiagnosticsWriter {
     }
 }
 
+/// A part file the writer thread has open, and the robots writing to it.
+struct Open {
+    file: BufWriter<File>,
+    robots: usize,
+}
+
 /// The writer thread: blocks until a job comes (a robot's batch at most
-/// about twice a second, see `BATCH_AGE`) and flushes after each, so it
-/// never wakes on a timer: with hundreds of agents, each one's writer
-/// waking once a second, all at about the same moment, stole a few
-/// milliseconds of both cores at once and made bursts of deadline misses
-/// every second.
+/// about twice a second, see `BATCH_AGE`), does it and every job already
+/// queued, then flushes, so it never wakes on a timer: with hundreds of
+/// agents, each one's writer waking once a second, all at about the same
+/// moment, stole a few milliseconds of both cores at once and made bursts
+/// of deadline misses every second. A write error of a part file is told
+/// to every robot of it that closes afterwards.
 fn write_jobs(rx: Receiver<Job>) {
     use std::collections::{HashMap, HashSet};
-    let mut open: HashMap<PathBuf, BufWriter<File>> = HashMap::new();
-    let mut created: HashSet<PathBuf> = HashSet::new();
-    let mut failed: HashMap<PathBuf, std::io::Error> = HashMap::new();
-    for job in rx {
-        match job {
-            Job::Rows { path, robot, rows } => {
-                if failed.contains_key(&path) {
-                    continue;
-                }
-                if !open.contains_key(&path) && open.len() >= OPEN_FILES {
-                    for (p, mut w) in open.drain() {
-                        if let Err(e) = w.flush() {
-                            failed.insert(p, e);
-                        }
+    let mut open: HashMap<Arc<Path>, Open> = HashMap::new();
+    let mut created: HashSet<Arc<Path>> = HashSet::new();
+    let mut failed: HashMap<Arc<Path>, (std::io::ErrorKind, String)> = HashMap::new();
+    let mut line = String::new();
+    let fail = |failed: &mut HashMap<Arc<Path>, _>, path: &Arc<Path>, e: std::io::Error| {
+        failed.insert(path.clone(), (e.kind(), e.to_string()));
+    };
+    while let Ok(first) = rx.recv() {
+        for job in std::iter::once(first).chain(std::iter::from_fn(|| rx.try_recv().ok())) {
+            match job {
+                Job::Rows {
+                    path,
+                    robot_id,
+                    robot,
+                    first,
+                    rows,
+                } => {
+                    if failed.contains_key(&path) {
+                        continue;
                     }
-                }
-                let w = match open.entry(path.clone()) {
-                    std::collections::hash_map::Entry::Occupied(o) => o.into_mut(),
-                    std::collections::hash_map::Entry::Vacant(v) => {
-                        let file = if created.insert(path.clone()) {
-                            File::create(&path)
-                        } else {
-                            std::fs::OpenOptions::new().append(true).open(&path)
-                        };
-                        match file {
-                            Ok(f) => v.insert(BufWriter::with_capacity(1 << 14, f)),
-                            Err(e) => {
-                                failed.insert(path, e);
-                                continue;
+                    let w = match open.entry(path.clone()) {
+                        std::collections::hash_map::Entry::Occupied(o) => o.into_mut(),
+                        std::collections::hash_map::Entry::Vacant(v) => {
+                            let file = if created.insert(path.clone()) {
+                                File::create(&path)
+                            } else {
+                                std::fs::OpenOptions::new()
+                                    .append(true)
+                                    .create(true)
+                                    .open(&path)
+                            };
+                            match file {
+                                Ok(f) => v.insert(Open {
+                                    file: BufWriter::with_capacity(1 << 16, f),
+                                    robots: 0,
+                                }),
+                                Err(e) => {
+                                    fail(&mut failed, &path, e);
+                                    continue;
+                                }
                             }
                         }
+                    };
+                    w.robots += usize::from(first);
+                    if let Err(e) = write_rows(&mut w.file, &mut line, robot_id, &robot, &rows) {
+                        open.remove(&path);
+                        fail(&mut failed, &path, e);
                     }
-                };
-                if let Err(e) = write_rows(w, &robot, &rows) {
-                    open.remove(&path);
-                    failed.insert(path, e);
+                }
+                Job::Close { path, done } => {
+                    let mut flushed = Ok(());
+                    if let Some(w) = open.get_mut(&path) {
+                        flushed = w.file.flush();
+                        w.robots = w.robots.saturating_sub(1);
+                        if w.robots == 0 || flushed.is_err() {
+                            open.remove(&path);
+                        }
+                    }
+                    if let Err(e) = flushed {
+                        fail(&mut failed, &path, e);
+                    }
+                    let told = failed.get(&path).map_or(Ok(()), |(kind, what)| {
+                        Err(std::io::Error::new(*kind, what.clone()))
+                    });
+                    let _ = done.send(told);
                 }
             }
-            Job::Close { path, done } => {
-                let flushed = open.remove(&path).map_or(Ok(()), |mut w| w.flush());
-                created.remove(&path);
-                let _ = done.send(failed.remove(&path).map_or(flushed, Err));
+        }
+        let mut broken = Vec::new();
+        for (path, w) in &mut open {
+            if let Err(e) = w.file.flush() {
+                broken.push((path.clone(), e));
             }
+        }
+        for (path, e) in broken {
+            open.remove(&path);
+            fail(&mut failed, &path, e);
         }
     }
 }
 
-fn write_rows(w: &mut BufWriter<File>, robot: &str, rows: &[Row]) -> std::io::Result<()> {
+fn write_rows(
+    w: &mut BufWriter<File>,
+    line: &mut String,
+    robot_id: usize,
+    robot: &str,
+    rows: &[Row],
+) -> std::io::Result<()> {
+    use std::fmt::Write as _;
     for row in rows {
+        // The row's start (`id,tick,time,robot,`) is formatted once for
+        // all its values. Writing into a String cannot fail.
+        line.clear();
+        let _ = write!(line, "{robot_id},{},{:.6},{robot},", row.tick, row.time);
+        let start = line.len();
         for d in &row.values {
-            writeln!(
-                w,
-                "{},{:.6},{robot},{},{}",
-                row.tick, row.time, d.name, d.value
-            )?;
+            line.truncate(start);
+            let _ = writeln!(line, "{},{}", d.name, d.value);
+            w.write_all(line.as_bytes())?;
         }
     }
-    w.flush()
+    Ok(())
 }
 
 /// What [`merge`] did.
@@ -280,48 +351,96 @@ pub struct MergeSummary {
     pub skipped: u64,
 }
 
-struct Part {
-    robot: usize,
-    reader: BufReader<File>,
+/// Rows the merge sorts in memory at once; more are sorted in runs of
+/// this many, written to temporary files and merged (about 25 MB).
+pub const RUN_ROWS: usize = 1 << 18;
+
+/// A row of a part file with its place in the merged file: by tick, then
+/// robot id, then where it was written (part file, line), which keeps each
+/// robot's rows in the order its planner gave them.
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]
+struct Keyed {
+    tick: u64,
+    robot: u64,
+    part: u64,
+    seq: u64,
+    /// The row as `diagnostics.csv` holds it.
+    line: String,
 }
 
-impl Part {
-    /// The next well-formed row and its tick. A last line without its
-    /// newline (the agent was killed mid-write) and a line that is not a
-    /// row are counted in `skipped` and left out.
-    fn next_row(&mut self, skipped: &mut u64) -> std::io::Result<Option<(u64, String)>> {
-        loop {
-            let mut line = String::new();
-            if self.reader.read_line(&mut line)? == 0 {
-                return Ok(None);
-            }
-            let Some(row) = line.strip_suffix('\n') else {
-                *skipped += 1;
-                continue;
-            };
-            let tick = row.split(',').next().and_then(|t| t.parse::<u64>().ok());
-            match tick {
-                Some(tick) if row.split(',').count() == 5 => {
-                    return Ok(Some((tick, row.to_string())));
-                }
-                _ => *skipped += 1,
-            }
+impl Keyed {
+    /// A part file's line (`id,tick,time,robot,name,value`, without its
+    /// newline), or `None` if it is not a row.
+    fn from_part(part: u64, seq: u64, row: &str) -> Option<Self> {
+        let (robot, line) = row.split_once(',')?;
+        let robot = robot.parse().ok()?;
+        let tick = line.split(',').next()?.parse().ok()?;
+        (line.split(',').count() == 5).then(|| Self {
+            tick,
+            robot,
+            part,
+            seq,
+            line: line.to_string(),
+        })
+    }
+
+    /// A line of a sorted run: the key, then the row.
+    fn write_run(&self, w: &mut impl Write) -> std::io::Result<()> {
+        writeln!(
+            w,
+            "{},{},{},{},{}",
+            self.tick, self.robot, self.part, self.seq, self.line
+        )
+    }
+
+    /// The line of a sorted run [`Self::write_run`] wrote.
+    fn from_run(row: &str) -> Option<Self> {
+        let mut it = row.splitn(5, ',');
+        let mut num = || it.next()?.parse::<u64>().ok();
+        let (tick, robot, part, seq) = (num()?, num()?, num()?, num()?);
+        Some(Self {
+            tick,
+            robot,
+            part,
+            seq,
+            line: it.next()?.to_string(),
+        })
+    }
+}
+
+/// Reads the next line of `r` without its newline into `line`; `false` at
+/// the end. A last line without its newline (an agent killed mid-write)
+/// is counted in `skipped` and left out.
+fn next_line(r: &mut impl BufRead, line: &mut String, skipped: &mut u64) -> std::io::Result<bool> {
+    loop {
+        line.clear();
+        if r.read_line(line)? == 0 {
+            return Ok(false);
         }
+        if line.ends_with('\n') {
+            line.pop();
+            return Ok(true);
+        }
+        *skipped += 1;
     }
 }
 
 /// Joins the agents' part files in `dir` into `diagnostics.csv`, sorted by
-/// tick, then robot id (scenario order), each agent's rows in their own
+/// tick, then robot id (scenario order), each robot's rows in their own
 /// order, and removes the part files. Call it once every agent of the run
-/// has ended. Each part file is already in tick order, so this is a k-way
-/// merge that holds one row per file in memory. Without part files nothing
-/// is written.
+/// has ended. Without part files nothing is written.
 pub fn merge(dir: &Path) -> std::io::Result<MergeSummary> {
-    let mut files: Vec<(usize, PathBuf)> = Vec::new();
+    merge_in_runs(dir, RUN_ROWS)
+}
+
+/// [`merge`], sorting at most `run_rows` rows in memory at once.
+fn merge_in_runs(dir: &Path, run_rows: usize) -> std::io::Result<MergeSummary> {
+    // By process id: an agent's earlier process first, as a rule.
+    let mut files: Vec<(u32, PathBuf)> = Vec::new();
     for entry in std::fs::read_dir(dir)? {
         let entry = entry?;
-        if let Some(robot) = entry.file_name().to_str().and_then(part_file_robot) {
-            files.push((robot, entry.path()));
+        if let Some(pid) = entry.file_name().to_str().and_then(part_file_pid) {
+            files.push((pid, entry.path()));
         }
     }
     let mut summary = MergeSummary {
@@ -332,41 +451,83 @@ pub fn merge(dir: &Path) -> std::io::Result<MergeSummary> {
         return Ok(summary);
     }
     files.sort();
-    let mut parts = Vec::with_capacity(files.len());
-    for (robot, path) in &files {
-        parts.push(Part {
-            robot: *robot,
-            reader: BufReader::new(File::open(path)?),
-        });
-    }
-
-    // Heap of (tick, robot, part, sequence) -> the part's current line.
-    let mut heads: Vec<Option<String>> = vec![None; parts.len()];
-    let mut heap = BinaryHeap::new();
-    let mut seq = 0u64;
-    for (k, part) in parts.iter_mut().enumerate() {
-        if let Some((tick, line)) = part.next_row(&mut summary.skipped)? {
-            heads[k] = Some(line);
-            heap.push(Reverse((tick, part.robot, k, seq)));
-            seq += 1;
-        }
-    }
+    let run_rows = run_rows.max(1);
     let out_path = dir.join(DIAGNOSTICS_FILE);
     let tmp_path = dir.join(format!("{DIAGNOSTICS_FILE}.tmp"));
+    let run_path = |k: usize| dir.join(format!("{DIAGNOSTICS_FILE}.run{k}"));
+
+    // Sorted runs of at most `run_rows` rows; the last stays in memory.
+    let mut runs = 0;
+    let mut rows: Vec<Keyed> = Vec::new();
+    let mut line = String::new();
+    for (part, (_, path)) in files.iter().enumerate() {
+        let mut r = BufReader::with_capacity(1 << 16, File::open(path)?);
+        let mut seq = 0;
+        while next_line(&mut r, &mut line, &mut summary.skipped)? {
+            match Keyed::from_part(part as u64, seq, &line) {
+                Some(k) => rows.push(k),
+                None => summary.skipped += 1,
+            }
+            seq += 1;
+            if rows.len() >= run_rows {
+                rows.sort_unstable();
+                let mut w = BufWriter::with_capacity(1 << 16, File::create(run_path(runs))?);
+                for k in &rows {
+                    k.write_run(&mut w)?;
+                }
+                w.flush()?;
+                runs += 1;
+                rows.clear();
+            }
+        }
+    }
+    rows.sort_unstable();
+
     let mut out = BufWriter::with_capacity(1 << 16, File::create(&tmp_path)?);
     writeln!(out, "{HEADER}")?;
-    while let Some(Reverse((_, robot, k, _))) = heap.pop() {
-        let part = &mut parts[k];
-        let next = part.next_row(&mut summary.skipped)?;
-        if let Some(line) = heads[k].take() {
-            out.write_all(line.as_bytes())?;
-            out.write_all(b"\n")?;
-            summary.rows += 1;
+    let mut emit = |k: &Keyed, out: &mut BufWriter<File>| -> std::io::Result<()> {
+        out.write_all(k.line.as_bytes())?;
+        out.write_all(b"\n")?;
+        summary.rows += 1;
+        Ok(())
+    };
+    if runs == 0 {
+        for k in &rows {
+            emit(k, &mut out)?;
         }
-        if let Some((tick, line)) = next {
-            heads[k] = Some(line);
-            heap.push(Reverse((tick, robot, k, seq)));
-            seq += 1;
+    } else {
+        // A k-way merge of the runs on disk and the one in memory.
+        let mut readers = Vec::with_capacity(runs);
+        for k in 0..runs {
+            readers.push(BufReader::with_capacity(1 << 16, File::open(run_path(k))?));
+        }
+        let mut memory = std::mem::take(&mut rows).into_iter();
+        let mut next = |i: usize, line: &mut String| -> std::io::Result<Option<Keyed>> {
+            if i == runs {
+                return Ok(memory.next());
+            }
+            let mut ignored = 0;
+            if !next_line(&mut readers[i], line, &mut ignored)? {
+                return Ok(None);
+            }
+            Keyed::from_run(line)
+                .map(Some)
+                .ok_or_else(|| std::io::Error::other("a sorted run of diagnostics is malformed"))
+        };
+        let mut heap = BinaryHeap::new();
+        for i in 0..=runs {
+            if let Some(k) = next(i, &mut line)? {
+                heap.push(Reverse((k, i)));
+            }
+        }
+        while let Some(Reverse((k, i))) = heap.pop() {
+            emit(&k, &mut out)?;
+            if let Some(k) = next(i, &mut line)? {
+                heap.push(Reverse((k, i)));
+            }
+        }
+        for k in 0..runs {
+            std::fs::remove_file(run_path(k))?;
         }
     }
     out.flush()?;
@@ -406,11 +567,103 @@ mod tests {
     }
 
     #[test]
-    fn part_file_names_round_trip_and_other_files_are_not_parts() {
-        assert_eq!(part_file_robot(&part_file_name(12, 4567)), Some(12));
-        assert_eq!(part_file_robot("diagnostics.csv"), None);
-        assert_eq!(part_file_robot("diagnostics-x-1.part"), None);
-        assert_eq!(part_file_robot("trajectory.csv"), None);
+    fn part_file_names_give_their_process_and_other_files_none() {
+        assert_eq!(part_file_pid(&part_file_name(4567)), Some(4567));
+        assert_eq!(part_file_pid("diagnostics.csv"), None);
+        assert_eq!(part_file_pid("diagnostics-x.part"), None);
+        assert_eq!(part_file_pid("diagnostics.csv.run0"), None);
+        assert_eq!(part_file_pid("trajectory.csv"), None);
+    }
+
+    /// Robots `0..n` of one process, each writing `ticks` ticks of two
+    /// values, in an order that is not the merged file's.
+    fn write_robots(dir: &Path, n: usize, ticks: u64) {
+        let mut writers: Vec<_> = (0..n)
+            .rev()
+            .map(|id| {
+                let w = DiagnosticsWriter::start(dir, id, &format!("r{id}")).expect("writer");
+                (id, w)
+            })
+            .collect();
+        for t in 0..ticks {
+            for (id, w) in &mut writers {
+                w.push(
+                    t,
+                    t as f64 * 0.1,
+                    vec![
+                        d("speed", (t * 100 + *id as u64) as f64),
+                        d("lines", *id as f64),
+                    ],
+                );
+            }
+        }
+        for (_, w) in writers {
+            w.finish().expect("flushed");
+        }
+    }
+
+    #[test]
+    fn many_robots_of_one_process_write_one_part_file() {
+        let dir = temp_dir("one-part");
+        write_robots(&dir, 50, 3);
+        let names: Vec<String> = std::fs::read_dir(&dir)
+            .expect("dir")
+            .flatten()
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(names, vec![part_file_name(std::process::id())]);
+        let s = merge(&dir).expect("merge");
+        assert_eq!((s.rows, s.parts, s.skipped), (300, 1, 0));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn merging_in_sorted_runs_on_disk_gives_the_file_sorting_in_memory_gives() {
+        let (small, large) = (temp_dir("runs-small"), temp_dir("runs-large"));
+        for dir in [&small, &large] {
+            write_robots(dir, 7, 5);
+        }
+        // An earlier process's part (an agent that restarted), written by
+        // hand: its rows come before the later process's at a tick.
+        for dir in [&small, &large] {
+            std::fs::write(
+                dir.join(part_file_name(0)),
+                "3,2,0.200000,r3,extra,1\n0,4,0.400000,r0,extra,2\n",
+            )
+            .expect("write part");
+        }
+        let a = merge_in_runs(&small, 3).expect("merge in runs");
+        let b = merge_in_runs(&large, 1 << 20).expect("merge in memory");
+        assert_eq!(a.rows, 7 * 5 * 2 + 2);
+        assert_eq!(a.rows, b.rows);
+        let text = std::fs::read_to_string(small.join(DIAGNOSTICS_FILE)).expect("merged");
+        assert_eq!(
+            text,
+            std::fs::read_to_string(large.join(DIAGNOSTICS_FILE)).expect("merged")
+        );
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines[1], "0,0.000000,r0,speed,0");
+        assert_eq!(lines[2], "0,0.000000,r0,lines,0");
+        assert_eq!(lines[3], "0,0.000000,r1,speed,1");
+        // Tick 2: robot 3's values of the earlier process, then its own.
+        let at = lines
+            .iter()
+            .position(|l| *l == "2,0.200000,r3,extra,1")
+            .expect("robot 3 at tick 2");
+        assert_eq!(lines[at - 1], "2,0.200000,r2,lines,2");
+        assert_eq!(lines[at + 1], "2,0.200000,r3,speed,203");
+        assert_eq!(lines[at + 2], "2,0.200000,r3,lines,3");
+        assert_eq!(lines[at + 3], "2,0.200000,r4,speed,204");
+        // Only the merged file is left: no part, no run.
+        let left: Vec<_> = std::fs::read_dir(&small)
+            .expect("dir")
+            .flatten()
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(left, vec![DIAGNOSTICS_FILE.to_string()]);
+        for dir in [small, large] {
+            let _ = std::fs::remove_dir_all(&dir);
+        }
     }
 
     #[test]
@@ -430,7 +683,7 @@ mod tests {
         }
         let s = merge(&dir).expect("merge");
         assert_eq!(s.rows, 12);
-        assert_eq!(s.parts, 2);
+        assert_eq!(s.parts, 1);
         let text = std::fs::read_to_string(dir.join(DIAGNOSTICS_FILE)).expect("merged");
         let lines: Vec<&str> = text.lines().collect();
         assert_eq!(lines[0], HEADER);
@@ -465,8 +718,8 @@ mod tests {
     fn a_cut_last_line_of_a_killed_agent_is_left_out() {
         let dir = temp_dir("cut");
         std::fs::write(
-            dir.join(part_file_name(0, 1)),
-            "0,0.000000,a,speed,0.2\n1,0.100000,a,speed,0.3\n2,0.2000",
+            dir.join(part_file_name(1)),
+            "0,0,0.000000,a,speed,0.2\n0,1,0.100000,a,speed,0.3\n0,2,0.2000",
         )
         .expect("write part");
         let s = merge(&dir).expect("merge");
