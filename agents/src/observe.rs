@@ -314,6 +314,10 @@ impl Scan {
     /// and go through the exact test of [`Self::accept`], so what is
     /// sensed does not depend on this test.
     #[inline(always)]
+    #[expect(
+        clippy::neg_cmp_op_on_partial_ord,
+        reason = "a NaN distance must pass, to the exact test"
+    )]
     fn near_enough(&self, b: &BodyState, (base, scale): (f64, f64)) -> bool {
         let (dx, dy) = (
             b.position[0] - self.position.x,
