@@ -151,11 +151,16 @@ impl DiagnosticsWriter {
         })
     }
 
-    /// Queues one tick's values (nothing is queued when there are none).
+    /// Queues one tick's values (nothing is queued when there are none:
+    /// a planner that reports nothing costs its agent no call here).
+    #[inline]
     pub fn push(&mut self, tick: u64, time: f64, values: Vec<Diagnostic>) {
-        if values.is_empty() {
-            return;
+        if !values.is_empty() {
+            self.queue(tick, time, values);
         }
+    }
+
+    fn queue(&mut self, tick: u64, time: f64, values: Vec<Diagnostic>) {
         if self.batch.is_empty() {
             self.batch_started = Instant::now();
         }

@@ -318,6 +318,7 @@ pub struct StatsHeader {
 
 /// Monotonic clock in ns (CLOCK_MONOTONIC), comparable across processes
 /// on one machine.
+#[inline]
 pub fn now_ns() -> u64 {
     let mut ts = libc::timespec {
         tv_sec: 0,
