@@ -33,8 +33,9 @@ for n in "$@"; do
         *) steps=1 ;;
     esac
     eval "steps=\${STEPS_$n:-$steps}"
-    # The scale table's arena: 4 km across below 30,000 robots, 40 km from there.
-    if [ "$n" -ge 30000 ]; then a=40000; else a=4000; fi
+    # The scale table's arena: 4 km across up to 10,000 robots, 40 km above
+    # (the crossing's streams grow with the count: 20,000 reach 7.5 km).
+    if [ "$n" -gt 10000 ]; then a=40000; else a=4000; fi
     "$MRSIM" run "$SCENE" --transport inproc --quiet --no-report --out "$WORK/run-$n" \
         --set generate.count="$n" --set world.dt="$DT" --set world.duration="$DT" \
         --set "world.arena.min=[-$a,-$a]" --set "world.arena.max=[$a,$a]" >/dev/null

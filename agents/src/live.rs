@@ -159,7 +159,19 @@ struct Ticks {
     check_after: u64,
     /// When the loop last asked whether it is to stop.
     asked_to_stop_at: u64,
+    /// Before the first snapshot: when the robots last said they are
+    /// ready, and how long a silent wait lasts before they say it again.
+    ready_at: u64,
+    ready_every: u64,
 }
+
+/// Before the first snapshot, the first pause after which robots that
+/// heard nothing say they are ready again; it doubles each time, up to
+/// [`READY_AGAIN_MAX_NS`].
+const READY_AGAIN_NS: u64 = 1_000_000_000;
+
+/// The longest pause between two "ready" of a robot that hears nothing.
+const READY_AGAIN_MAX_NS: u64 = 8_000_000_000;
 
 impl Ticks {
     /// Waits for snapshots until one `on` wants the caller to hear of, the
@@ -180,10 +192,12 @@ impl Ticks {
                     return Ok(Heard::Interrupted);
                 }
             }
-            link.wait(Duration::from_nanos(
-                until.saturating_sub(now).min(WAIT_SLICE_NS),
-            ))?;
+            let slice = until.saturating_sub(now).min(WAIT_SLICE_NS);
+            link.wait(Duration::from_nanos(slice))?;
             let woke = now_ns();
+            // Woken before the wait's end: the world called (or, rarely,
+            // a spurious wake-up).
+            let called = woke.saturating_sub(now) < slice;
             now = woke;
             let (mut finished, mut handled) = (false, Ok(false));
             let heard_one = &mut self.heard_one;
@@ -200,11 +214,23 @@ impl Ticks {
                 if woke.saturating_sub(self.last_heard) > self.check_after && !link.world_alive() {
                     return Ok(Heard::WorldGone);
                 }
-                if !self.heard_one {
+                if !self.heard_one
+                    && (called || woke.saturating_sub(self.ready_at) >= self.ready_every)
+                {
                     // Before the first snapshot a wake-up is the world's
                     // call to take up the tick's channels (this receive just
                     // did): say ready again, and the world starts the clock
                     // once every agent has (`WorldTransport::prepare_ticks`).
+                    // A wait that only timed out is no call: the robots say
+                    // it again only now and then, in case a call was missed.
+                    // A thousand agents of a hundred robots each saying it
+                    // every wait slice while a run of 100,000 robots
+                    // joins flood the world with a million commands a
+                    // second, and the joins never end.
+                    if !called {
+                        self.ready_every = (self.ready_every * 2).min(READY_AGAIN_MAX_NS);
+                    }
+                    self.ready_at = woke;
                     for s in &seats.seats {
                         link.send_command(&s.ready())?;
                     }
@@ -331,6 +357,8 @@ impl Live {
                 heard_one: false,
                 check_after: u64::try_from(world_check_after.as_nanos()).unwrap_or(u64::MAX),
                 asked_to_stop_at: 0,
+                ready_at: now_ns(),
+                ready_every: READY_AGAIN_NS,
             },
             queued: VecDeque::new(),
             pending: None,

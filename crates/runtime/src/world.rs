@@ -95,6 +95,7 @@ pub fn serve(
     // them all (else the surplus is overwritten: robots that never join,
     // lockstep ticks that wait out the stall timeout).
     let ros2_group = validated.ros2_robots().len();
+    let external = validated.external_robots().len();
     let (scenario, world) = validated.into_world();
     let setup_len = serde_json::to_vec(&serde_json::json!({
         "run_id": run_id, "out_dir": dir, "scenario": scenario
@@ -102,12 +103,12 @@ pub fn serve(
     .map(|v| v.len())
     .unwrap_or(1 << 16);
     let bodies = scenario.robots.len() + scenario.obstacles.len();
-    let cap = Capacity {
-        robots: scenario.robots.len(),
-        group: (scenario.world.robots_per_agent as usize)
-            .max(ros2_group)
-            .max(1),
-    };
+    let cap = capacity(
+        scenario.robots.len(),
+        scenario.world.robots_per_agent as usize,
+        external,
+        ros2_group,
+    );
     let create = |source| WorldError::Create {
         run_id: run_id.to_string(),
         source,
@@ -182,5 +183,66 @@ fn wait_for_agents(metrics: &mrsim_world::metrics::RunMetrics, limit: Duration) 
         .collect();
     while start.elapsed() < limit && pids.iter().any(|&p| mrsim_sys::process::pid_alive(p)) {
         std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// What the world's channels must hold for `robots` robots whose agents
+/// `mrsim run` starts one per `per_agent` robots: the `external` robots'
+/// agents are their users' programs (one process each at most) and the
+/// `ros2` robots share one process, the ROS 2 agent, so neither is grouped.
+/// An agent's buffers hold its whole group's messages (at least a ROS 2
+/// agent's).
+fn capacity(robots: usize, per_agent: usize, external: usize, ros2: usize) -> Capacity {
+    let per_agent = per_agent.max(1);
+    let grouped = robots.saturating_sub(external + ros2);
+    Capacity {
+        robots,
+        group: per_agent.max(ros2).max(1),
+        processes: grouped.div_ceil(per_agent) + external + usize::from(ros2 > 0),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_thousand_groups_of_a_hundred_robots_need_ports_for_a_thousand_agents() {
+        let cap = capacity(100_000, 100, 0, 0);
+        assert_eq!(cap.processes, 1000);
+        assert_eq!(cap.agents(), 1000 + Capacity::SPARE);
+        assert_eq!(cap.group, 100);
+        // Commands still come one per robot.
+        assert_eq!(cap.messages(), 100_000 + Capacity::SPARE);
+    }
+
+    #[test]
+    fn one_robot_per_agent_needs_a_port_per_robot() {
+        let cap = capacity(10_000, 1, 0, 0);
+        assert_eq!(cap.agents(), 10_000 + Capacity::SPARE);
+        assert_eq!(cap.group, 1);
+    }
+
+    #[test]
+    fn the_last_group_takes_the_rest_and_is_a_process_of_its_own() {
+        assert_eq!(capacity(10_001, 100, 0, 0).processes, 101);
+        assert_eq!(capacity(99, 100, 0, 0).processes, 1);
+    }
+
+    #[test]
+    fn external_robots_and_the_ros2_agent_are_processes_outside_the_groups() {
+        // 3 external robots (a process each), 5 ROS 2 robots (one process),
+        // 192 grouped by 64 (3 processes).
+        let cap = capacity(200, 64, 3, 5);
+        assert_eq!(cap.processes, 3 + 3 + 1);
+        assert_eq!(cap.group, 64);
+        // A ROS 2 agent larger than the groups sets the buffers' size.
+        assert_eq!(capacity(200, 4, 0, 50).group, 50);
+    }
+
+    #[test]
+    fn a_group_size_of_zero_is_taken_as_one() {
+        let cap = capacity(10, 0, 0, 0);
+        assert_eq!((cap.processes, cap.group), (10, 1));
     }
 }

@@ -338,14 +338,41 @@ pub struct Capacity {
     /// an agent sends that many commands a tick, and the world's buffer
     /// for each agent's commands must hold them all.
     pub group: usize,
+    /// Agent processes the run has at most: one per robot, or fewer when
+    /// agents drive groups. Every agent process holds one port of each
+    /// kind, and iceoryx2 visits every port slot a service has room for on
+    /// each send and receive, so room for a port per robot when 1,000
+    /// processes drive 100,000 robots makes each join reply and each
+    /// snapshot a hundred times the work.
+    pub processes: usize,
 }
 
 impl Capacity {
-    /// Room for strangers, restarted agents and observers beyond the robots.
+    /// Room for strangers, restarted agents and observers beyond the
+    /// agent processes.
     pub const SPARE: usize = 16;
 
-    /// Maximum number of agent-side ports of one kind.
+    /// A run of `robots` robots whose agents drive `group` robots each
+    /// (the last one the rest): `robots / group` processes, rounded up.
+    pub fn grouped(robots: usize, group: usize) -> Self {
+        let group = group.max(1);
+        Self {
+            robots,
+            group,
+            processes: robots.div_ceil(group),
+        }
+    }
+
+    /// Maximum number of agent-side ports of one kind: a port per agent
+    /// process and [`Self::SPARE`] more.
     pub fn agents(&self) -> usize {
+        self.processes.min(self.robots) + Self::SPARE
+    }
+
+    /// Maximum number of messages of one kind the agents send the world
+    /// at once (a command or a join request per robot), with
+    /// [`Self::SPARE`] more.
+    pub fn messages(&self) -> usize {
         self.robots + Self::SPARE
     }
 }

@@ -217,28 +217,29 @@ impl Prepared {
 }
 
 /// Agents end on the world's last snapshot: gives them a moment, then stops
-/// them. Returns the ones that ended badly while the world did not.
+/// the ones left, all at once (SIGTERM, then SIGKILL a second later): a
+/// thousand stragglers stopped one after another would take minutes.
+/// Returns the ones that ended badly while the world did not.
 fn reap_agents(agents: &mut [(String, Child)], world_status: ExitStatus) -> Vec<AgentFailure> {
-    let grace = Instant::now();
+    let mut ended: Vec<Option<ExitStatus>> = vec![None; agents.len()];
+    wait_ended(agents, &mut ended, Instant::now() + Duration::from_secs(3));
+    for (sig, wait) in [
+        (mrsim_sys::signal::SIGTERM, Duration::from_secs(1)),
+        (mrsim_sys::signal::SIGKILL, Duration::ZERO),
+    ] {
+        if ended.iter().all(Option::is_some) {
+            break;
+        }
+        for ((_, a), _) in agents.iter().zip(&ended).filter(|(_, e)| e.is_none()) {
+            mrsim_sys::process::kill(a.id(), sig);
+        }
+        wait_ended(agents, &mut ended, Instant::now() + wait);
+    }
     let mut failures = Vec::new();
-    for (name, a) in agents.iter_mut() {
-        let status = loop {
-            if let Ok(Some(s)) = a.try_wait() {
-                break s;
-            }
-            if grace.elapsed() > Duration::from_secs(3) {
-                mrsim_sys::process::kill(a.id(), mrsim_sys::signal::SIGTERM);
-                std::thread::sleep(Duration::from_millis(100));
-                if let Ok(Some(s)) = a.try_wait() {
-                    break s;
-                }
-                let _ = a.kill();
-                match a.wait() {
-                    Ok(s) => break s,
-                    Err(_) => break world_status,
-                }
-            }
-            std::thread::sleep(Duration::from_millis(10));
+    for ((name, a), e) in agents.iter_mut().zip(ended) {
+        let status = match e {
+            Some(s) => s,
+            None => a.wait().unwrap_or(world_status),
         };
         if !status.success() && world_status.success() {
             failures.push(AgentFailure {
@@ -248,6 +249,27 @@ fn reap_agents(agents: &mut [(String, Child)], world_status: ExitStatus) -> Vec<
         }
     }
     failures
+}
+
+/// Records in `ended` the status of each agent that has ended, until all
+/// have or `deadline` passes. The children are asked one by one only after
+/// one of them has ended (one system call a round otherwise).
+fn wait_ended(agents: &mut [(String, Child)], ended: &mut [Option<ExitStatus>], deadline: Instant) {
+    loop {
+        if mrsim_sys::process::a_child_ended() {
+            for ((_, a), e) in agents.iter_mut().zip(ended.iter_mut()) {
+                if e.is_none()
+                    && let Ok(Some(s)) = a.try_wait()
+                {
+                    *e = Some(s);
+                }
+            }
+        }
+        if ended.iter().all(Option::is_some) || Instant::now() >= deadline {
+            return;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
 }
 
 /// Failures of robots (or groups) that failed alike (every robot when the

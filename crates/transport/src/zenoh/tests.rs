@@ -26,10 +26,7 @@ fn world(run: &str, endpoint: &str) -> ZenohWorld {
     ZenohWorld::create(
         &Namespace::new(run).expect("run id"),
         &opts,
-        Capacity {
-            robots: 2,
-            group: 1,
-        },
+        Capacity::grouped(2, 1),
         4,
         1000,
     )
@@ -103,13 +100,7 @@ fn garbage_floods_and_other_runs_never_reach_the_world_loop() {
     assert_eq!(joins, 0);
 
     // A flood without the world draining: bounded, the rest counted.
-    let limit = Capacity {
-        robots: 2,
-        group: 1,
-    }
-    .agents()
-        * 8
-        + 256;
+    let limit = Capacity::grouped(2, 1).messages() * 8 + 256;
     let sent = limit + 500;
     for _ in 0..sent {
         c.put("mrsim/zt-garbage/command", wire::encode(&good))

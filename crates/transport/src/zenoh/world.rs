@@ -76,7 +76,7 @@ impl ZenohWorld {
         let keys = Keys::new(ns);
         // Room for every agent's command of a few ticks, then a flood is
         // dropped rather than kept.
-        let inbox = Arc::new(WorldInbox::new(cap.agents() * 8 + 256));
+        let inbox = Arc::new(WorldInbox::new(cap.messages() * 8 + 256));
 
         let i = inbox.clone();
         let cmd_sub = session
