@@ -182,3 +182,54 @@ fn a_hand_started_world_that_times_out_waiting_names_the_missing_robot_and_leave
     assert!(err.contains("agents for a did not join"), "{err}");
     assert_clean(&id);
 }
+
+/// Twelve robots on a circle, lockstep, a 1 s stall timeout: more than the
+/// world's default room for one process's commands (8).
+const TWELVE: &str = r#"name = "twelve"
+[world]
+dt = 0.1
+duration = 3.0
+stall_timeout = 1.0
+
+[generate]
+kind = "circle"
+count = 12
+radius = 6.0
+name_prefix = "r"
+"#;
+
+#[test]
+fn a_hand_started_group_of_twelve_robots_loses_no_command() {
+    let dir = fresh_dir("group12");
+    let file = dir.join("twelve.toml");
+    std::fs::write(&file, TWELVE).expect("write");
+    let out = dir.join("out");
+    let id = run_id("g12");
+    let mut world = hand_started_world(&file, &out, &id, 60);
+    let names: Vec<String> = (0..12).map(|i| format!("r{i:02}")).collect();
+    let mut group = mrsim()
+        .args(["agent", "--run", &id, "--robots", &names.join(",")])
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("group");
+    let ws = wait_timeout(&mut world, 120).expect("world ended");
+    assert!(ws.success(), "world failed");
+    let gs = wait_timeout(&mut group, 20).expect("group ended");
+    assert!(gs.success(), "the group's agent failed");
+
+    // Every tick got all twelve commands: no robot waited out the stall
+    // timeout (which loses it), every robot was driven to the end.
+    let m = metrics(&out);
+    assert_eq!(m["ticks"], 30, "{m:#}");
+    assert_eq!(m["agents_lost"], 0, "{m:#}");
+    assert_eq!(m["commands_rejected"], 0, "{m:#}");
+    let rows = trajectory(&out);
+    for name in &names {
+        assert_eq!(m["robots"][name]["lost"], 0, "{name}: {m:#}");
+        let t = track(&rows, name);
+        let moved = norm(t[t.len() - 1].x - t[0].x, t[t.len() - 1].y - t[0].y);
+        assert!(moved > 0.1, "{name} moved {moved}");
+    }
+    assert!(events_of(&events(&out), "agent_lost", "r00").is_empty());
+    assert_clean(&id);
+}

@@ -1122,6 +1122,7 @@ fn malformed_and_refused_joins_are_counted_and_recorded_while_honest_agents_join
             pid: 4_000_000 + nonce as u32,
             nonce,
             robot: FixedStr::new(robot),
+            group: 1,
         })
     };
     let refused = vec![

@@ -56,6 +56,7 @@ pub(crate) fn join_seats(
             pid: std::process::id(),
             nonce: nonce(&o.robot, i),
             robot: FixedStr::new(&o.robot),
+            group: u32::try_from(opts.len()).unwrap_or(u32::MAX),
         })
         .collect();
     let mut replies: Vec<Option<JoinReply>> = vec![None; opts.len()];

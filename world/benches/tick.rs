@@ -206,6 +206,7 @@ impl WorldTransport for InstantAgents {
                     pid: std::process::id(),
                     nonce: i as u64,
                     robot: FixedStr::new(name),
+                    group: self.names.len() as u32,
                 });
             }
         }
@@ -260,6 +261,8 @@ fn run_instant(s: &mrsim_scenario::Scenario, dir: &std::path::Path) -> (Duration
         transport: "instant".into(),
         start_timeout: None,
         verbose: false,
+        routes: Default::default(),
+        group_room: None,
     };
     let out = match mrsim_world::run(world, &mut InstantAgents::new(s), opts) {
         Ok(o) => o,

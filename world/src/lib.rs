@@ -47,4 +47,4 @@ pub mod timings;
 pub mod tracking;
 
 pub use physics::{Applied, World, WorldError};
-pub use run::{RunOptions, RunOutcome, run};
+pub use run::{Route, RunOptions, RunOutcome, run};

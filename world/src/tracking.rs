@@ -31,6 +31,26 @@ pub struct RobotMotion {
     pub min_clearance: f64,
     /// Designated-path metrics, for a robot with a `path`.
     pub path: Option<PathAccumulator>,
+    /// The shortest path from its start to its goal, as SPL counts it:
+    /// the straight distance, or its route's length ([`Tracker::along_routes`]).
+    pub shortest: f64,
+}
+
+impl RobotMotion {
+    /// Success weighted by path length (Anderson et al., "On Evaluation of
+    /// Embodied Navigation Agents", 2018): 0 without success, else the
+    /// shortest path over the longer of it and the path driven.
+    pub fn spl(&self, reached_goal: bool) -> f64 {
+        if !reached_goal {
+            return 0.0;
+        }
+        let longest = self.path_length.max(self.shortest);
+        if longest > 0.0 {
+            self.shortest / longest
+        } else {
+            1.0
+        }
+    }
 }
 
 /// Motion metrics of every robot, fed one tick's states at a time.
@@ -58,6 +78,7 @@ impl Tracker {
                     max_speed: 0.0,
                     min_clearance: f64::INFINITY,
                     path: PathAccumulator::new(&r.path, r.boundary),
+                    shortest: (r.goal[0] - r.start[0]).hypot(r.goal[1] - r.start[1]),
                 })
                 .collect(),
             walls: walls.to_vec(),
@@ -66,6 +87,21 @@ impl Tracker {
             clearance: Vec::new(),
             interaction: Interaction::new(scenario),
         }
+    }
+
+    /// The same, with the shortest path of each robot that `route_length`
+    /// gives a length for (by its name) the length of its route.
+    pub fn along_routes(
+        mut self,
+        scenario: &Scenario,
+        route_length: impl Fn(&str) -> Option<f64>,
+    ) -> Self {
+        for (m, r) in self.robots.iter_mut().zip(&scenario.robots) {
+            if let Some(l) = route_length(&r.name) {
+                m.shortest = l;
+            }
+        }
+        self
     }
 
     /// Takes in the next tick's states (tick `tick`, simulated time
@@ -139,6 +175,32 @@ mod tests {
             radius: 0.5,
             ..Default::default()
         }
+    }
+
+    #[test]
+    fn spl_measures_the_path_against_the_route_where_a_robot_has_one() {
+        // a: 8 m straight to its goal; b: 3 m straight, 5 m along its route.
+        let mut t = Tracker::new(&two_robots(), &[])
+            .along_routes(&two_robots(), |name| (name == "b").then_some(5.0));
+        t.track(0, 0.0, &[disc(1.0, 5.0, 0.0), disc(4.0, 5.0, 0.0)]);
+        t.track(1, 0.1, &[disc(11.0, 5.0, 0.0), disc(4.0, 1.0, 0.0)]);
+        t.track(2, 0.2, &[disc(11.0, 5.0, 0.0), disc(1.0, 5.0, 0.0)]);
+        let [a, b] = t.robots() else {
+            panic!("two robots")
+        };
+        assert_eq!((a.shortest, a.path_length), (8.0, 10.0));
+        assert!((a.spl(true) - 0.8).abs() < 1e-12);
+        assert_eq!(a.spl(false), 0.0);
+        // b drove 4 + 5 = 9 m, its route is 5 m: 5 / 9.
+        assert_eq!(b.shortest, 5.0);
+        assert!((b.path_length - 9.0).abs() < 1e-12);
+        assert!((b.spl(true) - 5.0 / 9.0).abs() < 1e-12);
+        // A path shorter than the shortest (a route's detour cut) counts 1.
+        let short = RobotMotion {
+            path_length: 4.0,
+            ..b.clone()
+        };
+        assert_eq!(short.spl(true), 1.0);
     }
 
     fn two_robots() -> Scenario {

@@ -25,8 +25,9 @@ use iceoryx2::prelude::ZeroCopySend;
 /// on with [`command_kind::NONE`], and a command its model lost arrives as
 /// [`command_kind::LOST`]. Version 9: over Zenoh, an accepted join reply
 /// carries the key the world signs its snapshots with, and every snapshot
-/// its tag (`mrsim_transport::zenoh::seal`).
-pub const PROTOCOL_VERSION: u32 = 9;
+/// its tag (`mrsim_transport::zenoh::seal`). Version 10: a join request
+/// says how many robots its process joins as ([`JoinRequest::group`]).
+pub const PROTOCOL_VERSION: u32 = 10;
 
 /// Longest robot name, in bytes, that fits a [`JoinRequest`].
 pub const MAX_NAME_LEN: usize = 64;
@@ -198,6 +199,11 @@ pub struct JoinRequest {
     pub nonce: u64,
     /// The robot's name from the scenario.
     pub robot: FixedStr<MAX_NAME_LEN>,
+    /// How many robots the agent's process joins as, this one included (1
+    /// for an agent of one robot; 0 where the transport does not carry
+    /// it): the process sends that many commands at once, and the world's
+    /// buffer for one process's commands must hold them all.
+    pub group: u32,
 }
 
 /// The world's answer to a [`JoinRequest`].

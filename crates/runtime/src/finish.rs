@@ -9,7 +9,6 @@ use crate::usage::AgentUsage;
 use mrsim_agents::diagnostics::MergeSummary;
 use mrsim_report::RenderError;
 use mrsim_runfolder::{FileError, RunMetrics};
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// How a run ended, for its caller to present.
@@ -89,19 +88,6 @@ pub enum FinishError {
     /// metrics.json is not JSON.
     #[error("parsing metrics.json")]
     ParseMetrics(#[source] serde_json::Error),
-    /// metrics.json could not be written again (with the routed robots'
-    /// `spl`).
-    #[error("rewriting metrics.json")]
-    WriteMetrics(#[source] FileError),
-    /// routes.csv could not be written.
-    #[error("writing {}", path.display())]
-    Routes {
-        /// The file.
-        path: PathBuf,
-        /// Why.
-        #[source]
-        source: std::io::Error,
-    },
 }
 
 /// What [`finish`] is given: how the run's parts ended.
@@ -189,74 +175,9 @@ pub fn finish(end: Ending<'_>) -> Result<Outcome, FinishError> {
             FileError::Json { source, .. } => FinishError::ParseMetrics(source),
         })?,
     });
-    let routes = write_routes(&outcome.dir)?;
-    if let Some(m) = outcome.metrics.as_mut()
-        && !routes.is_empty()
-    {
-        spl_along_routes(m, &routes);
-        mrsim_runfolder::write_metrics(&outcome.dir, m).map_err(FinishError::WriteMetrics)?;
-    }
     let mcap = wants_mcap(&outcome.dir);
     if end.render || mcap {
         outcome.render_error = render(&outcome.dir, end.render, mcap).err();
     }
     Ok(outcome)
-}
-
-/// `spl` of the robots with a route (`routes`: name to the route's
-/// length) with l the route's length rather than the straight start-goal
-/// distance the world used, and the run's mean again: the shortest way
-/// the robot fits through is what a perfect robot would drive.
-fn spl_along_routes(m: &mut RunMetrics, routes: &BTreeMap<String, f64>) {
-    for (name, r) in m.robots.iter_mut() {
-        let Some(&l) = routes.get(name) else { continue };
-        r.spl = Some(if !r.reached_goal {
-            0.0
-        } else if l.max(r.path_length) > 0.0 {
-            l / l.max(r.path_length)
-        } else {
-            1.0
-        });
-    }
-    let n = m.robots.len();
-    if n > 0 {
-        m.spl = Some(m.robots.values().filter_map(|r| r.spl).sum::<f64>() / n as f64);
-    }
-}
-
-/// Writes routes.csv: the route each robot with `route = "shortest"` was
-/// given at the start (the same computation as its agent's, from the run's
-/// scenario.json), and returns each one's length. Nothing is written when
-/// no robot has one, or when the folder holds no readable scenario.json
-/// (the world wrote none).
-fn write_routes(dir: &Path) -> Result<BTreeMap<String, f64>, FinishError> {
-    let mut lengths = BTreeMap::new();
-    let Ok(scenario) =
-        mrsim_runfolder::read_json::<mrsim_scenario::Scenario>(dir, mrsim_runfolder::SCENARIO_FILE)
-    else {
-        return Ok(lengths);
-    };
-    let routed: Vec<_> = scenario
-        .robots
-        .iter()
-        .filter(|r| r.route == mrsim_scenario::Route::Shortest)
-        .collect();
-    if routed.is_empty() {
-        return Ok(lengths);
-    }
-    let scene = mrsim_agents::route::RouteScene::of(&scenario);
-    let mut csv = String::from("robot,seq,x,y\n");
-    for r in routed {
-        // Validation refused every robot without a route.
-        if let Ok((_, path)) = scene.route(r) {
-            let points = path.points();
-            for (k, p) in points.iter().enumerate() {
-                csv.push_str(&format!("{},{k},{},{}\n", r.name, p[0], p[1]));
-            }
-            lengths.insert(r.name.clone(), path.length());
-        }
-    }
-    let path = dir.join(mrsim_runfolder::ROUTES_FILE);
-    std::fs::write(&path, csv).map_err(|source| FinishError::Routes { path, source })?;
-    Ok(lengths)
 }

@@ -39,6 +39,7 @@ pub mod memory;
 pub mod out;
 pub mod rerun;
 pub mod ros2;
+pub mod routes;
 pub mod sched;
 pub mod sim;
 pub mod sweep;

@@ -89,11 +89,19 @@ pub fn serve(
         // earlier world of the same run id left behind.
         crate::launch::claim_namespace(&ns)?;
     }
-    // The ROS 2 agent drives every robot with planner `ros2` from one
-    // process: it sends that many join requests, ready commands and
-    // commands at once, and the world's buffers for one agent's must hold
-    // them all (else the surplus is overwritten: robots that never join,
-    // lockstep ticks that wait out the stall timeout).
+    // An agent process that drives a group of robots sends that many join
+    // requests, ready commands and commands at once, and the world's
+    // buffers for one process's must hold them all (else the surplus is
+    // overwritten: robots that never join, lockstep ticks that wait out
+    // the stall timeout). iceoryx2 fixes their size when the world makes
+    // its services, before any join. A world its launcher started knows
+    // the groups it starts: `robots_per_agent` robots per agent process,
+    // and one ROS 2 agent for every robot with planner `ros2`. A world
+    // started by hand does not know how its agents will be grouped: any
+    // process may drive any number of its robots. Each join says its
+    // process's group, and a group larger than the room is refused with
+    // the reason rather than losing its commands.
+    let launched = req.launched;
     let ros2_group = validated.ros2_robots().len();
     let external = validated.external_robots().len();
     let (scenario, world) = validated.into_world();
@@ -103,12 +111,22 @@ pub fn serve(
     .map(|v| v.len())
     .unwrap_or(1 << 16);
     let bodies = scenario.robots.len() + scenario.obstacles.len();
-    let cap = capacity(
-        scenario.robots.len(),
-        scenario.world.robots_per_agent as usize,
-        external,
-        ros2_group,
-    );
+    let cap = if launched {
+        capacity(
+            scenario.robots.len(),
+            scenario.world.robots_per_agent as usize,
+            external,
+            ros2_group,
+        )
+    } else {
+        // Any grouping of all the robots, down to a process each.
+        let robots = scenario.robots.len();
+        Capacity {
+            robots,
+            group: robots.max(1),
+            processes: robots,
+        }
+    };
     let create = |source| WorldError::Create {
         run_id: run_id.to_string(),
         source,
@@ -131,6 +149,10 @@ pub fn serve(
         transport: if req.zenoh.is_some() { "zenoh" } else { "shm" }.to_string(),
         start_timeout: req.start_timeout,
         verbose: !req.launched || std::env::var_os("MRSIM_VERBOSE").is_some(),
+        routes: crate::routes::of(&scenario),
+        // Over Zenoh one inbox, sized from the robots, takes every
+        // process's messages.
+        group_room: req.zenoh.is_none().then_some(cap.commands_per_agent()),
     };
     let outcome = mrsim_world::run(world, link, opts);
     drop((shm, zenoh));

@@ -375,4 +375,10 @@ impl Capacity {
     pub fn messages(&self) -> usize {
         self.robots + Self::SPARE
     }
+
+    /// The commands the world's buffer for one agent process holds: its
+    /// [`Capacity::group`], and at least 8.
+    pub fn commands_per_agent(&self) -> usize {
+        self.group.max(8)
+    }
 }

@@ -1,6 +1,6 @@
 //! `mrsim agent`: one robot's agent process.
 
-use crate::cli::{LinkArg, ZenohArgs};
+use crate::cli::{Connect, LinkArgs};
 use crate::exit::fail;
 use anyhow::Result;
 use clap::Args;
@@ -39,21 +39,14 @@ pub struct AgentArgs {
     /// Write CPU time and peak RSS here at the end (set by `mrsim run`).
     #[arg(long, hide = true)]
     pub usage_out: Option<PathBuf>,
-    /// shm (the world on this machine) or zenoh (the world at --connect).
-    #[arg(long, value_enum, default_value = "shm")]
-    pub transport: LinkArg,
-    /// With --transport zenoh: the world's address (default
-    /// tcp/127.0.0.1:7447).
-    #[arg(long, value_name = "ENDPOINT")]
-    pub connect: Option<String>,
+    /// The transport; over Zenoh where the world is.
+    #[command(flatten)]
+    pub link: LinkArgs<Connect>,
     /// With --transport zenoh: seconds to keep trying to reach the world
     /// again after losing it (a cut link), rejoining with a new token; 0:
     /// end at once.
     #[arg(long, default_value_t = 30.0, value_name = "SECS")]
     pub reconnect: f64,
-    /// With --transport zenoh: the config file.
-    #[command(flatten)]
-    pub zenoh: ZenohArgs,
 }
 
 /// The runtime's request for an agent from its options.
@@ -72,7 +65,7 @@ pub(crate) fn request(args: &AgentArgs) -> Result<AgentRequest> {
             protocol_version: args.protocol_version,
         },
         usage_out: args.usage_out.clone(),
-        zenoh: (args.transport == LinkArg::Zenoh).then(|| args.zenoh.options(args.connect.clone())),
+        zenoh: args.link.zenoh(),
         reconnect: Duration::try_from_secs_f64(args.reconnect)
             .map_err(|e| crate::exit::invalid(format!("--reconnect {}: {e}", args.reconnect)))?,
     })
@@ -108,13 +101,7 @@ pub fn spell(req: &AgentRequest) -> Vec<OsString> {
     if let Some(p) = m.protocol_version {
         v.extend(["--protocol-version".into(), p.to_string().into()]);
     }
-    if let Some(z) = &req.zenoh {
-        v.extend(["--transport".into(), "zenoh".into()]);
-        if let Some(e) = &z.endpoint {
-            v.extend(["--connect".into(), e.into()]);
-        }
-        v.extend(ZenohArgs::spell(z));
-    }
+    v.extend(LinkArgs::<Connect>::spell(req.zenoh.as_ref()));
     v
 }
 

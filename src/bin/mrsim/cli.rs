@@ -7,6 +7,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use mrsim_runtime::ScenarioSource;
 use mrsim_runtime::launch::Transport;
 use mrsim_runtime::sched::Sched;
+use mrsim_transport::zenoh::ZenohOptions;
 use std::ffi::OsString;
 use std::path::PathBuf;
 
@@ -102,7 +103,7 @@ pub enum LinkArg {
     Zenoh,
 }
 
-/// Where a Zenoh world listens or its agents connect, and the config.
+/// The Zenoh config file of a run or of a process started by hand.
 #[derive(Debug, Clone, Default, Args)]
 pub struct ZenohArgs {
     /// A Zenoh JSON5 config file (TLS, user/password auth, routers, lease);
@@ -112,21 +113,98 @@ pub struct ZenohArgs {
 }
 
 impl ZenohArgs {
-    /// The arguments that give another process `opts`' config file (its
-    /// endpoint is `--listen` or `--connect`, by side).
-    pub fn spell(opts: &mrsim_transport::zenoh::ZenohOptions) -> Vec<OsString> {
-        match &opts.config_file {
-            Some(f) => vec!["--zenoh-config".into(), f.into()],
-            None => Vec::new(),
-        }
-    }
-
     /// The runtime's Zenoh options with `endpoint`.
-    pub fn options(&self, endpoint: Option<String>) -> mrsim_transport::zenoh::ZenohOptions {
-        mrsim_transport::zenoh::ZenohOptions {
+    pub fn options(&self, endpoint: Option<String>) -> ZenohOptions {
+        ZenohOptions {
             endpoint,
             config_file: self.zenoh_config.clone(),
         }
+    }
+}
+
+/// The side of a Zenoh link a process is on: the world listens
+/// ([`Listen`]), the processes that reach it connect ([`Connect`]).
+pub trait Side: Args + Clone + std::fmt::Debug {
+    /// The option that gives the endpoint (`--listen` or `--connect`).
+    const FLAG: &'static str;
+    /// The endpoint given, if any.
+    fn endpoint(&self) -> Option<String>;
+}
+
+/// `--listen`: where a world started by hand listens.
+#[derive(Debug, Clone, Default, Args)]
+pub struct Listen {
+    /// With --transport zenoh: where to listen (default: loopback only,
+    /// tcp/127.0.0.1:7447; tcp/0.0.0.0:7447 for every interface).
+    #[arg(long, value_name = "ENDPOINT")]
+    pub listen: Option<String>,
+}
+
+impl Side for Listen {
+    const FLAG: &'static str = "--listen";
+    fn endpoint(&self) -> Option<String> {
+        self.listen.clone()
+    }
+}
+
+/// `--connect`: where an agent, the ROS 2 agent or a watcher finds the
+/// world.
+#[derive(Debug, Clone, Default, Args)]
+pub struct Connect {
+    /// With --transport zenoh: the world's address (default
+    /// tcp/127.0.0.1:7447).
+    #[arg(long, value_name = "ENDPOINT")]
+    pub connect: Option<String>,
+}
+
+impl Side for Connect {
+    const FLAG: &'static str = "--connect";
+    fn endpoint(&self) -> Option<String> {
+        self.connect.clone()
+    }
+}
+
+/// How a process started by hand (`world`, `agent`, `ros2`, `top`,
+/// `view`) reaches the others of its run: the transport, and over Zenoh
+/// the endpoint of its side and the config file. The one place these
+/// options are declared, read and spelled.
+#[derive(Debug, Clone, Args)]
+pub struct LinkArgs<E: Side> {
+    /// shm (iceoryx2: every process on this machine) or zenoh (over TCP or
+    /// TLS: the world listens, the others connect, from this machine or
+    /// others).
+    #[arg(long, value_enum, default_value = "shm")]
+    pub transport: LinkArg,
+    /// With --transport zenoh: the endpoint.
+    #[command(flatten)]
+    pub endpoint: E,
+    /// With --transport zenoh: the config file.
+    #[command(flatten)]
+    pub zenoh: ZenohArgs,
+}
+
+impl<E: Side> LinkArgs<E> {
+    /// The runtime's Zenoh options when the link is Zenoh; `None`: shared
+    /// memory.
+    pub fn zenoh(&self) -> Option<ZenohOptions> {
+        (self.transport == LinkArg::Zenoh).then(|| self.zenoh.options(self.endpoint.endpoint()))
+    }
+
+    /// The arguments that give another process the link `zenoh` (`None`:
+    /// shared memory, the default, spelled as nothing): what
+    /// [`LinkArgs::zenoh`] makes of them again.
+    pub fn spell(zenoh: Option<&ZenohOptions>) -> Vec<OsString> {
+        let Some(z) = zenoh else {
+            return Vec::new();
+        };
+        let mut v: Vec<OsString> = vec!["--transport".into(), "zenoh".into()];
+        if let Some(e) = &z.endpoint {
+            v.extend([E::FLAG.into(), e.into()]);
+        }
+        if let Some(f) = &z.config_file {
+            v.extend(["--zenoh-config".into(), f.into()]);
+        }
+        v
     }
 }
 
@@ -170,23 +248,9 @@ pub struct WatchArgs {
     /// Seconds to wait for the world.
     #[arg(long, default_value_t = 10.0)]
     pub timeout: f64,
-    /// shm (the world on this machine) or zenoh (the world at --connect).
-    #[arg(long, value_enum, default_value = "shm")]
-    pub transport: LinkArg,
-    /// With --transport zenoh: the world's address (default
-    /// tcp/127.0.0.1:7447).
-    #[arg(long, value_name = "ENDPOINT")]
-    pub connect: Option<String>,
-    /// With --transport zenoh: the config file.
+    /// How to reach the world.
     #[command(flatten)]
-    pub zenoh: ZenohArgs,
-}
-
-impl WatchArgs {
-    /// The Zenoh options when the world is reached over Zenoh.
-    pub fn zenoh(&self) -> Option<mrsim_transport::zenoh::ZenohOptions> {
-        (self.transport == LinkArg::Zenoh).then(|| self.zenoh.options(self.connect.clone()))
-    }
+    pub link: LinkArgs<Connect>,
 }
 
 /// The subcommands.

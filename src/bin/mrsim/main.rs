@@ -33,9 +33,9 @@ fn main() {
         Command::World(args) => crate::world::main(&args),
         Command::Agent(args) => crate::agent::main(&args),
         Command::Ros2(args) => crate::ros2::main(&args),
-        Command::Top(w) => crate::top::run(&w.run, w.timeout, w.zenoh()),
+        Command::Top(w) => crate::top::run(&w.run, w.timeout, w.link.zenoh()),
         Command::View { watch, live } => {
-            crate::view::run(&watch.run, watch.timeout, watch.zenoh(), &live)
+            crate::view::run(&watch.run, watch.timeout, watch.link.zenoh(), &live)
         }
         Command::Report { dir } => crate::report::main(&dir),
         Command::Export { dir, mcap } => crate::export::main(&dir, mcap),

@@ -1,6 +1,6 @@
 //! `mrsim ros2`: the ROS 2 agent of robots with `planner = "ros2"`.
 
-use crate::cli::{LinkArg, ZenohArgs};
+use crate::cli::{Connect, LinkArgs};
 use crate::exit::{fail, invalid};
 use anyhow::Result;
 use clap::Args;
@@ -49,16 +49,9 @@ pub struct Ros2Args {
     /// Seconds to wait for the world.
     #[arg(long, default_value_t = 30.0)]
     pub timeout: f64,
-    /// shm (the world on this machine) or zenoh (the world at --connect).
-    #[arg(long, value_enum, default_value = "shm")]
-    pub transport: LinkArg,
-    /// With --transport zenoh: the world's address (default
-    /// tcp/127.0.0.1:7447).
-    #[arg(long, value_name = "ENDPOINT")]
-    pub connect: Option<String>,
-    /// With --transport zenoh: the config file.
+    /// The transport; over Zenoh where the world is.
     #[command(flatten)]
-    pub zenoh: ZenohArgs,
+    pub link: LinkArgs<Connect>,
 }
 
 /// The runtime's request for the ROS 2 agent from its options.
@@ -70,7 +63,7 @@ pub(crate) fn request(args: &Ros2Args) -> Result<Ros2Request> {
         robots: args.robots.clone(),
         run_id: args.run.clone(),
         timeout: secs("--timeout", args.timeout)?,
-        zenoh: (args.transport == LinkArg::Zenoh).then(|| args.zenoh.options(args.connect.clone())),
+        zenoh: args.link.zenoh(),
         node: NodeOptions {
             domain: args.domain,
             connect: args.ros2_connect.clone(),
@@ -114,13 +107,7 @@ pub fn spell(req: &Ros2Request) -> Vec<OsString> {
     if let Some(m) = &req.map {
         v.extend(["--map".into(), m.into()]);
     }
-    if let Some(z) = &req.zenoh {
-        v.extend(["--transport".into(), "zenoh".into()]);
-        if let Some(e) = &z.endpoint {
-            v.extend(["--connect".into(), e.into()]);
-        }
-        v.extend(ZenohArgs::spell(z));
-    }
+    v.extend(LinkArgs::<Connect>::spell(req.zenoh.as_ref()));
     v
 }
 

@@ -1,11 +1,12 @@
 //! `mrsim world`: a world process, started by `mrsim run` or by hand.
 
-use crate::cli::{LinkArg, ScenarioArgs, ZenohArgs};
+use crate::cli::{Connect, LinkArgs, Listen, ScenarioArgs};
 use crate::exit::{EXIT_INTERRUPTED, fail};
 use anyhow::Result;
 use clap::Args;
 use mrsim_runtime::world::WorldRequest;
 use mrsim_runtime::{ScenarioSource, Validated};
+use mrsim_transport::zenoh::ZenohOptions;
 use std::ffi::OsString;
 use std::time::Duration;
 
@@ -25,16 +26,9 @@ pub struct WorldArgs {
     /// Started by `mrsim run`: the launcher cleans up and prints.
     #[arg(long, hide = true)]
     pub launched: bool,
-    /// shm (this machine only) or zenoh (agents may be elsewhere).
-    #[arg(long, value_enum, default_value = "shm")]
-    pub transport: LinkArg,
-    /// With --transport zenoh: where to listen (default: loopback only,
-    /// tcp/127.0.0.1:7447; tcp/0.0.0.0:7447 for every interface).
-    #[arg(long, value_name = "ENDPOINT")]
-    pub listen: Option<String>,
-    /// With --transport zenoh: the config file.
+    /// The transport; over Zenoh where to listen.
     #[command(flatten)]
-    pub zenoh: ZenohArgs,
+    pub link: LinkArgs<Listen>,
 }
 
 /// The runtime's request for a world from its options (the scenario
@@ -45,7 +39,7 @@ pub(crate) fn request(args: &WorldArgs) -> WorldRequest {
         out: args.scenario.out.clone(),
         start_timeout: args.start_timeout.map(Duration::from_secs_f64),
         launched: args.launched,
-        zenoh: (args.transport == LinkArg::Zenoh).then(|| args.zenoh.options(args.listen.clone())),
+        zenoh: args.link.zenoh(),
     }
 }
 
@@ -64,13 +58,7 @@ pub fn spell(scenario: &ScenarioSource, req: &WorldRequest) -> Vec<OsString> {
     if let Some(out) = &req.out {
         v.extend(["--out".into(), out.into()]);
     }
-    if let Some(z) = &req.zenoh {
-        v.extend(["--transport".into(), "zenoh".into()]);
-        if let Some(e) = &z.endpoint {
-            v.extend(["--listen".into(), e.into()]);
-        }
-        v.extend(ZenohArgs::spell(z));
-    }
+    v.extend(LinkArgs::<Listen>::spell(req.zenoh.as_ref()));
     v
 }
 
@@ -78,15 +66,19 @@ pub fn spell(scenario: &ScenarioSource, req: &WorldRequest) -> Vec<OsString> {
 pub fn main(args: &WorldArgs) -> Result<i32> {
     let validated = Validated::new(args.scenario.source()).map_err(fail)?;
     let req = request(args);
-    let agent_flags = match &req.zenoh {
-        None => String::new(),
-        Some(z) => format!(
-            " --transport zenoh --connect {}",
+    // The agents' link: this world's endpoint (the config file is theirs).
+    let agent_link = req.zenoh.as_ref().map(|z| ZenohOptions {
+        endpoint: Some(
             z.endpoint
-                .as_deref()
-                .unwrap_or(mrsim_transport::zenoh::DEFAULT_ENDPOINT)
+                .clone()
+                .unwrap_or_else(|| mrsim_transport::zenoh::DEFAULT_ENDPOINT.to_string()),
         ),
-    };
+        config_file: None,
+    });
+    let agent_flags: String = LinkArgs::<Connect>::spell(agent_link.as_ref())
+        .iter()
+        .map(|a| format!(" {}", a.to_string_lossy()))
+        .collect();
     let ended = mrsim_runtime::world::serve(validated, &req, &mut |run_id, scenario| {
         eprintln!(
             "world: run `{run_id}`, {} robots; start each agent with\n  mrsim agent --run {run_id} --robot NAME{agent_flags}\nfor NAME in: {}",

@@ -135,6 +135,9 @@ pub struct Admission {
     /// This tick's answer per robot was garbage (rejected; it brakes).
     pub garbage: Vec<bool>,
     world_pid: u32,
+    /// The most robots one process may join as: what the transport's
+    /// buffer for one process's commands holds (`None`: no such limit).
+    room: Option<usize>,
 }
 
 fn splitmix(mut x: u64) -> u64 {
@@ -161,7 +164,16 @@ impl Admission {
             got: vec![None; n],
             garbage: vec![false; n],
             world_pid,
+            room: None,
         }
+    }
+
+    /// The same, refusing a process that joins as more robots than `room`
+    /// (the commands it sends at once would not all fit the buffer the
+    /// world keeps for one process's commands).
+    pub fn with_room(mut self, room: Option<usize>) -> Self {
+        self.room = room;
+        self
     }
 
     /// Every robot's agent.
@@ -217,6 +229,12 @@ impl Admission {
             refuse(format!(
                 "protocol version {} refused: this world speaks version {PROTOCOL_VERSION}",
                 req.protocol_version
+            ))
+        } else if let Some(room) = self.room.filter(|&r| req.group as usize > r) {
+            refuse(format!(
+                "process {} joins as {} robots; this world holds the commands of {room} \
+                 robots from one process ([world] robots_per_agent)",
+                req.pid, req.group
             ))
         } else if let Some(i) = idx {
             match self.agents[i] {

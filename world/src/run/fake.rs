@@ -115,6 +115,7 @@ pub fn join_request(robot: &str, pid: u32, nonce: u64) -> JoinRequest {
         pid,
         nonce,
         robot: FixedStr::new(robot),
+        group: 1,
     }
 }
 

@@ -34,7 +34,7 @@ use mrsim_proto::{
     CommandMsg, JoinRequest, SnapshotHeader, StatsHeader, command_kind, flags, now_ns, run_phase,
 };
 use mrsim_runfolder::timing::{Status, TIMING_FILE, TIMING_PARQUET_FILE, TimingSink};
-use mrsim_runfolder::{FileError, METRICS_FILE, SCENARIO_FILE, TRAJECTORY_FILE};
+use mrsim_runfolder::{FileError, METRICS_FILE, ROUTES_FILE, SCENARIO_FILE, TRAJECTORY_FILE};
 use mrsim_scenario::timing::{Timing, s_to_ns};
 use mrsim_scenario::{MissPolicy, Mode};
 use mrsim_sys::sched::BelowAgents;
@@ -48,7 +48,7 @@ use std::time::{Duration, Instant};
 pub use crate::metrics::RunMetrics;
 use mrsim_sys::process::pid_alive;
 use options::out_err;
-pub use options::{RunError, RunOptions, RunOutcome};
+pub use options::{Route, RunError, RunOptions, RunOutcome};
 
 /// The loop's state: the world and its transport, and one struct per role.
 struct Loop<'a> {
@@ -150,7 +150,7 @@ impl<'a> Loop<'a> {
         let schedule = Schedule::new(scenario);
         let timed = Timed::new(scenario);
         Self {
-            admission: Admission::new(robots, std::process::id()),
+            admission: Admission::new(robots, std::process::id()).with_room(opts.group_room),
             recording: Recording::new(rec, timings, names, n),
             // Before the first tick nothing is late.
             window: TickWindow {
@@ -700,6 +700,28 @@ fn body_names(scenario: &mrsim_scenario::Scenario) -> Vec<String> {
         .collect()
 }
 
+/// Writes routes.csv: the route of each robot that has one, in scenario
+/// order; nothing when none has.
+fn write_routes(
+    dir: &std::path::Path,
+    scenario: &mrsim_scenario::Scenario,
+    routes: &std::collections::BTreeMap<String, Route>,
+) -> std::io::Result<()> {
+    if routes.is_empty() {
+        return Ok(());
+    }
+    let mut csv = String::from("robot,seq,x,y\n");
+    for r in &scenario.robots {
+        let Some(route) = routes.get(&r.name) else {
+            continue;
+        };
+        for (k, p) in route.points.iter().enumerate() {
+            csv.push_str(&format!("{},{k},{},{}\n", r.name, p[0], p[1]));
+        }
+    }
+    std::fs::write(dir.join(ROUTES_FILE), csv)
+}
+
 /// Runs `world` to the end over `link`, writing the outputs into
 /// `opts.out_dir`.
 pub fn run(
@@ -731,7 +753,8 @@ fn run_with_clock(
         &json!({"run_id": opts.run_id, "out_dir": out_dir, "scenario": scenario}),
     )
     .map_err(|e| out_err("setup")(e.into()))?;
-    let tracker = Tracker::new(&scenario, world.walls());
+    let tracker = Tracker::new(&scenario, world.walls())
+        .along_routes(&scenario, |name| opts.routes.get(name).map(|r| r.length));
     let mut extras =
         crate::record::Extras::of(&dir, &scenario).map_err(out_err(TRAJECTORY_FILE))?;
     if records_calls(&scenario) {
@@ -891,6 +914,8 @@ fn finish(
     if let Some(c) = lp.link.network_counts() {
         recording::add_network_counts(&mut metrics, c);
     }
+    write_routes(&lp.opts.out_dir, &lp.world.scenario, &lp.opts.routes)
+        .map_err(out_err(ROUTES_FILE))?;
     mrsim_runfolder::write_metrics(&lp.opts.out_dir, &metrics).map_err(|e| match e {
         FileError::Io { source, .. } => out_err(METRICS_FILE)(source),
         FileError::Json { source, .. } => out_err(METRICS_FILE)(source.into()),

@@ -2,6 +2,7 @@
 
 use crate::metrics::RunMetrics;
 use mrsim_transport::TransportError;
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -18,6 +19,25 @@ pub struct RunOptions {
     pub start_timeout: Option<Duration>,
     /// Print progress lines (joins, losses) to stderr.
     pub verbose: bool,
+    /// The routes of the robots with `route = "shortest"`, by name, as
+    /// their agents compute them: written to routes.csv, and each one's
+    /// length is the shortest path the robot's `spl` is measured against
+    /// (the straight start-goal distance for the others).
+    pub routes: BTreeMap<String, Route>,
+    /// The most robots one agent process may join as: what the transport's
+    /// buffer for one process's commands holds (a join that says more is
+    /// refused). `None`: no such limit.
+    pub group_room: Option<usize>,
+}
+
+/// The route a robot was given at the start: the shortest way its disc
+/// fits through the run's walls and static obstacles.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Route {
+    /// Its points, from the start to the goal.
+    pub points: Vec<[f64; 2]>,
+    /// Its length along the points.
+    pub length: f64,
 }
 
 /// What a finished run returns.

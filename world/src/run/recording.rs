@@ -485,17 +485,7 @@ impl Summary<'_> {
             .map(|((((spec, a), t), m), x)| {
                 let [latency, wake, compute] = t.histograms();
                 let min_clearance = m.min_clearance.min(a.min_contact_gap);
-                let straight = (spec.goal[0] - spec.start[0]).hypot(spec.goal[1] - spec.start[1]);
-                let spl = if a.reached_goal {
-                    let longest = m.path_length.max(straight);
-                    if longest > 0.0 {
-                        straight / longest
-                    } else {
-                        1.0
-                    }
-                } else {
-                    0.0
-                };
+                let spl = m.spl(a.reached_goal);
                 let stuck_time = a.stuck_time + a.stuck_since.map_or(0.0, |s| self.sim_time - s);
                 (
                     spec.name.clone(),

@@ -54,6 +54,8 @@ fn with_loop<R>(mode: &str, test: impl FnOnce(&mut Loop<'_>, &FakeTransport) -> 
         transport: "fake".into(),
         start_timeout: None,
         verbose: false,
+        routes: Default::default(),
+        group_room: None,
     };
     let out = {
         let mut lp = Loop::new(world, &mut link, &clock, opts, rec, timings);
@@ -134,6 +136,27 @@ fn joins_for_unknown_robots_or_other_protocols_are_refused_and_say_why() {
     assert_eq!(reply.accepted, 0);
     assert!(reply.reason.as_str().contains("protocol version"));
     assert!(a.any_waiting());
+}
+
+#[test]
+fn a_process_joining_as_more_robots_than_the_world_holds_is_refused_and_told_why() {
+    let names: Vec<String> = (0..12).map(|i| format!("r{i}")).collect();
+    let mut a = Admission::new(names, 42).with_room(Some(8));
+    let mut req = join_request("r3", 7, 1);
+    req.group = 12;
+    let (reply, events) = a.join(&req, 5, |_| true);
+    assert_eq!(reply.accepted, 0);
+    assert!(
+        reply.reason.as_str().contains("joins as 12 robots")
+            && reply.reason.as_str().contains("commands of 8 robots"),
+        "{}",
+        reply.reason.as_str()
+    );
+    assert!(matches!(&events[..], [Event::JoinRefused { robot, .. }] if robot == "r3"));
+    // A group that fits is taken.
+    req.group = 8;
+    let (reply, _) = a.join(&req, 5, |_| true);
+    assert_eq!(reply.accepted, 1);
 }
 
 #[test]

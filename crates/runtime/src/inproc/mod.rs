@@ -189,6 +189,8 @@ pub fn run_scenario(
         transport: "inproc".to_string(),
         start_timeout: Some(start_timeout(n)),
         verbose: std::env::var_os("MRSIM_VERBOSE").is_some(),
+        routes: crate::routes::of(scenario),
+        group_room: None,
     };
     // The world loop in a thread of its own, and this one shows progress
     // (`on_wait`, about every 20 ms) until it ends.
@@ -830,6 +832,8 @@ mod tests {
                 transport: "inproc".to_string(),
                 start_timeout: Some(Duration::from_secs(30)),
                 verbose: false,
+                routes: Default::default(),
+                group_room: None,
             },
         );
         drop(link);

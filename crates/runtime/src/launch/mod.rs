@@ -32,7 +32,6 @@ pub use spec::{ProcessSpec, Starter};
 
 use crate::error::{Invalid, Refusal};
 use crate::finish::FinishError;
-use crate::inproc::InprocError;
 use crate::sched::Sched;
 use mrsim_transport::zenoh::ZenohOptions;
 use std::path::PathBuf;
@@ -87,8 +86,8 @@ pub struct RunRequest {
     pub zenoh: ZenohOptions,
     /// With [`Transport::Inproc`] in lockstep: the longest one robot's
     /// answer (observe, plan, send) may take before the run stops with
-    /// [`RunError::Planner`] naming the robot and the tick, the outputs so
-    /// far written. `None`: no limit (a planner that never returns holds
+    /// [`InProcessError::Planner`] naming the robot and the tick, the
+    /// outputs so far written. `None`: no limit (a planner that never returns holds
     /// the run).
     pub plan_timeout: Option<Duration>,
     /// Robots with planner `ros2`: how the ROS 2 agent reaches ROS 2.
@@ -160,39 +159,21 @@ pub enum RunError {
     /// Waiting for the world process failed.
     #[error("waiting for the world")]
     Wait(#[source] std::io::Error),
-    /// The in-process run failed.
+    /// The run in this process failed (`--transport inproc`): refused, a
+    /// planner that failed in lockstep, the run itself, or its ending
+    /// ([`InProcessError`]'s variants).
     #[error(transparent)]
-    Inproc(#[from] InprocError),
-    /// A robot's planner failed in an in-process lockstep run (panicked, or
-    /// returned a non-finite command): the run stopped at that tick; the
-    /// outputs so far are in `dir`.
-    #[error("{failure}; the run stopped there, outputs so far are in {}", dir.display())]
-    Planner {
-        /// Which robot, which tick, how.
-        failure: mrsim_agents::PlanFailure,
-        /// The run folder.
-        dir: PathBuf,
-    },
-    /// The run ended but could not be finished.
+    InProcess(#[from] InProcessError),
+    /// The run's processes ended but the run could not be finished.
     #[error(transparent)]
     Finish(#[from] FinishError),
-}
-
-impl From<InProcessError> for RunError {
-    fn from(e: InProcessError) -> Self {
-        match e {
-            InProcessError::Invalid(i) => RunError::Invalid(i),
-            InProcessError::Run(e) => RunError::Inproc(e),
-            InProcessError::Planner { failure, dir } => RunError::Planner { failure, dir },
-            InProcessError::Finish(e) => RunError::Finish(e),
-        }
-    }
 }
 
 impl Refusal for RunError {
     fn refused(&self) -> Option<&Invalid> {
         match self {
             RunError::Invalid(i) => Some(i),
+            RunError::InProcess(e) => e.refused(),
             _ => None,
         }
     }

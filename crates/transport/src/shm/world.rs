@@ -149,7 +149,7 @@ impl ShmWorld {
             .service_builder(&service_name("mrsim/command")?)
             .publish_subscribe::<CommandMsg>()
             // A group's agent sends a command per robot, all at once.
-            .subscriber_max_buffer_size(cap.group.max(8))
+            .subscriber_max_buffer_size(cap.commands_per_agent())
             .max_publishers(agents)
             .max_subscribers(2)
             .max_nodes(nodes)

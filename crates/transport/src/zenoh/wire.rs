@@ -203,6 +203,9 @@ impl Wire for JoinRequest {
             pid: r.u32(),
             nonce: r.u64(),
             robot: r.str(),
+            // Not sent: the world's inbox over Zenoh is shared by every
+            // agent and sized from the robots, not per process.
+            group: 0,
         }
     }
 }
@@ -320,6 +323,7 @@ mod tests {
             pid: 1234,
             nonce: 99,
             robot: FixedStr::new("r17"),
+            group: 0,
         });
         round_trip(JoinReply {
             nonce: 1,
