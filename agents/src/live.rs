@@ -259,6 +259,8 @@ struct Seats {
     reach: Option<f64>,
     grid: NeighbourGrid,
     near: Vec<u32>,
+    /// The bodies bucketed this snapshot, with their indices in it.
+    named: Vec<(u32, [f64; 3])>,
 }
 
 impl Seats {
@@ -273,20 +275,54 @@ impl Seats {
             reach,
             grid: NeighbourGrid::default(),
             near: Vec::new(),
+            named: Vec::new(),
         }
     }
 
     /// Builds the grid over this snapshot's bodies: true if there is one
-    /// to look robots' neighbours up in.
+    /// to look robots' neighbours up in. Of a large snapshot (a group of a
+    /// few robots among many bodies), only the bodies that can come within
+    /// reach of one of the group are bucketed: those near the box around
+    /// the group's robots. Each keeps its index in the snapshot, so every
+    /// robot's candidates hold every body within its reach as before, and
+    /// the observations are the same.
     fn index(&mut self, bodies: &[BodyState]) -> bool {
-        self.reach.is_some_and(|r| {
-            self.grid.build(
-                bodies
-                    .iter()
-                    .map(|b| [b.position[0], b.position[1], b.radius]),
-                r,
-            )
-        })
+        let Some(r) = self.reach else {
+            return false;
+        };
+        let all = |b: &BodyState| [b.position[0], b.position[1], b.radius];
+        if bodies.len() < 4 * self.seats.len() {
+            return self.grid.build(bodies.iter().map(all), r);
+        }
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for b in self.seats.iter().filter_map(|s| bodies.get(s.me)) {
+            for k in 0..2 {
+                // min and max pass over a NaN: that robot scans every body.
+                lo[k] = lo[k].min(b.position[k]);
+                hi[k] = hi[k].max(b.position[k]);
+            }
+        }
+        if !(lo[0] <= hi[0] && lo[1] <= hi[1]) {
+            return self.grid.build(bodies.iter().map(all), r);
+        }
+        // Within reach of a robot inside the box only if within reach plus
+        // the body's radius of the box (with room for rounding). A centre
+        // that is not finite fails every test and is kept: the grid then
+        // refuses, as over all the bodies.
+        let m = r * (1.0 + 1e-6) + 1e-6;
+        self.named.clear();
+        self.named.extend(
+            bodies
+                .iter()
+                .enumerate()
+                .filter(|(_, b)| {
+                    let [x, y] = b.position;
+                    let e = m + b.radius * (1.0 + 1e-6);
+                    !(x + e < lo[0] || x - e > hi[0] || y + e < lo[1] || y - e > hi[1])
+                })
+                .map(|(j, b)| (j as u32, all(b))),
+        );
+        self.grid.build_named(&self.named, r)
     }
 
     /// Seat `i` and, when `gridded`, the indices of the bodies near it

@@ -89,6 +89,15 @@ impl Buckets {
         self.key[j] as usize
     }
 
+    /// Renames every sorted disc `j` to `name(j)` in what
+    /// [`Self::bucket`] reports ([`Self::bucket_of`] still takes the
+    /// position in the sorted input).
+    pub fn rename(&mut self, name: impl Fn(u32) -> u32) {
+        for j in &mut self.order {
+            *j = name(*j);
+        }
+    }
+
     /// Number of discs sorted.
     pub fn len(&self) -> usize {
         self.order.len()
@@ -264,6 +273,19 @@ impl NeighbourGrid {
         true
     }
 
+    /// [`Self::build`] over some of the discs, each named by the index
+    /// that [`Self::near`] reports for it: a caller that buckets only the
+    /// discs that can matter (those near the points it will ask about)
+    /// names them by their index among all the discs. Names must ascend
+    /// in `named`'s order, so that answers stay in ascending order.
+    pub fn build_named(&mut self, named: &[(u32, Disc)], reach: f64) -> bool {
+        let built = self.build(named.iter().map(|(_, d)| *d), reach);
+        if built {
+            self.buckets.rename(|j| named[j as usize].0);
+        }
+        built
+    }
+
     /// Fills `out` with the indices of every disc that may come within
     /// `reach` of `p` (every one whose surface does, and others nearby),
     /// ascending; false, with `out` empty, if the grid cannot answer
@@ -395,6 +417,41 @@ mod tests {
                     assert!(out.contains(&(j as u32)));
                 }
             }
+        }
+    }
+
+    #[test]
+    fn a_grid_of_some_named_discs_answers_with_their_names() {
+        let discs = scatter(400, 5, 40.0);
+        let mut all = NeighbourGrid::default();
+        assert!(all.build(discs.iter().copied(), 3.0));
+        // Only the discs of the left half, named by their index among all.
+        let named: Vec<(u32, Disc)> = discs
+            .iter()
+            .enumerate()
+            .filter(|(_, d)| d[0] < 0.0)
+            .map(|(j, d)| (j as u32, *d))
+            .collect();
+        let mut some = NeighbourGrid::default();
+        assert!(some.build_named(&named, 3.0));
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        for me in discs.iter().filter(|d| d[0] < -10.0) {
+            assert!(all.near([me[0], me[1]], 3.0, &mut a));
+            assert!(some.near([me[0], me[1]], 3.0, &mut b));
+            // Far from the cut, the left half's answer is the whole one's
+            // among the left half, under the same names.
+            a.retain(|&j| discs[j as usize][0] < 0.0);
+            let exact = |v: &Vec<u32>| -> Vec<u32> {
+                v.iter()
+                    .copied()
+                    .filter(|&j| {
+                        let d = discs[j as usize];
+                        (d[0] - me[0]).hypot(d[1] - me[1]) - d[2] <= 3.0
+                    })
+                    .collect()
+            };
+            assert_eq!(exact(&a), exact(&b));
+            assert!(b.windows(2).all(|w| w[0] < w[1]), "ascending");
         }
     }
 
