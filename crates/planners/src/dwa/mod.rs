@@ -117,10 +117,20 @@
 //! robots that each keep to their half stop apart whatever the other does
 //! (the responsibility shared as ORCA shares it). On true states the
 //! others' velocities are known and the arcs are checked against them.
+//!
+//! **Walls on true states**: a map's traced outlines hold thousands of
+//! wall segments, and every chord of every arc would be checked against
+//! every one within reach. A grid of the walls (square cells of the padded
+//! diameter, each holding the segments whose bounding box meets it) is
+//! built at the first tick (again only if the walls given change); each
+//! chord is checked only against the walls within reach in the cells its
+//! padded disc's box meets, which are all those it could touch, so the
+//! outcome is the same as checking every wall.
 
 mod contact;
 mod planner;
 mod unicycle;
+mod walls;
 
 pub use planner::{Dwa, Obstacles};
 
