@@ -402,6 +402,76 @@ mod tests {
     }
 
     #[test]
+    fn arcs_checked_through_the_walls_grid_meet_walls_when_checking_every_wall_does() {
+        // A map's traced outline: short segments scattered round the
+        // robot. Every arc of the window meets its first wall at the same
+        // time whether its chords are checked against the grid's walls or
+        // against every wall within reach, one by one.
+        let walls: Vec<Segment> = (0..600)
+            .map(|k| {
+                let (x, y) = (
+                    (k * 37 % 101) as f64 * 0.06 - 3.0,
+                    (k * 53 % 97) as f64 * 0.06 - 3.0,
+                );
+                let (dx, dy) = (0.05 * (k % 3) as f64, 0.05 * (k % 5) as f64);
+                Segment {
+                    a: Vec2::new(x, y),
+                    b: Vec2::new(x + dx, y + dy),
+                }
+            })
+            .filter(|w| w.closest_point(Vec2::zeros()).norm() > 0.4)
+            .collect();
+        let mut s = me(0.3);
+        s.velocity = Vec2::new(0.5, 0.1);
+        let mut obs = observation(s, Vec2::new(5.0, 0.0), &[]);
+        obs.walls = &walls;
+        let (radius, reach, step, horizon) = (0.3, 3.5, 0.05, 3.0);
+        let mut grid = WallGrid::default();
+        grid.prepare(&walls, 2.0 * radius);
+        let near = grid.near(&walls, Vec2::zeros(), reach);
+        let brute: Vec<u32> = (0..walls.len() as u32)
+            .filter(|&k| walls[k as usize].closest_point(Vec2::zeros()).norm() <= reach)
+            .collect();
+        assert_eq!(near, brute);
+        let mut arc_walls = ArcWalls {
+            all: &walls,
+            grid: &mut grid,
+            buf: Vec::new(),
+            any: true,
+        };
+        let mut met = 0;
+        for i in 0..=10 {
+            for j in 0..=10 {
+                let (v, w) = (0.1 * i as f64, -2.0 + 0.4 * j as f64);
+                let fast = arc_contact(&obs, radius, &[], &mut arc_walls, v, w, step, horizon);
+                // Every wall within reach, chord by chord.
+                let (mut p, mut th, mut t, mut slow) = (Vec2::zeros(), 0.3, 0.0, f64::INFINITY);
+                while t < horizon {
+                    let (q, th2) = arc(p, th, v, w, step);
+                    let vel = (q - p) / step;
+                    let hit = brute
+                        .iter()
+                        .filter_map(|&k| time_to_segment(p, vel, radius, &walls[k as usize]))
+                        .fold(f64::INFINITY, f64::min);
+                    if hit <= step {
+                        slow = t + hit;
+                        break;
+                    }
+                    (p, th) = (q, th2);
+                    t += step;
+                }
+                assert_eq!(
+                    fast.to_bits(),
+                    slow.to_bits(),
+                    "v {v} omega {w}: {fast} vs {slow}"
+                );
+                met += usize::from(slow.is_finite());
+            }
+        }
+        assert!(met > 50, "only {met} arcs meet a wall");
+    }
+
+    #[test]
     fn a_robot_driving_at_a_near_wall_brakes() {
         let walls = [Segment {
             a: Vec2::new(0.3, -2.0),
