@@ -45,10 +45,7 @@ pub(super) fn time_to_segment(p: Vec2, v: Vec2, r: f64, s: &Segment) -> Option<f
         let n = Vec2::new(-ab.y, ab.x) / len;
         let dist = (p - s.a).dot(&n);
         let closing = -v.dot(&n) * dist.signum();
-        // Within r of the line but not of the segment (beyond an end): the
-        // side is met, if ever, at a round end; the line's crossing lies
-        // in the past.
-        if closing > 0.0 && dist.abs() >= r {
+        if closing > 0.0 {
             let t = (dist.abs() - r) / closing;
             let q = p + v * t;
             let along = (q - s.a).dot(&ab) / (len * len);
