@@ -124,8 +124,12 @@
 //! diameter, each holding the segments whose bounding box meets it) is
 //! built at the first tick (again only if the walls given change); each
 //! chord is checked only against the walls within reach in the cells its
-//! padded disc's box meets, which are all those it could touch, so the
-//! outcome is the same as checking every wall.
+//! padded disc's box meets, which are all those it could touch. (The
+//! outcome differs from checking every wall within reach in one case:
+//! a disc within its radius of a segment's line but beyond its end gets a
+//! contact time in the past from that side, which made an arc
+//! inadmissible even when the segment was metres away; now only a
+//! segment near the chord can do so.)
 
 mod contact;
 mod planner;
