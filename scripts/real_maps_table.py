@@ -101,12 +101,26 @@ def map_of(src):
     return os.path.splitext(os.path.basename(m.group(1)))[0] if m else "-"
 
 
+def absolute_map(src, scene):
+    """The scene with its map's `file` made absolute (the variant is
+    written elsewhere; a relative path is relative to the scene)."""
+    base = os.path.dirname(os.path.abspath(scene))
+
+    def fix(m):
+        path = m.group(2)
+        if not os.path.isabs(path):
+            path = os.path.normpath(os.path.join(base, path))
+        return '%s"%s"' % (m.group(1), path.replace("\\", "/"))
+
+    return re.sub(r'(?m)^(file\s*=\s*)"([^"]+)"', fix, src)
+
+
 def run(scene, label, planner, params, tmp):
     src = open(scene).read()
     tag = "%s-%s" % (os.path.splitext(os.path.basename(scene))[0], re.sub(r"\W+", "-", label))
     path = os.path.join(tmp, tag + ".toml")
     with open(path, "w") as f:
-        f.write(variant(src, planner, params))
+        f.write(variant(absolute_map(src, scene), planner, params))
     out = os.path.join(tmp, tag)
     p = subprocess.run(
         [MRSIM, "run", path, "--out", out, "--mode", "lockstep", "--transport", "inproc", "--quiet"],

@@ -117,10 +117,24 @@
 //! robots that each keep to their half stop apart whatever the other does
 //! (the responsibility shared as ORCA shares it). On true states the
 //! others' velocities are known and the arcs are checked against them.
+//!
+//! **Walls on true states**: a map's traced outlines hold thousands of
+//! wall segments, and every chord of every arc would be checked against
+//! every one within reach. A grid of the walls (square cells of the padded
+//! diameter, each holding the segments whose bounding box meets it) is
+//! built at the first tick (again only if the walls given change); each
+//! chord is checked only against the walls within reach in the cells its
+//! padded disc's box meets, which are all those it could touch. (The
+//! outcome differs from checking every wall within reach in one case:
+//! a disc within its radius of a segment's line but beyond its end gets a
+//! contact time in the past from that side, which made an arc
+//! inadmissible even when the segment was metres away; now only a
+//! segment near the chord can do so.)
 
 mod contact;
 mod planner;
 mod unicycle;
+mod walls;
 
 pub use planner::{Dwa, Obstacles};
 

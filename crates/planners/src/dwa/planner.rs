@@ -36,6 +36,8 @@ pub struct Dwa {
     pub padding: Option<f64>,
     /// A unicycle's recovery state.
     pub(super) recovery: Recovery,
+    /// The walls' grid (true states), built at the first tick.
+    pub(super) walls: super::walls::WallGrid,
 }
 
 impl Default for Dwa {
@@ -49,6 +51,7 @@ impl Default for Dwa {
             obstacles: Obstacles::Truth,
             padding: None,
             recovery: Default::default(),
+            walls: Default::default(),
         }
     }
 }
@@ -83,6 +86,7 @@ impl Dwa {
             obstacles,
             padding,
             recovery: Default::default(),
+            walls: Default::default(),
         })
     }
 }

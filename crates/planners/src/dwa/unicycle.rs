@@ -4,6 +4,7 @@
 
 use super::contact::{scan_points, time_to_disc, time_to_segment};
 use super::planner::{Dwa, Obstacles};
+use super::walls::WallGrid;
 use crate::{Command, Observation, Segment, Sensed, Vec2};
 use std::f64::consts::PI;
 
@@ -25,13 +26,14 @@ fn arc(p: Vec2, theta: f64, v: f64, omega: f64, t: f64) -> (Vec2, f64) {
 /// `horizon` (infinite if none): the arc is followed chord by chord (steps
 /// of `step`), each chord checked exactly against every sensed body
 /// (moving at its velocity, and also standing where it is) and every wall
-/// in `walls`.
+/// within the robot's reach that the chord's disc can touch (the walls'
+/// grid gives those near the chord).
 #[allow(clippy::too_many_arguments)]
 fn arc_contact(
     obs: &Observation,
     radius: f64,
     others: &[Sensed],
-    walls: &[&Segment],
+    walls: &mut ArcWalls,
     v: f64,
     omega: f64,
     step: f64,
@@ -56,9 +58,15 @@ fn arc_contact(
                 hit = hit.min(h);
             }
         }
-        for w in walls {
-            if let Some(h) = time_to_segment(p, vel, radius, w) {
-                hit = hit.min(h);
+        if walls.any {
+            let pad = Vec2::repeat(radius * (1.0 + 1e-9) + 1e-9);
+            walls
+                .grid
+                .query_near(p.inf(&q) - pad, p.sup(&q) + pad, &mut walls.buf);
+            for &k in &walls.buf {
+                if let Some(h) = time_to_segment(p, vel, radius, &walls.all[k as usize]) {
+                    hit = hit.min(h);
+                }
             }
         }
         if hit <= step {
@@ -68,6 +76,16 @@ fn arc_contact(
         t += step;
     }
     f64::INFINITY
+}
+
+/// The walls an arc is checked against: all the run's, their grid (its
+/// [`WallGrid::near`] done for this tick), and a buffer for its queries.
+struct ArcWalls<'a> {
+    all: &'a [Segment],
+    grid: &'a mut WallGrid,
+    buf: Vec<u32>,
+    /// Whether any wall is within reach.
+    any: bool,
 }
 
 /// Time to the first contact of the disc of radius `r` with any of the
@@ -197,30 +215,39 @@ pub(super) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
     } else {
         Vec::new()
     };
-    let walls: Vec<&Segment> = if scan {
+    // (On true states the walls come from a grid of them built at the
+    // first tick: those within reach, in their order, for the nearest
+    // obstacle, and per chord of an arc those near the chord.)
+    let near: Vec<u32> = if scan {
         Vec::new()
     } else {
-        obs.walls
-            .iter()
-            .filter(|w| (w.closest_point(me.position) - me.position).norm() <= reach)
-            .collect()
+        dwa.walls.prepare(obs.walls, 2.0 * padded);
+        dwa.walls.near(obs.walls, me.position, reach)
+    };
+    let walls: Vec<&Segment> = near.iter().map(|&k| &obs.walls[k as usize]).collect();
+    let mut arc_walls = ArcWalls {
+        all: obs.walls,
+        grid: &mut dwa.walls,
+        buf: Vec::new(),
+        any: !walls.is_empty(),
     };
     let others: &[Sensed] = if scan { &[] } else { obs.others };
     let step = dt / 2.0;
-    let contact_time = |v: f64, w: f64| {
-        let t = arc_points(&points, padded, v, w, dwa.horizon);
-        if walls.is_empty() && others.is_empty() {
+    let horizon = dwa.horizon;
+    let mut contact_time = |v: f64, w: f64| {
+        let t = arc_points(&points, padded, v, w, horizon);
+        if !arc_walls.any && others.is_empty() {
             t
         } else {
             t.min(arc_contact(
                 obs,
                 padded,
                 others,
-                &walls,
+                &mut arc_walls,
                 v,
                 w,
                 step,
-                dwa.horizon,
+                horizon,
             ))
         }
     };
