@@ -1455,3 +1455,67 @@ fn over_tls_a_run_goes_through_and_an_agent_that_does_not_trust_the_worlds_ca_is
         assert_eq!(count_events(&out, "agent_joined", r), 1, "{r}");
     }
 }
+
+/// How many of process `pid`'s threads are Zenoh's receiving threads
+/// (named `rx-N` by Zenoh's runtime).
+fn receiving_threads(pid: u32) -> usize {
+    let Ok(tasks) = std::fs::read_dir(format!("/proc/{pid}/task")) else {
+        return 0;
+    };
+    tasks
+        .flatten()
+        .filter_map(|t| std::fs::read_to_string(t.path().join("comm")).ok())
+        .filter(|name| name.starts_with("rx-"))
+        .count()
+}
+
+#[test]
+fn zenoh_receives_on_one_thread_per_process_unless_the_environment_says_otherwise() {
+    let dir = fresh_dir("zrx");
+    let file = dir.join("two.toml");
+    std::fs::write(&file, TWO).expect("write");
+    let out = dir.join("out");
+    let id = run_id("zrx");
+    let ep = free_endpoint();
+    let mut world = mrsim()
+        .args(["world"])
+        .arg(&file)
+        .args([
+            "--run",
+            &id,
+            "--start-timeout",
+            "60",
+            "--transport",
+            "zenoh",
+        ])
+        .args(["--listen", &ep, "--out"])
+        .arg(&out)
+        .env_remove("ZENOH_RUNTIME")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("world");
+    let mut a = zenoh_agent("a", &id, &ep)
+        .env_remove("ZENOH_RUNTIME")
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("a");
+    let mut b = zenoh_agent("b", &id, &ep)
+        .env("ZENOH_RUNTIME", "(rx: (worker_threads: 2))")
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("b");
+    for r in ["a", "b"] {
+        wait_for_event(&out, 30, "both joined", |e| {
+            e["type"] == "agent_joined" && e["robot"] == r
+        });
+    }
+    // Every process has a link by now, so its receiving threads exist.
+    let counts = [world.id(), a.id(), b.id()].map(receiving_threads);
+    for c in [&mut world, &mut a, &mut b] {
+        let _ = c.kill();
+        let _ = c.wait();
+    }
+    remove_leftovers(&id);
+    assert_eq!(counts, [1, 1, 2], "world, a, b");
+}

@@ -71,6 +71,33 @@ use std::path::PathBuf;
 /// Where the world listens unless told otherwise: loopback only.
 pub const DEFAULT_ENDPOINT: &str = "tcp/127.0.0.1:7447";
 
+/// The environment variable Zenoh's runtime takes its threads from, read
+/// once, when the process opens its first session.
+pub const RUNTIME_ENV: &str = "ZENOH_RUNTIME";
+
+/// The threads mrsim gives Zenoh's runtime unless [`RUNTIME_ENV`] says
+/// otherwise: one receiving thread instead of two. With two, each message
+/// a process receives wakes the second as well (it comes to look for work
+/// it does not find): a context switch more per message for every agent
+/// and for the world, about a fifth of Zenoh's CPU per round trip; one
+/// thread reads a world's 256 agents' links as well.
+pub const RUNTIME: &str = "(rx: (worker_threads: 1))";
+
+/// Gives Zenoh's runtime [`RUNTIME`] unless the environment already says
+/// what it is to be.
+///
+/// # Safety
+///
+/// Sets an environment variable: call it before the process has started
+/// any other thread (first thing in `main`).
+pub unsafe fn default_runtime() {
+    if std::env::var_os(RUNTIME_ENV).is_none() {
+        // SAFETY: no other thread reads the environment (the caller's
+        // promise).
+        unsafe { std::env::set_var(RUNTIME_ENV, RUNTIME) };
+    }
+}
+
 /// How to reach the other side.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct ZenohOptions {
