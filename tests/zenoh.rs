@@ -1456,21 +1456,22 @@ fn over_tls_a_run_goes_through_and_an_agent_that_does_not_trust_the_worlds_ca_is
     }
 }
 
-/// How many of process `pid`'s threads are Zenoh's receiving threads
-/// (named `rx-N` by Zenoh's runtime).
-fn receiving_threads(pid: u32) -> usize {
+/// How many of process `pid`'s threads are of Zenoh's runtime `name`
+/// (which names them `NAME-N`).
+fn runtime_threads(pid: u32, name: &str) -> usize {
     let Ok(tasks) = std::fs::read_dir(format!("/proc/{pid}/task")) else {
         return 0;
     };
+    let prefix = format!("{name}-");
     tasks
         .flatten()
         .filter_map(|t| std::fs::read_to_string(t.path().join("comm")).ok())
-        .filter(|name| name.starts_with("rx-"))
+        .filter(|comm| comm.starts_with(&prefix))
         .count()
 }
 
 #[test]
-fn zenoh_receives_on_one_thread_per_process_unless_the_environment_says_otherwise() {
+fn zenoh_reads_links_on_its_application_thread_unless_the_environment_says_otherwise() {
     let dir = fresh_dir("zrx");
     let file = dir.join("two.toml");
     std::fs::write(&file, TWO).expect("write");
@@ -1510,12 +1511,24 @@ fn zenoh_receives_on_one_thread_per_process_unless_the_environment_says_otherwis
             e["type"] == "agent_joined" && e["robot"] == r
         });
     }
-    // Every process has a link by now, so its receiving threads exist.
-    let counts = [world.id(), a.id(), b.id()].map(receiving_threads);
+    // Every process has accepted or opened a link and read from it by
+    // now: a runtime of its own for that would have its threads.
+    let threads = |pid: u32| {
+        (
+            runtime_threads(pid, "rx"),
+            runtime_threads(pid, "acc"),
+            runtime_threads(pid, "app") > 0,
+        )
+    };
+    let counts = [world.id(), a.id(), b.id()].map(threads);
     for c in [&mut world, &mut a, &mut b] {
         let _ = c.kill();
         let _ = c.wait();
     }
     remove_leftovers(&id);
-    assert_eq!(counts, [1, 1, 2], "world, a, b");
+    assert_eq!(
+        counts,
+        [(0, 0, true), (0, 0, true), (2, 0, true)],
+        "(rx, acc, app) threads of the world, a, b"
+    );
 }
