@@ -9,8 +9,9 @@
 //! answers from Zenoh's callback (no hand-over to another thread), so this
 //! is what Zenoh itself costs per round trip, with the settings the
 //! transport uses (express, real-time priority, blocking congestion
-//! control; with `MRSIM_FLOOR_LOW_LATENCY=1`, Zenoh's low-latency
-//! transport on both sides).
+//! control, Zenoh's runtime threads as mrsim sets them unless
+//! `ZENOH_RUNTIME` is set; with `MRSIM_FLOOR_LOW_LATENCY=1`, Zenoh's
+//! low-latency transport on both sides).
 //!
 //! `MRSIM_FLOOR_HANDOVER=1` makes the echo answer from a thread of its
 //! own that the callback wakes, as an agent's loop is woken (one
@@ -115,6 +116,9 @@ fn cpu_s(who: libc::c_int) -> f64 {
 }
 
 fn main() -> zenoh::Result<()> {
+    // Zenoh's runtime threads as mrsim sets them (and the echo inherits).
+    // SAFETY: first thing in main, before any thread exists.
+    unsafe { mrsim_transport::zenoh::default_runtime() };
     let args: Vec<String> = std::env::args().collect();
     if args.get(1).map(String::as_str) == Some("echo") {
         let endpoint = args.get(2).cloned().unwrap_or_default();
