@@ -1506,13 +1506,9 @@ fn zenoh_reads_links_on_its_application_thread_unless_the_environment_says_other
         .stderr(Stdio::null())
         .spawn()
         .expect("b");
-    for r in ["a", "b"] {
-        wait_for_event(&out, 30, "both joined", |e| {
-            e["type"] == "agent_joined" && e["robot"] == r
-        });
-    }
-    // Every process has accepted or opened a link and read from it by
-    // now: a runtime of its own for that would have its threads.
+    // The run is short and its events are written late: the processes'
+    // threads are watched instead, until b has its link's receiving
+    // threads (a, started first, has its link by then too).
     let threads = |pid: u32| {
         (
             runtime_threads(pid, "rx"),
@@ -1520,6 +1516,10 @@ fn zenoh_reads_links_on_its_application_thread_unless_the_environment_says_other
             runtime_threads(pid, "app") > 0,
         )
     };
+    let start = Instant::now();
+    while runtime_threads(b.id(), "rx") < 2 && start.elapsed() < Duration::from_secs(30) {
+        std::thread::sleep(Duration::from_millis(20));
+    }
     let counts = [world.id(), a.id(), b.id()].map(threads);
     for c in [&mut world, &mut a, &mut b] {
         let _ = c.kill();
