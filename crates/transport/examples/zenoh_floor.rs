@@ -116,7 +116,7 @@ fn cpu_s(who: libc::c_int) -> f64 {
 }
 
 fn main() -> zenoh::Result<()> {
-    // Zenoh's runtime threads as mrsim sets them (and the echo inherits).
+    // Zenoh's runtime threads as `default_runtime` sets them (and the echo inherits).
     // SAFETY: first thing in main, before any thread exists.
     unsafe { mrsim_transport::zenoh::default_runtime() };
     let args: Vec<String> = std::env::args().collect();

@@ -24,8 +24,6 @@ mod watch;
 mod world;
 
 fn main() {
-    // SAFETY: first thing in main, before any thread exists.
-    unsafe { mrsim_transport::zenoh::default_runtime() };
     let result = match Cli::parse()
         .command
         .unwrap_or(Command::Run(Default::default()))
