@@ -75,8 +75,9 @@ pub const DEFAULT_ENDPOINT: &str = "tcp/127.0.0.1:7447";
 /// once, when the process opens its first session.
 pub const RUNTIME_ENV: &str = "ZENOH_RUNTIME";
 
-/// The threads mrsim gives Zenoh's runtime unless [`RUNTIME_ENV`] says
-/// otherwise: links are read, and connections accepted, on the
+/// Threads for Zenoh's runtime that [`default_runtime`] sets (mrsim itself
+/// does not: with them, agents behind a cut link often fail to rejoin):
+/// links are read, and connections accepted, on the
 /// application runtime's thread instead of runtimes of their own. A
 /// link's socket is registered with the runtime that opened or accepted
 /// it (the application's for a client, the acceptor's for a listener), so
@@ -84,7 +85,7 @@ pub const RUNTIME_ENV: &str = "ZENOH_RUNTIME";
 /// receiving thread, and Zenoh's default two receiving threads wake each
 /// other: on one runtime, the thread that sees the socket ready reads it
 /// and runs the callback. Two to three context switches fewer per agent
-/// and tick, and less CPU per round trip; 256 agents still join.
+/// and tick, and less CPU per round trip.
 pub const RUNTIME: &str = "(rx: (handover: app), acc: (handover: app))";
 
 /// Gives Zenoh's runtime [`RUNTIME`] unless the environment already says
