@@ -9,8 +9,15 @@
 //! answers from Zenoh's callback (no hand-over to another thread), so this
 //! is what Zenoh itself costs per round trip, with the settings the
 //! transport uses (express, real-time priority, blocking congestion
-//! control; with `MRSIM_FLOOR_LOW_LATENCY=1`, Zenoh's low-latency
-//! transport on both sides).
+//! control, Zenoh's runtime threads as mrsim sets them unless
+//! `ZENOH_RUNTIME` is set; with `MRSIM_FLOOR_LOW_LATENCY=1`, Zenoh's
+//! low-latency transport on both sides).
+//!
+//! `MRSIM_FLOOR_HANDOVER=1` makes the echo answer from a thread of its
+//! own that the callback wakes, as an agent's loop is woken (one
+//! hand-over and its context switches more per round trip). It also
+//! prints the CPU time both processes spent per round trip, a figure that
+//! holds on a busy machine where the round trip's time does not.
 
 use std::sync::{Arc, Condvar, Mutex};
 use std::time::{Duration, Instant};
@@ -46,6 +53,11 @@ fn config(mode: &str, endpoint: &str) -> zenoh::Config {
     c
 }
 
+/// Whether environment variable `name` is `1`.
+fn flag(name: &str) -> bool {
+    std::env::var_os(name).is_some_and(|v| v == "1")
+}
+
 fn echo(endpoint: &str) -> zenoh::Result<()> {
     let s = zenoh::open(config("client", endpoint)).wait()?;
     let pong = s
@@ -54,6 +66,32 @@ fn echo(endpoint: &str) -> zenoh::Result<()> {
         .priority(Priority::RealTime)
         .congestion_control(CongestionControl::Block)
         .wait()?;
+    if flag("MRSIM_FLOOR_HANDOVER") {
+        // The callback keeps the newest ping and wakes this thread, which
+        // answers (an agent's loop, less its planning).
+        let inbox = Arc::new((Mutex::new(None::<zenoh::bytes::ZBytes>), Condvar::new()));
+        let i = inbox.clone();
+        let _sub = s
+            .declare_subscriber("mrsim-floor/ping")
+            .callback(move |sample| {
+                let (m, cv) = &*i;
+                *m.lock().unwrap_or_else(|p| p.into_inner()) = Some(sample.payload().clone());
+                cv.notify_one();
+            })
+            .wait()?;
+        let (m, cv) = &*inbox;
+        loop {
+            let mut g = m.lock().unwrap_or_else(|p| p.into_inner());
+            while g.is_none() {
+                g = cv.wait(g).unwrap_or_else(|p| p.into_inner());
+            }
+            let ping = g.take();
+            drop(g);
+            if let Some(p) = ping {
+                let _ = pong.put(p).wait();
+            }
+        }
+    }
     let _sub = s
         .declare_subscriber("mrsim-floor/ping")
         .callback(move |sample| {
@@ -66,7 +104,21 @@ fn echo(endpoint: &str) -> zenoh::Result<()> {
     }
 }
 
+/// CPU seconds (user and system) of this process (`who`: `RUSAGE_SELF`).
+fn cpu_s(who: libc::c_int) -> f64 {
+    // SAFETY: getrusage writes only the struct it is given.
+    let mut u: libc::rusage = unsafe { std::mem::zeroed() };
+    if unsafe { libc::getrusage(who, &mut u) } != 0 {
+        return f64::NAN;
+    }
+    let t = |tv: libc::timeval| tv.tv_sec as f64 + tv.tv_usec as f64 * 1e-6;
+    t(u.ru_utime) + t(u.ru_stime)
+}
+
 fn main() -> zenoh::Result<()> {
+    // Zenoh's runtime threads as `default_runtime` sets them (and the echo inherits).
+    // SAFETY: first thing in main, before any thread exists.
+    unsafe { mrsim_transport::zenoh::default_runtime() };
     let args: Vec<String> = std::env::args().collect();
     if args.get(1).map(String::as_str) == Some("echo") {
         let endpoint = args.get(2).cloned().unwrap_or_default();
@@ -130,6 +182,8 @@ fn main() -> zenoh::Result<()> {
     // Late pongs of the warm-up pings, then a clean count.
     std::thread::sleep(Duration::from_millis(300));
     let base = *m.lock().unwrap_or_else(|p| p.into_inner());
+    let cpu_before = cpu_s(libc::RUSAGE_SELF);
+    let child_cpu_before = child_cpu_s(child.id());
     let mut rtt = Vec::with_capacity(n);
     for i in 0..n as u64 {
         let t = Instant::now();
@@ -140,8 +194,17 @@ fn main() -> zenoh::Result<()> {
         }
         rtt.push(t.elapsed().as_secs_f64() * 1e6);
     }
+    let cpu_ping = cpu_s(libc::RUSAGE_SELF) - cpu_before;
+    let cpu_echo = child_cpu_s(child.id()) - child_cpu_before;
     let _ = child.kill();
     let _ = child.wait();
+    let per = |s: f64| s / rtt.len().max(1) as f64 * 1e6;
+    println!(
+        "cpu per round trip: {:.1} us (pinging peer {:.1}, echoing client {:.1})",
+        per(cpu_ping + cpu_echo),
+        per(cpu_ping),
+        per(cpu_echo)
+    );
     rtt.sort_by(f64::total_cmp);
     let q = |p: f64| {
         rtt.get(((rtt.len() as f64 - 1.0) * p) as usize)
@@ -149,11 +212,38 @@ fn main() -> zenoh::Result<()> {
             .unwrap_or(f64::NAN)
     };
     println!(
-        "zenoh round trip, peer <-> client on loopback, 64 B, {} samples: p50 {:.0} us, p99 {:.0} us, max {:.0} us",
+        "zenoh round trip, peer <-> client on loopback{}, 64 B, {} samples: p50 {:.0} us, p99 {:.0} us, max {:.0} us",
+        if flag("MRSIM_FLOOR_HANDOVER") {
+            ", echoed from a thread the callback wakes"
+        } else {
+            ""
+        },
         rtt.len(),
         q(0.5),
         q(0.99),
         q(1.0)
     );
     Ok(())
+}
+
+/// CPU seconds (user and system) of process `pid` so far, from
+/// /proc/PID/stat (the echo runs until killed: its rusage would come only
+/// after).
+fn child_cpu_s(pid: u32) -> f64 {
+    let Ok(stat) = std::fs::read_to_string(format!("/proc/{pid}/stat")) else {
+        return f64::NAN;
+    };
+    // Fields after the command name (which may hold spaces), in `)`.
+    let Some((_, rest)) = stat.rsplit_once(')') else {
+        return f64::NAN;
+    };
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    // utime and stime are fields 14 and 15 of the line, 11 and 12 here.
+    let ticks = |i: usize| f.get(i).and_then(|v| v.parse::<f64>().ok());
+    // SAFETY: sysconf has no preconditions.
+    let hz = unsafe { libc::sysconf(libc::_SC_CLK_TCK) } as f64;
+    match (ticks(11), ticks(12)) {
+        (Some(u), Some(s)) if hz > 0.0 => (u + s) / hz,
+        _ => f64::NAN,
+    }
 }
