@@ -553,6 +553,15 @@ fn merge_in_runs(dir: &Path, run_rows: usize) -> std::io::Result<MergeSummary> {
 mod tests {
     use super::*;
 
+    /// The names of the files left in `dir`.
+    fn files_in(dir: &Path) -> Vec<String> {
+        std::fs::read_dir(dir)
+            .expect("dir")
+            .flatten()
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .collect()
+    }
+
     fn temp_dir(tag: &str) -> PathBuf {
         let d = std::env::temp_dir().join(format!(
             "mrsim-diag-{tag}-{}-{:?}",
@@ -660,12 +669,7 @@ mod tests {
         assert_eq!(lines[at + 2], "2,0.200000,r3,lines,3");
         assert_eq!(lines[at + 3], "2,0.200000,r4,speed,204");
         // Only the merged file is left: no part, no run.
-        let left: Vec<_> = std::fs::read_dir(&small)
-            .expect("dir")
-            .flatten()
-            .map(|e| e.file_name().to_string_lossy().into_owned())
-            .collect();
-        assert_eq!(left, vec![DIAGNOSTICS_FILE.to_string()]);
+        assert_eq!(files_in(&small), vec![DIAGNOSTICS_FILE.to_string()]);
         for dir in [small, large] {
             let _ = std::fs::remove_dir_all(&dir);
         }
@@ -697,12 +701,7 @@ mod tests {
         assert_eq!(lines[3], "0,0.000000,b,speed,0");
         assert_eq!(lines[5], "1,0.100000,a,speed,1");
         assert_eq!(lines.len(), 13);
-        let left: Vec<_> = std::fs::read_dir(&dir)
-            .expect("dir")
-            .flatten()
-            .map(|e| e.file_name().to_string_lossy().into_owned())
-            .collect();
-        assert_eq!(left, vec![DIAGNOSTICS_FILE.to_string()]);
+        assert_eq!(files_in(&dir), vec![DIAGNOSTICS_FILE.to_string()]);
         let _ = std::fs::remove_dir_all(&dir);
     }
 
