@@ -23,6 +23,8 @@ fn main() {
     let script = Path::new(&dir).join("link").join("wake.ld");
     let script = script.to_string_lossy();
     // `-Wl,` splits at commas: a path with one goes as the driver's `-T`.
+    // Tells the tests the layout was asked for (tests/bench.rs checks it).
+    println!("cargo:rustc-env=MRSIM_WAKE_LAYOUT=1");
     if script.contains(',') {
         println!("cargo:rustc-link-arg-bin=mrsim=-T{script}");
     } else {
