@@ -276,3 +276,99 @@ fn an_interrupted_bench_leaves_no_load_behind() {
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
 }
+
+/// The named sections and the function symbols of an ELF64 little-endian
+/// file, read from its section headers and symbol table.
+struct Elf {
+    /// Section names by index.
+    sections: Vec<String>,
+    /// Function symbols: name and the index of their section.
+    functions: Vec<(String, usize)>,
+}
+
+fn read_elf(path: &std::path::Path) -> Elf {
+    use std::io::{Read, Seek, SeekFrom};
+    let mut f = std::fs::File::open(path).expect("open the binary");
+    let mut at = |offset: u64, len: usize| {
+        let mut buf = vec![0u8; len];
+        f.seek(SeekFrom::Start(offset)).expect("seek");
+        f.read_exact(&mut buf).expect("read");
+        buf
+    };
+    let u16_ = |b: &[u8], i: usize| u16::from_le_bytes([b[i], b[i + 1]]) as usize;
+    let u32_ = |b: &[u8], i: usize| u32::from_le_bytes(b[i..i + 4].try_into().unwrap()) as usize;
+    let u64_ = |b: &[u8], i: usize| u64::from_le_bytes(b[i..i + 8].try_into().unwrap());
+    let head = at(0, 64);
+    assert_eq!(
+        &head[..6],
+        b"\x7fELF\x02\x01",
+        "an ELF64 little-endian file"
+    );
+    let (shoff, shentsize, shnum, shstrndx) = (
+        u64_(&head, 0x28),
+        u16_(&head, 0x3a),
+        u16_(&head, 0x3c),
+        u16_(&head, 0x3e),
+    );
+    let table = at(shoff, shentsize * shnum);
+    let header = |i: usize| &table[i * shentsize..(i + 1) * shentsize];
+    let contents = |at: &mut dyn FnMut(u64, usize) -> Vec<u8>, i: usize| {
+        let h = header(i);
+        at(u64_(h, 0x18), u64_(h, 0x20) as usize)
+    };
+    let name_at = |strings: &[u8], i: usize| {
+        let end = strings[i..].iter().position(|&c| c == 0).unwrap_or(0);
+        String::from_utf8_lossy(&strings[i..i + end]).into_owned()
+    };
+    let shstr = contents(&mut at, shstrndx);
+    let sections = (0..shnum)
+        .map(|i| name_at(&shstr, u32_(header(i), 0)))
+        .collect::<Vec<_>>();
+    let symtab = (0..shnum)
+        .find(|&i| u32_(header(i), 4) == 2)
+        .expect("a symbol table");
+    let strings = contents(&mut at, u32_(header(symtab), 0x28));
+    let symbols = contents(&mut at, symtab);
+    let functions = symbols
+        .chunks_exact(24)
+        .filter(|s| s[4] & 0xf == 2)
+        .map(|s| (name_at(&strings, u32_(s, 0)), u16_(s, 6)))
+        .collect();
+    Elf {
+        sections,
+        functions,
+    }
+}
+
+#[test]
+fn the_code_of_an_agents_wake_up_lies_side_by_side_at_the_start_of_the_text() {
+    let elf = read_elf(std::path::Path::new(env!("CARGO_BIN_EXE_mrsim")));
+    let wake = elf.sections.iter().position(|s| s == ".text.wake");
+    if option_env!("MRSIM_WAKE_LAYOUT").is_none() {
+        assert_eq!(wake, None, "no layout was asked for, yet there is one");
+        return;
+    }
+    let wake = wake.expect("the binary has the wake-up's section (link/wake.ld)");
+    // One function of each step of a wake-up: the wait, the snapshot's
+    // receipt, the observation, the planner, the command's send.
+    for name in [
+        "mrsim_agents4live5Ticks6listen",
+        "mrsim_transport3shm8doorbell10futex_wait",
+        "Subscriber$LT$Service$C$$u5b$Payload$u5d$$C$UserHeader$GT$7receive",
+        "mrsim_agents7observe8Observer13observe_among",
+        "mrsim_planners..chung..Chung$u20$as$u20$mrsim_planners..Planner$GT$4plan",
+        "mrsim_transport3shm5agent12send_command",
+        "Publisher$LT$Service$C$Payload$C$UserHeader$GT$9send_copy",
+    ] {
+        let found: Vec<_> = elf
+            .functions
+            .iter()
+            .filter(|(n, _)| n.contains(name))
+            .collect();
+        assert!(!found.is_empty(), "no function {name} in the binary");
+        assert!(
+            found.iter().any(|(_, s)| *s == wake),
+            "{name} is not in .text.wake: link/wake.ld no longer names it"
+        );
+    }
+}
