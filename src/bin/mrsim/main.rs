@@ -24,10 +24,17 @@ mod watch;
 mod world;
 
 fn main() {
-    let result = match Cli::parse()
+    let command = Cli::parse()
         .command
-        .unwrap_or(Command::Run(Default::default()))
-    {
+        .unwrap_or(Command::Run(Default::default()));
+    if matches!(command, Command::Agent(_)) {
+        // An agent reads one link, its world's: Zenoh reads it on the
+        // application runtime's thread (the world keeps Zenoh's threads).
+        // SAFETY: parsing the command line started no thread; nothing
+        // else has run yet.
+        unsafe { mrsim_transport::zenoh::default_runtime() };
+    }
+    let result = match command {
         Command::Run(args) => crate::run::main(&args),
         Command::Bench(args) => crate::bench::main(&args),
         Command::World(args) => crate::world::main(&args),

@@ -75,17 +75,23 @@ pub const DEFAULT_ENDPOINT: &str = "tcp/127.0.0.1:7447";
 /// once, when the process opens its first session.
 pub const RUNTIME_ENV: &str = "ZENOH_RUNTIME";
 
-/// Threads for Zenoh's runtime that [`default_runtime`] sets (mrsim itself
-/// does not: with them, agents behind a cut link often fail to rejoin):
-/// links are read, and connections accepted, on the
-/// application runtime's thread instead of runtimes of their own. A
-/// link's socket is registered with the runtime that opened or accepted
-/// it (the application's for a client, the acceptor's for a listener), so
-/// by default every message wakes that runtime's thread, which wakes a
-/// receiving thread, and Zenoh's default two receiving threads wake each
-/// other: on one runtime, the thread that sees the socket ready reads it
-/// and runs the callback. Two to three context switches fewer per agent
-/// and tick, and less CPU per round trip.
+/// Threads for Zenoh's runtime that [`default_runtime`] sets, and that
+/// every `mrsim agent` process takes unless [`RUNTIME_ENV`] is set: links
+/// are read, and connections accepted, on the application runtime's
+/// thread instead of runtimes of their own. A link's socket is registered
+/// with the runtime that opened or accepted it (the application's for a
+/// client, the acceptor's for a listener), so by default every message
+/// wakes that runtime's thread, which wakes a receiving thread, and
+/// Zenoh's default two receiving threads wake each other: on one runtime,
+/// the thread that sees the socket ready reads it and runs the callback.
+/// Fewer context switches per agent and tick, and less CPU per round trip.
+///
+/// The world keeps Zenoh's defaults. It reads every agent's link: with all
+/// of them on one thread, closing the transport of an agent whose lease
+/// ran out (a cut link) stops that thread, so no other agent's command is
+/// read again and the other agents behind the cut are never counted lost
+/// (nor rejoin). An agent reads one link, its world's: nothing else waits
+/// on that thread.
 pub const RUNTIME: &str = "(rx: (handover: app), acc: (handover: app))";
 
 /// Gives Zenoh's runtime [`RUNTIME`] unless the environment already says
