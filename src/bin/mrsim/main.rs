@@ -27,12 +27,15 @@ fn main() {
     let command = Cli::parse()
         .command
         .unwrap_or(Command::Run(Default::default()));
-    if matches!(command, Command::Agent(_)) {
-        // An agent reads one link, its world's: Zenoh reads it on the
-        // application runtime's thread (the world keeps Zenoh's threads).
+    // Zenoh's threads for an agent and for the world (unless ZENOH_RUNTIME
+    // says otherwise), set before Zenoh reads them.
+    match command {
         // SAFETY: parsing the command line started no thread; nothing
         // else has run yet.
-        unsafe { mrsim_transport::zenoh::default_runtime() };
+        Command::Agent(_) => unsafe { mrsim_transport::zenoh::default_runtime() },
+        // SAFETY: as above.
+        Command::World(_) => unsafe { mrsim_transport::zenoh::world_runtime() },
+        _ => {}
     }
     let result = match command {
         Command::Run(args) => crate::run::main(&args),

@@ -84,28 +84,56 @@ pub const RUNTIME_ENV: &str = "ZENOH_RUNTIME";
 /// wakes that runtime's thread, which wakes a receiving thread, and
 /// Zenoh's default two receiving threads wake each other: on one runtime,
 /// the thread that sees the socket ready reads it and runs the callback.
-/// Fewer context switches per agent and tick, and less CPU per round trip.
-///
-/// The world keeps Zenoh's defaults. It reads every agent's link: with all
-/// of them on one thread, closing the transport of an agent whose lease
-/// ran out (a cut link) stops that thread, so no other agent's command is
-/// read again and the other agents behind the cut are never counted lost
-/// (nor rejoin). An agent reads one link, its world's: nothing else waits
-/// on that thread.
+/// An agent reads one link, its world's.
 pub const RUNTIME: &str = "(rx: (handover: app), acc: (handover: app))";
 
-/// Gives Zenoh's runtime [`RUNTIME`] unless the environment already says
-/// what it is to be.
+/// Threads for Zenoh's runtime that [`world_runtime`] sets, and that
+/// every `mrsim world` process takes unless [`RUNTIME_ENV`] is set:
+/// connections are accepted on the receiving runtime (Zenoh's two threads
+/// by default), so an agent's socket is watched by the threads that read
+/// it, and a message no longer wakes the acceptor's thread first.
+///
+/// The world does not read its links on one thread ([`RUNTIME`], or one
+/// receiving thread): it reads every agent's link, and closing the
+/// transport of an agent whose lease ran out (a cut link) stalls the
+/// thread that closes it, so with one thread no other agent's command is
+/// read again, and the other agents behind the cut are never counted lost
+/// nor rejoin. With two, the other thread goes on.
+pub const WORLD_RUNTIME: &str = "(acc: (handover: rx))";
+
+/// Gives Zenoh's runtime [`RUNTIME`] (an agent's threads) unless the
+/// environment already says what it is to be.
 ///
 /// # Safety
 ///
 /// Sets an environment variable: call it before the process has started
 /// any other thread (first thing in `main`).
 pub unsafe fn default_runtime() {
+    // SAFETY: the caller's promise.
+    unsafe { runtime_unless_set(RUNTIME) };
+}
+
+/// Gives Zenoh's runtime [`WORLD_RUNTIME`] (the world's threads) unless
+/// the environment already says what it is to be.
+///
+/// # Safety
+///
+/// As [`default_runtime`]: before the process has started any other thread.
+pub unsafe fn world_runtime() {
+    // SAFETY: the caller's promise.
+    unsafe { runtime_unless_set(WORLD_RUNTIME) };
+}
+
+/// Sets [`RUNTIME_ENV`] to `threads` unless it is set.
+///
+/// # Safety
+///
+/// As [`default_runtime`].
+unsafe fn runtime_unless_set(threads: &str) {
     if std::env::var_os(RUNTIME_ENV).is_none() {
         // SAFETY: no other thread reads the environment (the caller's
         // promise).
-        unsafe { std::env::set_var(RUNTIME_ENV, RUNTIME) };
+        unsafe { std::env::set_var(RUNTIME_ENV, threads) };
     }
 }
 
