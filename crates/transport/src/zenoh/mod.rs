@@ -94,11 +94,13 @@ pub const RUNTIME: &str = "(rx: (handover: app), acc: (handover: app))";
 /// it, and a message no longer wakes the acceptor's thread first.
 ///
 /// The world does not read its links on one thread ([`RUNTIME`], or one
-/// receiving thread): it reads every agent's link, and closing the
-/// transport of an agent whose lease ran out (a cut link) stalls the
-/// thread that closes it, so with one thread no other agent's command is
-/// read again, and the other agents behind the cut are never counted lost
-/// nor rejoin. With two, the other thread goes on.
+/// receiving thread): it reads every agent's link, and with all of them
+/// on one thread, once Zenoh closed the transport of an agent whose lease
+/// ran out (a cut link), no other link was read again: the other agents'
+/// commands stopped arriving, the other agents behind the cut were never
+/// counted lost (nor rejoined), and the world's next snapshot blocked in
+/// Zenoh's send to a dead link whose socket had filled. With Zenoh's two
+/// receiving threads they are lost and rejoin.
 pub const WORLD_RUNTIME: &str = "(acc: (handover: rx))";
 
 /// Gives Zenoh's runtime [`RUNTIME`] (an agent's threads) unless the
