@@ -1456,3 +1456,81 @@ fn over_tls_a_run_goes_through_and_an_agent_that_does_not_trust_the_worlds_ca_is
         assert_eq!(count_events(&out, "agent_joined", r), 1, "{r}");
     }
 }
+
+/// How many of process `pid`'s threads are of Zenoh's runtime `name`
+/// (which names them `NAME-N`).
+fn runtime_threads(pid: u32, name: &str) -> usize {
+    let Ok(tasks) = std::fs::read_dir(format!("/proc/{pid}/task")) else {
+        return 0;
+    };
+    let prefix = format!("{name}-");
+    tasks
+        .flatten()
+        .filter_map(|t| std::fs::read_to_string(t.path().join("comm")).ok())
+        .filter(|comm| comm.starts_with(&prefix))
+        .count()
+}
+
+#[test]
+fn the_world_accepts_on_its_receiving_threads_and_an_agent_reads_on_its_application_thread_unless_told_otherwise()
+ {
+    let dir = fresh_dir("zrt");
+    let file = dir.join("row.toml");
+    // Nobody arrives and the run outlasts the test, which ends it: every
+    // process is there when its threads are counted.
+    std::fs::write(&file, realtime_row(2, 700.0, 600.0)).expect("write");
+    let out = dir.join("out");
+    let id = run_id("zrt");
+    let ep = free_endpoint();
+    let mut world = mrsim()
+        .arg("world")
+        .arg(&file)
+        .args([
+            "--run",
+            &id,
+            "--start-timeout",
+            "60",
+            "--transport",
+            "zenoh",
+        ])
+        .args(["--listen", &ep, "--out"])
+        .arg(&out)
+        .env_remove("ZENOH_RUNTIME")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("world");
+    let spawn = |robot: &str, runtime: Option<&str>| {
+        let mut c = zenoh_agent(robot, &id, &ep);
+        match runtime {
+            Some(r) => c.env("ZENOH_RUNTIME", r),
+            None => c.env_remove("ZENOH_RUNTIME"),
+        };
+        c.stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("agent")
+    };
+    let mut a = spawn("r0", None);
+    let mut b = spawn("r1", Some("(rx: (worker_threads: 2))"));
+    for r in ["r0", "r1"] {
+        wait_for_event(&out, 60, &format!("{r} joined"), |e| {
+            e["type"] == "agent_joined" && e["robot"] == r
+        });
+    }
+    // Every process has accepted or opened a link and read from it by
+    // now: a runtime of its own for that would have its threads.
+    let threads = |pid: u32| (runtime_threads(pid, "rx"), runtime_threads(pid, "acc"));
+    let [w, a_threads, b_threads] = [world.id(), a.id(), b.id()].map(threads);
+    for c in [&mut world, &mut a, &mut b] {
+        let _ = c.kill();
+        let _ = c.wait();
+    }
+    remove_leftovers(&id);
+    assert!(w.0 > 0 && w.1 == 0, "the world's (rx, acc) threads: {w:?}");
+    assert_eq!(a_threads, (0, 0), "an agent's (rx, acc) threads");
+    assert!(
+        b_threads.0 > 0,
+        "an agent given ZENOH_RUNTIME keeps it: (rx, acc) threads {b_threads:?}"
+    );
+}

@@ -9,8 +9,8 @@
 //! answers from Zenoh's callback (no hand-over to another thread), so this
 //! is what Zenoh itself costs per round trip, with the settings the
 //! transport uses (express, real-time priority, blocking congestion
-//! control, Zenoh's runtime threads as mrsim sets them unless
-//! `ZENOH_RUNTIME` is set; with `MRSIM_FLOOR_LOW_LATENCY=1`, Zenoh's
+//! control, Zenoh's runtime threads as mrsim sets them for the world and
+//! for an agent unless `ZENOH_RUNTIME` is set; with `MRSIM_FLOOR_LOW_LATENCY=1`, Zenoh's
 //! low-latency transport on both sides).
 //!
 //! `MRSIM_FLOOR_HANDOVER=1` makes the echo answer from a thread of its
@@ -116,11 +116,21 @@ fn cpu_s(who: libc::c_int) -> f64 {
 }
 
 fn main() -> zenoh::Result<()> {
-    // Zenoh's runtime threads as `default_runtime` sets them (and the echo inherits).
-    // SAFETY: first thing in main, before any thread exists.
-    unsafe { mrsim_transport::zenoh::default_runtime() };
+    use mrsim_transport::zenoh::RUNTIME_ENV;
+    // Zenoh's runtime threads as mrsim sets them: an agent's in the echo,
+    // the world's here (the echo inherits only a ZENOH_RUNTIME of the user).
     let args: Vec<String> = std::env::args().collect();
-    if args.get(1).map(String::as_str) == Some("echo") {
+    let is_echo = args.get(1).map(String::as_str) == Some("echo");
+    let users_runtime = std::env::var_os(RUNTIME_ENV).is_some();
+    // SAFETY: first thing in main, before any thread exists.
+    unsafe {
+        if is_echo {
+            mrsim_transport::zenoh::default_runtime();
+        } else {
+            mrsim_transport::zenoh::world_runtime();
+        }
+    }
+    if is_echo {
         let endpoint = args.get(2).cloned().unwrap_or_default();
         return echo(&endpoint);
     }
@@ -146,9 +156,12 @@ fn main() -> zenoh::Result<()> {
         .priority(Priority::RealTime)
         .congestion_control(CongestionControl::Block)
         .wait()?;
-    let mut child = std::process::Command::new(std::env::current_exe()?)
-        .args(["echo", &endpoint])
-        .spawn()?;
+    let mut echo_cmd = std::process::Command::new(std::env::current_exe()?);
+    echo_cmd.args(["echo", &endpoint]);
+    if !users_runtime {
+        echo_cmd.env_remove(RUNTIME_ENV);
+    }
+    let mut child = echo_cmd.spawn()?;
     let (m, cv) = &*got;
     let wait_for = |count: u64, limit: Duration| -> bool {
         let start = Instant::now();

@@ -24,10 +24,20 @@ mod watch;
 mod world;
 
 fn main() {
-    let result = match Cli::parse()
+    let command = Cli::parse()
         .command
-        .unwrap_or(Command::Run(Default::default()))
-    {
+        .unwrap_or(Command::Run(Default::default()));
+    // Zenoh's threads for an agent and for the world (unless ZENOH_RUNTIME
+    // says otherwise), set before Zenoh reads them.
+    match command {
+        // SAFETY: parsing the command line started no thread; nothing
+        // else has run yet.
+        Command::Agent(_) => unsafe { mrsim_transport::zenoh::default_runtime() },
+        // SAFETY: as above.
+        Command::World(_) => unsafe { mrsim_transport::zenoh::world_runtime() },
+        _ => {}
+    }
+    let result = match command {
         Command::Run(args) => crate::run::main(&args),
         Command::Bench(args) => crate::bench::main(&args),
         Command::World(args) => crate::world::main(&args),

@@ -75,31 +75,67 @@ pub const DEFAULT_ENDPOINT: &str = "tcp/127.0.0.1:7447";
 /// once, when the process opens its first session.
 pub const RUNTIME_ENV: &str = "ZENOH_RUNTIME";
 
-/// Threads for Zenoh's runtime that [`default_runtime`] sets (mrsim itself
-/// does not: with them, agents behind a cut link often fail to rejoin):
-/// links are read, and connections accepted, on the
-/// application runtime's thread instead of runtimes of their own. A
-/// link's socket is registered with the runtime that opened or accepted
-/// it (the application's for a client, the acceptor's for a listener), so
-/// by default every message wakes that runtime's thread, which wakes a
-/// receiving thread, and Zenoh's default two receiving threads wake each
-/// other: on one runtime, the thread that sees the socket ready reads it
-/// and runs the callback. Two to three context switches fewer per agent
-/// and tick, and less CPU per round trip.
+/// Threads for Zenoh's runtime that [`default_runtime`] sets, and that
+/// every `mrsim agent` process takes unless [`RUNTIME_ENV`] is set: links
+/// are read, and connections accepted, on the application runtime's
+/// thread instead of runtimes of their own. A link's socket is registered
+/// with the runtime that opened or accepted it (the application's for a
+/// client, the acceptor's for a listener), so by default every message
+/// wakes that runtime's thread, which wakes a receiving thread, and
+/// Zenoh's default two receiving threads wake each other: on one runtime,
+/// the thread that sees the socket ready reads it and runs the callback.
+/// An agent reads one link, its world's.
 pub const RUNTIME: &str = "(rx: (handover: app), acc: (handover: app))";
 
-/// Gives Zenoh's runtime [`RUNTIME`] unless the environment already says
-/// what it is to be.
+/// Threads for Zenoh's runtime that [`world_runtime`] sets, and that
+/// every `mrsim world` process takes unless [`RUNTIME_ENV`] is set:
+/// connections are accepted on the receiving runtime (Zenoh's two threads
+/// by default), so an agent's socket is watched by the threads that read
+/// it, and a message no longer wakes the acceptor's thread first.
+///
+/// The world does not read its links on one thread ([`RUNTIME`], or one
+/// receiving thread): it reads every agent's link, and with all of them
+/// on one thread, once Zenoh closed the transport of an agent whose lease
+/// ran out (a cut link), no other link was read again: the other agents'
+/// commands stopped arriving, the other agents behind the cut were never
+/// counted lost (nor rejoined), and the world's next snapshot blocked in
+/// Zenoh's send to a dead link whose socket had filled. With Zenoh's two
+/// receiving threads they are lost and rejoin.
+pub const WORLD_RUNTIME: &str = "(acc: (handover: rx))";
+
+/// Gives Zenoh's runtime [`RUNTIME`] (an agent's threads) unless the
+/// environment already says what it is to be.
 ///
 /// # Safety
 ///
 /// Sets an environment variable: call it before the process has started
 /// any other thread (first thing in `main`).
 pub unsafe fn default_runtime() {
+    // SAFETY: the caller's promise.
+    unsafe { runtime_unless_set(RUNTIME) };
+}
+
+/// Gives Zenoh's runtime [`WORLD_RUNTIME`] (the world's threads) unless
+/// the environment already says what it is to be.
+///
+/// # Safety
+///
+/// As [`default_runtime`]: before the process has started any other thread.
+pub unsafe fn world_runtime() {
+    // SAFETY: the caller's promise.
+    unsafe { runtime_unless_set(WORLD_RUNTIME) };
+}
+
+/// Sets [`RUNTIME_ENV`] to `threads` unless it is set.
+///
+/// # Safety
+///
+/// As [`default_runtime`].
+unsafe fn runtime_unless_set(threads: &str) {
     if std::env::var_os(RUNTIME_ENV).is_none() {
         // SAFETY: no other thread reads the environment (the caller's
         // promise).
-        unsafe { std::env::set_var(RUNTIME_ENV, RUNTIME) };
+        unsafe { std::env::set_var(RUNTIME_ENV, threads) };
     }
 }
 
