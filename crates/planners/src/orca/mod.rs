@@ -204,7 +204,13 @@ impl Planner for Orca {
     }
 
     fn diagnostics(&self) -> Vec<Diagnostic> {
-        vec![
+        let mut d = Vec::with_capacity(2);
+        self.diagnostics_into(&mut d);
+        d
+    }
+
+    fn diagnostics_into(&self, out: &mut Vec<Diagnostic>) {
+        out.extend([
             Diagnostic {
                 name: "orca_lines".into(),
                 value: self.last_lines as f64,
@@ -213,7 +219,7 @@ impl Planner for Orca {
                 name: "orca_infeasible".into(),
                 value: if self.last_infeasible { 1.0 } else { 0.0 },
             },
-        ]
+        ]);
     }
 }
 
