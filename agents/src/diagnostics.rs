@@ -483,60 +483,96 @@ pub struct MergeSummary {
 }
 
 /// Rows the merge sorts in memory at once; more are sorted in runs of
-/// this many, written to temporary files and merged (about 25 MB).
+/// this many, written to temporary files and merged (about 20 MB).
 pub const RUN_ROWS: usize = 1 << 18;
 
-/// A row of a part file with its place in the merged file: by tick, then
-/// robot id, then where it was written (part file, line), which keeps each
-/// robot's rows in the order its planner gave them.
-#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]
-struct Keyed {
-    tick: u64,
-    robot: u64,
-    part: u64,
-    seq: u64,
-    /// The row as `diagnostics.csv` holds it.
-    line: String,
+/// A row's place in the merged file: by tick, then robot id, then where it
+/// was written (part file, line), which keeps each robot's rows in the
+/// order its planner gave them.
+type Key = (u64, u64, u64, u64);
+
+/// The key of a part file's line (`id,tick,time,robot,name,value`, without
+/// its newline) and where the row (all but `id,`) starts, or `None` if it
+/// is not a row.
+fn part_key(part: u64, seq: u64, row: &str) -> Option<(Key, usize)> {
+    let (robot, line) = row.split_once(',')?;
+    let robot = robot.parse().ok()?;
+    let tick = line.split(',').next()?.parse().ok()?;
+    (line.bytes().filter(|&b| b == b',').count() == 4)
+        .then_some(((tick, robot, part, seq), row.len() - line.len()))
 }
 
-impl Keyed {
-    /// A part file's line (`id,tick,time,robot,name,value`, without its
-    /// newline), or `None` if it is not a row.
-    fn from_part(part: u64, seq: u64, row: &str) -> Option<Self> {
-        let (robot, line) = row.split_once(',')?;
-        let robot = robot.parse().ok()?;
-        let tick = line.split(',').next()?.parse().ok()?;
-        (line.split(',').count() == 5).then(|| Self {
-            tick,
-            robot,
-            part,
-            seq,
-            line: line.to_string(),
-        })
+/// Rows sorted in memory: their keys and where their text is in `text`.
+#[derive(Default)]
+struct Run {
+    keys: Vec<(Key, usize, usize)>,
+    text: String,
+}
+
+impl Run {
+    fn push(&mut self, key: Key, row: &str) {
+        let start = self.text.len();
+        self.text.push_str(row);
+        self.keys.push((key, start, row.len()));
     }
 
-    /// A line of a sorted run: the key, then the row.
-    fn write_run(&self, w: &mut impl Write) -> std::io::Result<()> {
-        writeln!(
-            w,
-            "{},{},{},{},{}",
-            self.tick, self.robot, self.part, self.seq, self.line
-        )
+    fn len(&self) -> usize {
+        self.keys.len()
     }
 
-    /// The line of a sorted run [`Self::write_run`] wrote.
-    fn from_run(row: &str) -> Option<Self> {
-        let mut it = row.splitn(5, ',');
-        let mut num = || it.next()?.parse::<u64>().ok();
-        let (tick, robot, part, seq) = (num()?, num()?, num()?, num()?);
-        Some(Self {
-            tick,
-            robot,
-            part,
-            seq,
-            line: it.next()?.to_string(),
-        })
+    fn is_empty(&self) -> bool {
+        self.keys.is_empty()
     }
+
+    fn sort(&mut self) {
+        // Keys are unique (part and line), so the order is total.
+        self.keys.sort_unstable_by_key(|k| k.0);
+    }
+
+    fn row(&self, i: usize) -> (Key, &str) {
+        let (key, start, len) = self.keys[i];
+        (key, self.text.get(start..start + len).unwrap_or_default())
+    }
+
+    /// Writes the sorted rows as a run on disk: each its key's four
+    /// numbers and its text's length (little-endian), then the text.
+    fn write_to(&self, path: &Path) -> std::io::Result<()> {
+        let mut w = BufWriter::with_capacity(1 << 16, File::create(path)?);
+        for i in 0..self.len() {
+            let ((tick, robot, part, seq), row) = self.row(i);
+            for n in [tick, robot, part, seq] {
+                w.write_all(&n.to_le_bytes())?;
+            }
+            w.write_all(&(row.len() as u64).to_le_bytes())?;
+            w.write_all(row.as_bytes())?;
+        }
+        w.flush()
+    }
+
+    fn clear(&mut self) {
+        self.keys.clear();
+        self.text.clear();
+    }
+}
+
+/// The next row of a run on disk ([`Run::write_to`]) into `row`, with its
+/// key; `None` at its end.
+fn next_run_row(r: &mut impl BufRead, row: &mut Vec<u8>) -> std::io::Result<Option<Key>> {
+    if r.fill_buf()?.is_empty() {
+        return Ok(None);
+    }
+    let mut head = [0u8; 40];
+    r.read_exact(&mut head)?;
+    let n = |k: usize| {
+        let mut b = [0u8; 8];
+        b.copy_from_slice(&head[8 * k..8 * k + 8]);
+        u64::from_le_bytes(b)
+    };
+    let len = usize::try_from(n(4))
+        .map_err(|_| std::io::Error::other("a sorted run of diagnostics is malformed"))?;
+    row.resize(len, 0);
+    r.read_exact(row)?;
+    Ok(Some((n(0), n(1), n(2), n(3))))
 }
 
 /// Reads the next line of `r` without its newline into `line`; `false` at
@@ -589,74 +625,71 @@ fn merge_in_runs(dir: &Path, run_rows: usize) -> std::io::Result<MergeSummary> {
 
     // Sorted runs of at most `run_rows` rows; the last stays in memory.
     let mut runs = 0;
-    let mut rows: Vec<Keyed> = Vec::new();
+    let mut memory = Run::default();
     let mut line = String::new();
     for (part, (_, path)) in files.iter().enumerate() {
         let mut r = BufReader::with_capacity(1 << 16, File::open(path)?);
         let mut seq = 0;
         while next_line(&mut r, &mut line, &mut summary.skipped)? {
-            match Keyed::from_part(part as u64, seq, &line) {
-                Some(k) => rows.push(k),
+            match part_key(part as u64, seq, &line) {
+                Some((key, start)) => memory.push(key, &line[start..]),
                 None => summary.skipped += 1,
             }
             seq += 1;
-            if rows.len() >= run_rows {
-                rows.sort_unstable();
-                let mut w = BufWriter::with_capacity(1 << 16, File::create(run_path(runs))?);
-                for k in &rows {
-                    k.write_run(&mut w)?;
-                }
-                w.flush()?;
+            if memory.len() >= run_rows {
+                memory.sort();
+                memory.write_to(&run_path(runs))?;
                 runs += 1;
-                rows.clear();
+                memory.clear();
             }
         }
     }
-    rows.sort_unstable();
+    memory.sort();
 
     let mut out = BufWriter::with_capacity(1 << 16, File::create(&tmp_path)?);
     writeln!(out, "{HEADER}")?;
-    let mut emit = |k: &Keyed, out: &mut BufWriter<File>| -> std::io::Result<()> {
-        out.write_all(k.line.as_bytes())?;
+    let mut emit = |row: &[u8], out: &mut BufWriter<File>| -> std::io::Result<()> {
+        out.write_all(row)?;
         out.write_all(b"\n")?;
         summary.rows += 1;
         Ok(())
     };
     if runs == 0 {
-        for k in &rows {
-            emit(k, &mut out)?;
+        for i in 0..memory.len() {
+            emit(memory.row(i).1.as_bytes(), &mut out)?;
         }
     } else {
-        // A k-way merge of the runs on disk and the one in memory.
+        // A k-way merge of the runs on disk (each with its current row)
+        // and the one in memory (its next row's index).
         let mut readers = Vec::with_capacity(runs);
-        for k in 0..runs {
-            readers.push(BufReader::with_capacity(1 << 16, File::open(run_path(k))?));
-        }
-        let mut memory = std::mem::take(&mut rows).into_iter();
-        let mut next = |i: usize, line: &mut String| -> std::io::Result<Option<Keyed>> {
-            if i == runs {
-                return Ok(memory.next());
-            }
-            let mut ignored = 0;
-            if !next_line(&mut readers[i], line, &mut ignored)? {
-                return Ok(None);
-            }
-            Keyed::from_run(line)
-                .map(Some)
-                .ok_or_else(|| std::io::Error::other("a sorted run of diagnostics is malformed"))
-        };
+        let mut current = vec![Vec::new(); runs];
         let mut heap = BinaryHeap::new();
-        for i in 0..=runs {
-            if let Some(k) = next(i, &mut line)? {
-                heap.push(Reverse((k, i)));
+        for (k, row) in current.iter_mut().enumerate() {
+            let mut r = BufReader::with_capacity(1 << 16, File::open(run_path(k))?);
+            if let Some(key) = next_run_row(&mut r, row)? {
+                heap.push(Reverse((key, k)));
+            }
+            readers.push(r);
+        }
+        let mut next_memory = 0;
+        if !memory.is_empty() {
+            heap.push(Reverse((memory.row(0).0, runs)));
+        }
+        while let Some(Reverse((_, k))) = heap.pop() {
+            if k == runs {
+                emit(memory.row(next_memory).1.as_bytes(), &mut out)?;
+                next_memory += 1;
+                if next_memory < memory.len() {
+                    heap.push(Reverse((memory.row(next_memory).0, runs)));
+                }
+            } else {
+                emit(&current[k], &mut out)?;
+                if let Some(key) = next_run_row(&mut readers[k], &mut current[k])? {
+                    heap.push(Reverse((key, k)));
+                }
             }
         }
-        while let Some(Reverse((k, i))) = heap.pop() {
-            emit(&k, &mut out)?;
-            if let Some(k) = next(i, &mut line)? {
-                heap.push(Reverse((k, i)));
-            }
-        }
+        drop(readers);
         for k in 0..runs {
             std::fs::remove_file(run_path(k))?;
         }
