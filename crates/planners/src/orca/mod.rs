@@ -124,6 +124,7 @@ pub struct Orca {
     obstacles: ObstacleSet,
     chains: Vec<WallChain>,
     chains_of: Vec<Segment>,
+    chain_points: Vec<Vec2>,
     lines: Vec<Line>,
     proj_lines: Vec<Line>,
     neighbors: Vec<(f64, usize)>,
@@ -151,7 +152,8 @@ impl Planner for Orca {
             self.chains = WallChain::join(obs.walls);
         }
         self.obstacles.clear();
-        self.obstacles.push_chains(&self.chains, me.position);
+        self.obstacles
+            .push_chains(&self.chains, me.position, &mut self.chain_points);
         let radius = me.radius + self.radius_margin;
         self.select_obstacle_neighbors(me.position, radius, me.max_speed);
         self.push_obstacle_lines(me.position, me.velocity, radius);
@@ -244,6 +246,7 @@ impl Orca {
             obstacles: ObstacleSet::default(),
             chains: Vec::new(),
             chains_of: Vec::new(),
+            chain_points: Vec::new(),
             lines: Vec::new(),
             proj_lines: Vec::new(),
             neighbors: Vec::new(),
