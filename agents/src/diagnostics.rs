@@ -28,7 +28,7 @@
 //! threat is infinite) is written `inf`, `-inf` or `NaN`, which the report
 //! reader parses and the plots leave out.
 
-use mrsim_planners::Diagnostic;
+use mrsim_planners::{Diagnostic, Planner};
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 use std::fs::File;
@@ -61,10 +61,12 @@ fn part_file_pid(name: &str) -> Option<u32> {
         .ok()
 }
 
+/// One tick's values of a robot: those of its batch's flat list of values
+/// after the previous row's, up to `end`.
 struct Row {
     tick: u64,
     time: f64,
-    values: Vec<Diagnostic>,
+    end: usize,
 }
 
 /// One robot's values, handed in batches to the process's one writer
@@ -86,6 +88,9 @@ pub struct DiagnosticsWriter {
     /// none behind (100,000 robots each keeping room for 64 rows held
     /// 250 MB).
     batch: Vec<Row>,
+    /// The values of the rows of `batch`, in order (one list, not one per
+    /// row: a row costs no allocation of its own).
+    values: Vec<Diagnostic>,
     batch_started: Instant,
     /// Why the writer could not take the rows, told at `finish`.
     error: Option<std::io::Error>,
@@ -106,6 +111,7 @@ enum Job {
         robot: Arc<str>,
         first: bool,
         rows: Vec<Row>,
+        values: Vec<Diagnostic>,
     },
     /// A robot writing to `path` is done: flush it (close it when it was
     /// the last) and say whether all of it was written.
@@ -146,6 +152,7 @@ impl DiagnosticsWriter {
             robot: robot.into(),
             started: false,
             batch: Vec::new(),
+            values: Vec::new(),
             batch_started: Instant::now(),
             error: None,
         })
@@ -156,7 +163,8 @@ impl DiagnosticsWriter {
     #[inline]
     pub fn push(&mut self, tick: u64, time: f64, values: Vec<Diagnostic>) {
         if !values.is_empty() {
-            self.queue(tick, time, values);
+            self.values.extend(values);
+            self.queue(tick, time);
         } else if values.capacity() == 0 {
             // Nothing in it and nothing allocated: nothing to drop. Left
             // to drop, it costs each tick a call of the vector's drop,
@@ -165,11 +173,30 @@ impl DiagnosticsWriter {
         }
     }
 
-    fn queue(&mut self, tick: u64, time: f64, values: Vec<Diagnostic>) {
+    /// Queues the values `planner` reports for its last plan, at `tick`
+    /// and `time` ([`Planner::diagnostics_into`]: a planner that reports
+    /// without allocating costs no allocation here either, but when a
+    /// batch starts).
+    #[inline]
+    pub fn record(&mut self, tick: u64, time: f64, planner: &dyn Planner) {
+        let before = self.values.len();
+        planner.diagnostics_into(&mut self.values);
+        if self.values.len() > before {
+            self.queue(tick, time);
+        }
+    }
+
+    /// Queues a row of the values appended to `self.values` since the last
+    /// row.
+    fn queue(&mut self, tick: u64, time: f64) {
         if self.batch.is_empty() {
             self.batch_started = Instant::now();
         }
-        self.batch.push(Row { tick, time, values });
+        self.batch.push(Row {
+            tick,
+            time,
+            end: self.values.len(),
+        });
         if self.batch.len() >= BATCH_ROWS || self.batch_started.elapsed() >= BATCH_AGE {
             self.hand_over();
         }
@@ -185,6 +212,7 @@ impl DiagnosticsWriter {
             robot: self.robot.clone(),
             first: !self.started,
             rows: std::mem::take(&mut self.batch),
+            values: std::mem::take(&mut self.values),
         };
         match writer().and_then(|tx| {
             tx.send(job)
@@ -246,7 +274,8 @@ fn write_jobs(rx: Receiver<Job>) {
     let mut open: HashMap<Arc<Path>, Open> = HashMap::new();
     let mut created: HashSet<Arc<Path>> = HashSet::new();
     let mut failed: HashMap<Arc<Path>, (std::io::ErrorKind, String)> = HashMap::new();
-    let mut line = String::new();
+    let mut line = Vec::new();
+    let mut times = Times::default();
     let fail = |failed: &mut HashMap<Arc<Path>, _>, path: &Arc<Path>, e: std::io::Error| {
         failed.insert(path.clone(), (e.kind(), e.to_string()));
     };
@@ -259,6 +288,7 @@ fn write_jobs(rx: Receiver<Job>) {
                     robot,
                     first,
                     rows,
+                    values,
                 } => {
                     if failed.contains_key(&path) {
                         continue;
@@ -287,7 +317,13 @@ fn write_jobs(rx: Receiver<Job>) {
                         }
                     };
                     w.robots += usize::from(first);
-                    if let Err(e) = write_rows(&mut w.file, &mut line, robot_id, &robot, &rows) {
+                    let batch = Batch {
+                        robot_id,
+                        robot: &robot,
+                        rows: &rows,
+                        values: &values,
+                    };
+                    if let Err(e) = batch.write(&mut w.file, &mut line, &mut times) {
                         open.remove(&path);
                         fail(&mut failed, &path, e);
                     }
@@ -324,27 +360,117 @@ fn write_jobs(rx: Receiver<Job>) {
     }
 }
 
-fn write_rows(
-    w: &mut BufWriter<File>,
-    line: &mut String,
+/// One robot's batch of rows as the writer thread gets it.
+struct Batch<'a> {
     robot_id: usize,
-    robot: &str,
-    rows: &[Row],
-) -> std::io::Result<()> {
-    use std::fmt::Write as _;
-    for row in rows {
-        // The row's start (`id,tick,time,robot,`) is formatted once for
-        // all its values. Writing into a String cannot fail.
-        line.clear();
-        let _ = write!(line, "{robot_id},{},{:.6},{robot},", row.tick, row.time);
-        let start = line.len();
-        for d in &row.values {
-            line.truncate(start);
-            let _ = writeln!(line, "{},{}", d.name, d.value);
-            w.write_all(line.as_bytes())?;
+    robot: &'a str,
+    rows: &'a [Row],
+    values: &'a [Diagnostic],
+}
+
+impl Batch<'_> {
+    /// Appends the batch's lines (`id,tick,time,robot,name,value`) to `w`,
+    /// `line` being room for one line. The numbers are written without
+    /// `format!` where that is exact: the integers, and a value that is a
+    /// whole number (most are counts); the time with six decimals is
+    /// formatted once per tick (`times`).
+    fn write(
+        &self,
+        w: &mut BufWriter<File>,
+        line: &mut Vec<u8>,
+        times: &mut Times,
+    ) -> std::io::Result<()> {
+        let mut first = 0;
+        for row in self.rows {
+            // The row's start (`id,tick,time,robot,`) is written once for
+            // all its values.
+            line.clear();
+            push_u64(line, self.robot_id as u64);
+            line.push(b',');
+            push_u64(line, row.tick);
+            line.push(b',');
+            line.extend_from_slice(times.fixed6(row.tick, row.time));
+            line.push(b',');
+            line.extend_from_slice(self.robot.as_bytes());
+            line.push(b',');
+            let start = line.len();
+            let values = self.values.get(first..row.end).unwrap_or_default();
+            first = row.end;
+            for d in values {
+                line.truncate(start);
+                line.extend_from_slice(d.name.as_bytes());
+                line.push(b',');
+                push_value(line, d.value);
+                line.push(b'\n');
+                w.write_all(line)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The times of recent ticks formatted with six decimals (`{:.6}`), by
+/// tick: every robot's row of a tick has the same time.
+#[derive(Default)]
+struct Times {
+    /// Slot `tick % TIME_SLOTS`: the time's bits and its text.
+    slots: Vec<Option<(u64, Vec<u8>)>>,
+}
+
+/// Ticks whose times [`Times`] keeps (a batch spans at most
+/// [`BATCH_ROWS`] ticks).
+const TIME_SLOTS: usize = 2 * BATCH_ROWS;
+
+impl Times {
+    /// `time` formatted as `{:.6}` formats it.
+    fn fixed6(&mut self, tick: u64, time: f64) -> &[u8] {
+        use std::io::Write as _;
+        if self.slots.is_empty() {
+            self.slots.resize(TIME_SLOTS, None);
+        }
+        let slot = &mut self.slots[(tick % TIME_SLOTS as u64) as usize];
+        let bits = time.to_bits();
+        if slot.as_ref().is_none_or(|(b, _)| *b != bits) {
+            let mut text = slot.take().map(|(_, t)| t).unwrap_or_default();
+            text.clear();
+            // Writing into a Vec cannot fail.
+            let _ = write!(text, "{time:.6}");
+            *slot = Some((bits, text));
+        }
+        slot.as_ref().map_or(&[], |(_, t)| t.as_slice())
+    }
+}
+
+/// Appends `n` in decimal.
+fn push_u64(out: &mut Vec<u8>, mut n: u64) {
+    let mut digits = [0u8; 20];
+    let mut i = digits.len();
+    loop {
+        i -= 1;
+        digits[i] = b'0' + (n % 10) as u8;
+        n /= 10;
+        if n == 0 {
+            break;
         }
     }
-    Ok(())
+    out.extend_from_slice(&digits[i..]);
+}
+
+/// Appends `v` as Rust's `{}` writes it (the shortest text that reads back
+/// as `v`): a whole number below 2^53 in magnitude is its integer's digits
+/// (`4.0` is `4`, as `{}` writes it), anything else goes through `{}`.
+fn push_value(out: &mut Vec<u8>, v: f64) {
+    use std::io::Write as _;
+    const EXACT: f64 = (1u64 << 53) as f64;
+    if v.fract() == 0.0 && v.abs() < EXACT && !(v == 0.0 && v.is_sign_negative()) {
+        if v < 0.0 {
+            out.push(b'-');
+        }
+        push_u64(out, v.abs() as u64);
+    } else {
+        // Writing into a Vec cannot fail.
+        let _ = write!(out, "{v}");
+    }
 }
 
 /// What [`merge`] did.
@@ -362,60 +488,96 @@ pub struct MergeSummary {
 }
 
 /// Rows the merge sorts in memory at once; more are sorted in runs of
-/// this many, written to temporary files and merged (about 25 MB).
+/// this many, written to temporary files and merged (about 20 MB).
 pub const RUN_ROWS: usize = 1 << 18;
 
-/// A row of a part file with its place in the merged file: by tick, then
-/// robot id, then where it was written (part file, line), which keeps each
-/// robot's rows in the order its planner gave them.
-#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]
-struct Keyed {
-    tick: u64,
-    robot: u64,
-    part: u64,
-    seq: u64,
-    /// The row as `diagnostics.csv` holds it.
-    line: String,
+/// A row's place in the merged file: by tick, then robot id, then where it
+/// was written (part file, line), which keeps each robot's rows in the
+/// order its planner gave them.
+type Key = (u64, u64, u64, u64);
+
+/// The key of a part file's line (`id,tick,time,robot,name,value`, without
+/// its newline) and where the row (all but `id,`) starts, or `None` if it
+/// is not a row.
+fn part_key(part: u64, seq: u64, row: &str) -> Option<(Key, usize)> {
+    let (robot, line) = row.split_once(',')?;
+    let robot = robot.parse().ok()?;
+    let tick = line.split(',').next()?.parse().ok()?;
+    (line.bytes().filter(|&b| b == b',').count() == 4)
+        .then_some(((tick, robot, part, seq), row.len() - line.len()))
 }
 
-impl Keyed {
-    /// A part file's line (`id,tick,time,robot,name,value`, without its
-    /// newline), or `None` if it is not a row.
-    fn from_part(part: u64, seq: u64, row: &str) -> Option<Self> {
-        let (robot, line) = row.split_once(',')?;
-        let robot = robot.parse().ok()?;
-        let tick = line.split(',').next()?.parse().ok()?;
-        (line.split(',').count() == 5).then(|| Self {
-            tick,
-            robot,
-            part,
-            seq,
-            line: line.to_string(),
-        })
+/// Rows sorted in memory: their keys and where their text is in `text`.
+#[derive(Default)]
+struct Run {
+    keys: Vec<(Key, usize, usize)>,
+    text: String,
+}
+
+impl Run {
+    fn push(&mut self, key: Key, row: &str) {
+        let start = self.text.len();
+        self.text.push_str(row);
+        self.keys.push((key, start, row.len()));
     }
 
-    /// A line of a sorted run: the key, then the row.
-    fn write_run(&self, w: &mut impl Write) -> std::io::Result<()> {
-        writeln!(
-            w,
-            "{},{},{},{},{}",
-            self.tick, self.robot, self.part, self.seq, self.line
-        )
+    fn len(&self) -> usize {
+        self.keys.len()
     }
 
-    /// The line of a sorted run [`Self::write_run`] wrote.
-    fn from_run(row: &str) -> Option<Self> {
-        let mut it = row.splitn(5, ',');
-        let mut num = || it.next()?.parse::<u64>().ok();
-        let (tick, robot, part, seq) = (num()?, num()?, num()?, num()?);
-        Some(Self {
-            tick,
-            robot,
-            part,
-            seq,
-            line: it.next()?.to_string(),
-        })
+    fn is_empty(&self) -> bool {
+        self.keys.is_empty()
     }
+
+    fn sort(&mut self) {
+        // Keys are unique (part and line), so the order is total.
+        self.keys.sort_unstable_by_key(|k| k.0);
+    }
+
+    fn row(&self, i: usize) -> (Key, &str) {
+        let (key, start, len) = self.keys[i];
+        (key, self.text.get(start..start + len).unwrap_or_default())
+    }
+
+    /// Writes the sorted rows as a run on disk: each its key's four
+    /// numbers and its text's length (little-endian), then the text.
+    fn write_to(&self, path: &Path) -> std::io::Result<()> {
+        let mut w = BufWriter::with_capacity(1 << 16, File::create(path)?);
+        for i in 0..self.len() {
+            let ((tick, robot, part, seq), row) = self.row(i);
+            for n in [tick, robot, part, seq] {
+                w.write_all(&n.to_le_bytes())?;
+            }
+            w.write_all(&(row.len() as u64).to_le_bytes())?;
+            w.write_all(row.as_bytes())?;
+        }
+        w.flush()
+    }
+
+    fn clear(&mut self) {
+        self.keys.clear();
+        self.text.clear();
+    }
+}
+
+/// The next row of a run on disk ([`Run::write_to`]) into `row`, with its
+/// key; `None` at its end.
+fn next_run_row(r: &mut impl BufRead, row: &mut Vec<u8>) -> std::io::Result<Option<Key>> {
+    if r.fill_buf()?.is_empty() {
+        return Ok(None);
+    }
+    let mut head = [0u8; 40];
+    r.read_exact(&mut head)?;
+    let n = |k: usize| {
+        let mut b = [0u8; 8];
+        b.copy_from_slice(&head[8 * k..8 * k + 8]);
+        u64::from_le_bytes(b)
+    };
+    let len = usize::try_from(n(4))
+        .map_err(|_| std::io::Error::other("a sorted run of diagnostics is malformed"))?;
+    row.resize(len, 0);
+    r.read_exact(row)?;
+    Ok(Some((n(0), n(1), n(2), n(3))))
 }
 
 /// Reads the next line of `r` without its newline into `line`; `false` at
@@ -468,74 +630,71 @@ fn merge_in_runs(dir: &Path, run_rows: usize) -> std::io::Result<MergeSummary> {
 
     // Sorted runs of at most `run_rows` rows; the last stays in memory.
     let mut runs = 0;
-    let mut rows: Vec<Keyed> = Vec::new();
+    let mut memory = Run::default();
     let mut line = String::new();
     for (part, (_, path)) in files.iter().enumerate() {
         let mut r = BufReader::with_capacity(1 << 16, File::open(path)?);
         let mut seq = 0;
         while next_line(&mut r, &mut line, &mut summary.skipped)? {
-            match Keyed::from_part(part as u64, seq, &line) {
-                Some(k) => rows.push(k),
+            match part_key(part as u64, seq, &line) {
+                Some((key, start)) => memory.push(key, &line[start..]),
                 None => summary.skipped += 1,
             }
             seq += 1;
-            if rows.len() >= run_rows {
-                rows.sort_unstable();
-                let mut w = BufWriter::with_capacity(1 << 16, File::create(run_path(runs))?);
-                for k in &rows {
-                    k.write_run(&mut w)?;
-                }
-                w.flush()?;
+            if memory.len() >= run_rows {
+                memory.sort();
+                memory.write_to(&run_path(runs))?;
                 runs += 1;
-                rows.clear();
+                memory.clear();
             }
         }
     }
-    rows.sort_unstable();
+    memory.sort();
 
     let mut out = BufWriter::with_capacity(1 << 16, File::create(&tmp_path)?);
     writeln!(out, "{HEADER}")?;
-    let mut emit = |k: &Keyed, out: &mut BufWriter<File>| -> std::io::Result<()> {
-        out.write_all(k.line.as_bytes())?;
+    let mut emit = |row: &[u8], out: &mut BufWriter<File>| -> std::io::Result<()> {
+        out.write_all(row)?;
         out.write_all(b"\n")?;
         summary.rows += 1;
         Ok(())
     };
     if runs == 0 {
-        for k in &rows {
-            emit(k, &mut out)?;
+        for i in 0..memory.len() {
+            emit(memory.row(i).1.as_bytes(), &mut out)?;
         }
     } else {
-        // A k-way merge of the runs on disk and the one in memory.
+        // A k-way merge of the runs on disk (each with its current row)
+        // and the one in memory (its next row's index).
         let mut readers = Vec::with_capacity(runs);
-        for k in 0..runs {
-            readers.push(BufReader::with_capacity(1 << 16, File::open(run_path(k))?));
-        }
-        let mut memory = std::mem::take(&mut rows).into_iter();
-        let mut next = |i: usize, line: &mut String| -> std::io::Result<Option<Keyed>> {
-            if i == runs {
-                return Ok(memory.next());
-            }
-            let mut ignored = 0;
-            if !next_line(&mut readers[i], line, &mut ignored)? {
-                return Ok(None);
-            }
-            Keyed::from_run(line)
-                .map(Some)
-                .ok_or_else(|| std::io::Error::other("a sorted run of diagnostics is malformed"))
-        };
+        let mut current = vec![Vec::new(); runs];
         let mut heap = BinaryHeap::new();
-        for i in 0..=runs {
-            if let Some(k) = next(i, &mut line)? {
-                heap.push(Reverse((k, i)));
+        for (k, row) in current.iter_mut().enumerate() {
+            let mut r = BufReader::with_capacity(1 << 16, File::open(run_path(k))?);
+            if let Some(key) = next_run_row(&mut r, row)? {
+                heap.push(Reverse((key, k)));
+            }
+            readers.push(r);
+        }
+        let mut next_memory = 0;
+        if !memory.is_empty() {
+            heap.push(Reverse((memory.row(0).0, runs)));
+        }
+        while let Some(Reverse((_, k))) = heap.pop() {
+            if k == runs {
+                emit(memory.row(next_memory).1.as_bytes(), &mut out)?;
+                next_memory += 1;
+                if next_memory < memory.len() {
+                    heap.push(Reverse((memory.row(next_memory).0, runs)));
+                }
+            } else {
+                emit(&current[k], &mut out)?;
+                if let Some(key) = next_run_row(&mut readers[k], &mut current[k])? {
+                    heap.push(Reverse((key, k)));
+                }
             }
         }
-        while let Some(Reverse((k, i))) = heap.pop() {
-            emit(&k, &mut out)?;
-            if let Some(k) = next(i, &mut line)? {
-                heap.push(Reverse((k, i)));
-            }
-        }
+        drop(readers);
         for k in 0..runs {
             std::fs::remove_file(run_path(k))?;
         }
@@ -580,9 +739,102 @@ mod tests {
 
     fn d(name: &str, value: f64) -> Diagnostic {
         Diagnostic {
-            name: name.into(),
+            name: name.to_string().into(),
             value,
         }
+    }
+
+    #[test]
+    fn values_and_times_are_written_as_rusts_own_formatting_writes_them() {
+        let values = [
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            4.0,
+            10.0,
+            12345.0,
+            -987654321.0,
+            9007199254740991.0,
+            9007199254740992.0,
+            -9007199254740992.0,
+            1e300,
+            0.5,
+            -0.25,
+            0.1,
+            1.0 / 3.0,
+            2.5e-8,
+            f64::MIN_POSITIVE,
+            f64::MAX,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+        ];
+        for v in values {
+            let mut out = Vec::new();
+            push_value(&mut out, v);
+            assert_eq!(String::from_utf8(out).expect("ascii"), format!("{v}"));
+        }
+        for n in [0u64, 7, 10, 99, 100, 123456789, u64::MAX] {
+            let mut out = Vec::new();
+            push_u64(&mut out, n);
+            assert_eq!(String::from_utf8(out).expect("ascii"), n.to_string());
+        }
+        let mut times = Times::default();
+        // Ticks that share a slot, a tick seen again with another time,
+        // and times that round at the sixth decimal.
+        for (tick, time) in [
+            (0, 0.0),
+            (1, 0.1),
+            (1 + TIME_SLOTS as u64, 12.8000005),
+            (1, 0.1),
+            (2, 0.2),
+            (2, 0.0000015),
+            (3, 1e20),
+        ] {
+            assert_eq!(
+                String::from_utf8(times.fixed6(tick, time).to_vec()).expect("ascii"),
+                format!("{time:.6}")
+            );
+        }
+    }
+
+    #[test]
+    fn a_planners_values_are_recorded_as_it_reports_them() {
+        struct Two;
+        impl Planner for Two {
+            fn plan(&mut self, _: &mrsim_planners::Observation) -> mrsim_planners::Command {
+                mrsim_planners::Command::Velocity(mrsim_planners::Vec2::zeros())
+            }
+            fn diagnostics(&self) -> Vec<Diagnostic> {
+                vec![d("lines", 3.0), d("ratio", 0.1)]
+            }
+        }
+        struct Silent;
+        impl Planner for Silent {
+            fn plan(&mut self, _: &mrsim_planners::Observation) -> mrsim_planners::Command {
+                mrsim_planners::Command::Velocity(mrsim_planners::Vec2::zeros())
+            }
+        }
+        let dir = temp_dir("record");
+        let mut w = DiagnosticsWriter::start(&dir, 2, "b").expect("writer");
+        for t in 0..3 {
+            w.record(t, t as f64 * 0.1, &Two);
+            w.record(t, t as f64 * 0.1, &Silent);
+        }
+        w.finish().expect("flushed");
+        let s = merge(&dir).expect("merge");
+        assert_eq!((s.rows, s.skipped), (6, 0));
+        let text = std::fs::read_to_string(dir.join(DIAGNOSTICS_FILE)).expect("merged");
+        assert_eq!(
+            text,
+            format!(
+                "{HEADER}\n0,0.000000,b,lines,3\n0,0.000000,b,ratio,0.1\n\
+                 1,0.100000,b,lines,3\n1,0.100000,b,ratio,0.1\n\
+                 2,0.200000,b,lines,3\n2,0.200000,b,ratio,0.1\n"
+            )
+        );
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]

@@ -409,7 +409,7 @@ impl Seat {
         // After the command is out: off the tick's critical path (asking a
         // planner for its diagnostics costs it something).
         if let Some(d) = &mut self.diag {
-            d.push(header.tick, header.sim_time, planner.diagnostics());
+            d.record(header.tick, header.sim_time, &*planner);
         }
         Ok(t1)
     }

@@ -231,8 +231,9 @@ impl Command {
 /// virtual distance to each obstacle for `vdf`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Diagnostic {
-    /// Name, e.g. `vd_3` (virtual distance to body 3).
-    pub name: String,
+    /// Name, e.g. `vd_3` (virtual distance to body 3). A fixed name is
+    /// borrowed (`"orca_lines".into()`), so reporting it allocates nothing.
+    pub name: std::borrow::Cow<'static, str>,
     /// Value at this tick.
     pub value: f64,
 }
@@ -250,6 +251,22 @@ pub trait Planner: Send {
     /// Planners with nothing to report keep the default.
     fn diagnostics(&self) -> Vec<Diagnostic> {
         Vec::new()
+    }
+
+    /// [`Planner::diagnostics`] appended to `out`: what an agent calls
+    /// every tick, into a buffer it reuses. The default asks
+    /// [`Planner::diagnostics`]; a planner that reports every tick
+    /// overrides it to report without allocating (both must give the same
+    /// values).
+    fn diagnostics_into(&self, out: &mut Vec<Diagnostic>) {
+        let values = self.diagnostics();
+        if values.capacity() == 0 {
+            // Nothing reported and nothing allocated: nothing to drop (a
+            // drop is an out-of-line call on every agent's tick).
+            std::mem::forget(values);
+        } else {
+            out.extend(values);
+        }
     }
 
     /// True for a planner that plans a unicycle robot's (v, omega) itself

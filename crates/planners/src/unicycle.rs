@@ -145,6 +145,10 @@ impl Planner for LookAhead {
         self.inner.diagnostics()
     }
 
+    fn diagnostics_into(&self, out: &mut Vec<Diagnostic>) {
+        self.inner.diagnostics_into(out);
+    }
+
     fn native_unicycle(&self) -> bool {
         true
     }

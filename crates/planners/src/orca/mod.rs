@@ -124,6 +124,7 @@ pub struct Orca {
     obstacles: ObstacleSet,
     chains: Vec<WallChain>,
     chains_of: Vec<Segment>,
+    chain_points: Vec<Vec2>,
     lines: Vec<Line>,
     proj_lines: Vec<Line>,
     neighbors: Vec<(f64, usize)>,
@@ -151,7 +152,8 @@ impl Planner for Orca {
             self.chains = WallChain::join(obs.walls);
         }
         self.obstacles.clear();
-        self.obstacles.push_chains(&self.chains, me.position);
+        self.obstacles
+            .push_chains(&self.chains, me.position, &mut self.chain_points);
         let radius = me.radius + self.radius_margin;
         self.select_obstacle_neighbors(me.position, radius, me.max_speed);
         self.push_obstacle_lines(me.position, me.velocity, radius);
@@ -204,7 +206,13 @@ impl Planner for Orca {
     }
 
     fn diagnostics(&self) -> Vec<Diagnostic> {
-        vec![
+        let mut d = Vec::with_capacity(2);
+        self.diagnostics_into(&mut d);
+        d
+    }
+
+    fn diagnostics_into(&self, out: &mut Vec<Diagnostic>) {
+        out.extend([
             Diagnostic {
                 name: "orca_lines".into(),
                 value: self.last_lines as f64,
@@ -213,7 +221,7 @@ impl Planner for Orca {
                 name: "orca_infeasible".into(),
                 value: if self.last_infeasible { 1.0 } else { 0.0 },
             },
-        ]
+        ]);
     }
 }
 
@@ -238,6 +246,7 @@ impl Orca {
             obstacles: ObstacleSet::default(),
             chains: Vec::new(),
             chains_of: Vec::new(),
+            chain_points: Vec::new(),
             lines: Vec::new(),
             proj_lines: Vec::new(),
             neighbors: Vec::new(),

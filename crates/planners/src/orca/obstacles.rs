@@ -77,21 +77,28 @@ impl ObstacleSet {
     /// when inside; an open chain p0..pk is the degenerate polygon
     /// p0..pk..p1 that goes there and back, of which a lone segment is
     /// RVO2's two-vertex obstacle.
-    pub(super) fn push_chains(&mut self, chains: &[WallChain], position: Vec2) {
-        let mut points = Vec::new();
+    /// `points` is scratch space, reused across calls.
+    pub(super) fn push_chains(
+        &mut self,
+        chains: &[WallChain],
+        position: Vec2,
+        points: &mut Vec<Vec2>,
+    ) {
         for c in chains {
             points.clear();
             points.extend_from_slice(&c.points);
             if c.closed {
-                let ccw = signed_area(&points) > 0.0;
-                if ccw == contains(&points, position) {
+                let ccw = signed_area(points) > 0.0;
+                if ccw == contains(points, position) {
                     points.reverse();
                 }
             } else if points.len() > 2 {
-                let back: Vec<Vec2> = points[1..points.len() - 1].iter().rev().copied().collect();
-                points.extend(back);
+                // There and back: p0..pk, then pk-1..p1.
+                for i in (1..c.points.len() - 1).rev() {
+                    points.push(c.points[i]);
+                }
             }
-            self.push_polygon(&points);
+            self.push_polygon(points);
         }
     }
 
@@ -99,7 +106,7 @@ impl ObstacleSet {
     /// (see [`WallChain::join`]), as seen from `position`.
     #[cfg(test)]
     pub(super) fn push_walls(&mut self, walls: &[Segment], position: Vec2) {
-        self.push_chains(&WallChain::join(walls), position);
+        self.push_chains(&WallChain::join(walls), position, &mut Vec::new());
     }
 
     /// The edges that can matter within `time_horizon_obst`, seen from their

@@ -394,7 +394,7 @@ fn an_arena_is_a_boundary_from_inside_and_open_chains_go_there_and_back() {
     assert_eq!(chains.len(), 1);
     assert!(!chains[0].closed);
     let mut set = ObstacleSet::default();
-    set.push_chains(&chains, Vec2::new(-3.0, 2.0));
+    set.push_chains(&chains, Vec2::new(-3.0, 2.0), &mut Vec::new());
     let pts: Vec<Vec2> = set.vertices.iter().map(|v| v.point).collect();
     assert_eq!(pts.len(), 4);
     assert_eq!(pts[1], Vec2::new(5.0, 0.0));

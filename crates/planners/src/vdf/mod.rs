@@ -343,7 +343,7 @@ impl Planner for Vdf {
         self.vds
             .iter()
             .map(|&(id, vd)| Diagnostic {
-                name: format!("{}{id}", self.diag_prefix),
+                name: format!("{}{id}", self.diag_prefix).into(),
                 value: vd,
             })
             .collect()

@@ -545,6 +545,10 @@ struct Hand {
     grid: Grid,
     near: Vec<u32>,
     batch: Vec<mrsim_proto::CommandMsg>,
+    /// Commands of the last batch: the next one starts with room for as
+    /// many (a batch is handed over whole each tick, and growing it from
+    /// empty copied it over and over: tens of thousands of commands).
+    last: usize,
 }
 
 impl Hand {
@@ -571,6 +575,7 @@ impl Hand {
         busy: Option<&Busy>,
     ) {
         pool.saw(h, b);
+        self.batch.reserve(self.last);
         let mut gridded = None;
         let mut clock = mrsim_proto::now_ns();
         while let Some(k) = pool.claim(h.tick) {
@@ -596,6 +601,7 @@ impl Hand {
                 }
             }
         }
+        self.last = self.batch.len();
     }
 }
 
