@@ -3,8 +3,7 @@
 //! interrupted. Every "how soon" is measured in ticks from events.jsonl,
 //! never on the wall clock.
 
-mod common;
-use common::*;
+use crate::common::*;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Stdio};

@@ -2,8 +2,7 @@
 //! one agent process per robot over iceoryx2, and the outputs, isolation and
 //! ownership rules hold. No test asserts a wall-clock time.
 
-mod common;
-use common::*;
+use crate::common::*;
 use std::collections::BTreeSet;
 use std::process::Stdio;
 

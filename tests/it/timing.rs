@@ -2,8 +2,7 @@
 //! (deterministic, and what each model promises), in realtime it is spent
 //! for real and recorded, and `mrsim rerun` replays the record exactly.
 
-mod common;
-use common::*;
+use crate::common::*;
 use std::path::Path;
 
 /// Four orca robots crossing in pairs, one obstacle, 10 Hz, a timing

@@ -2,8 +2,7 @@
 //! The world and agents are started by hand, as a user would in separate
 //! terminals.
 
-mod common;
-use common::*;
+use crate::common::*;
 use std::process::Stdio;
 
 #[test]

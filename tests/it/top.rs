@@ -7,9 +7,7 @@
 //! tmux pane (Debian's tmux; `.ci/run` installs it; `MRSIM_SKIP_TMUX=1`
 //! skips that test on a machine without it).
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use mrsim_top::{TopModel, draw, wait_for_setup};
 use mrsim_transport::{Namespace, ObserverTransport};
 use ratatui::Terminal;

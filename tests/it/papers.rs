@@ -4,8 +4,7 @@
 //! outcome the scenario's description says our implementation gives, is
 //! read back from trajectory.csv, events.jsonl and metrics.json.
 
-mod common;
-use common::*;
+use crate::common::*;
 use std::path::{Path, PathBuf};
 
 /// Runs `scenarios/papers/NAME.toml` and returns its run folder.

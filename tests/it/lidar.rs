@@ -2,8 +2,7 @@
 //! range for range, what the world writes to scan.csv (one scanner,
 //! `mrsim-lidar`, on both sides, with the same noise stream).
 
-mod common;
-use common::*;
+use crate::common::*;
 use mrsim::{Command, InProcess, Observation, Planner, Registry, ScenarioSource, Vec2};
 use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex};

@@ -3,8 +3,7 @@
 //! a corridor, none where every robot arrives, and the interaction metrics
 //! and encounters.csv written beside metrics.json.
 
-mod common;
-use common::*;
+use crate::common::*;
 
 /// Runs `scenario` in-process, lockstep, with `extra` arguments; returns
 /// the run folder and stdout.

@@ -4,8 +4,7 @@
 //! are skipped). Waits are on the world's outputs (events.jsonl, exits),
 //! never fixed sleeps; no test asserts a wall-clock time.
 
-mod common;
-use common::*;
+use crate::common::*;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};

@@ -5,8 +5,7 @@
 //! boundary violation and the behaviour the paper reports; and that the
 //! planner's chosen speed reaches diagnostics.csv.
 
-mod common;
-use common::*;
+use crate::common::*;
 use std::path::{Path, PathBuf};
 use std::process::Stdio;
 use std::time::{Duration, Instant};

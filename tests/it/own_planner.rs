@@ -5,8 +5,7 @@
 //! (docs/own-planner.md) is the example file, byte for byte, and its
 //! commands are the ones run here.
 
-mod common;
-use common::*;
+use crate::common::*;
 use mrsim::{Command, InProcess, Observation, Planner, Registry, RunError, ScenarioSource, Vec2};
 use std::path::{Path, PathBuf};
 use std::process::Stdio;

@@ -3,8 +3,7 @@
 //! interrupted. No wall-clock assertions: a slow machine only makes these
 //! slower.
 
-mod common;
-use common::*;
+use crate::common::*;
 use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};

@@ -12,8 +12,7 @@
 //! only with a 1 m view, with a `per-body` compute model it peaks at an
 //! inner view (the last test).
 
-mod common;
-use common::*;
+use crate::common::*;
 
 /// Every obstacle's motion for one model at a time (docs/planners.md, "Zhu & Loh").
 const PURSUE: &str = "{ model = \"intentional\", behavior = \"pursue\", target = \"r0\", max_speed = 0.3, max_accel = 1.0 }";

@@ -1,8 +1,7 @@
 //! `mrsim bench` on a tiny run: the output's shape (fields, one row per
 //! combination, csv, plot), never its timing.
 
-mod common;
-use common::*;
+use crate::common::*;
 
 /// `mrsim bench --baseline` runs the `mrsim-baseline` program next to
 /// `mrsim`. A workspace build has it (its package's own test makes cargo

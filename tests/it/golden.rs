@@ -14,8 +14,7 @@
 //! commit. The runs are in-process (`--transport inproc`), which the spine
 //! tests already show gives the same bytes as one process per robot.
 
-mod common;
-use common::*;
+use crate::common::*;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 

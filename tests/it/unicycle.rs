@@ -5,8 +5,7 @@
 //! defaults.kinematics=holonomic`), and the lidar demo records scans that
 //! match the geometry.
 
-mod common;
-use common::*;
+use crate::common::*;
 use std::path::PathBuf;
 
 /// Parameters a planner gets for the every-goal check, with why its

@@ -1,8 +1,7 @@
 //! `mrsim sweep` end to end: 2 values x 2 seeds of a tiny scenario give a
 //! sweep.csv of the right shape, and the same command gives the same file.
 
-mod common;
-use common::*;
+use crate::common::*;
 
 const SCENARIO: &str = r#"
 name = "sweep-tiny"

@@ -15,8 +15,7 @@
 //!   edge of that band: shifted 0.1 cm the other way, case 4 touches o1 too;
 //!   shifted 2.2 cm, case 5 hits o1 a tick later.
 
-mod common;
-use common::*;
+use crate::common::*;
 use std::path::PathBuf;
 
 /// Runs `scenarios/papers/NAME.toml` with `--set` overrides, in process.

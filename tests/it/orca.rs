@@ -1,8 +1,7 @@
 //! End-to-end tests of the baseline planners through the real binary: a
 //! world process and one agent process per robot, in lockstep.
 
-mod common;
-use common::*;
+use crate::common::*;
 
 /// RVO2's Circle at 32 agents (scenarios/bench/circle-32.toml): every robot
 /// reaches its antipode, no contact starts, no overlap in the trajectory.

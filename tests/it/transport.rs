@@ -2,8 +2,7 @@
 //! controls: `mrsim run --transport inproc` gives the same lockstep run as
 //! processes over iceoryx2, byte for byte. No test asserts a wall-clock time.
 
-mod common;
-use common::*;
+use crate::common::*;
 use std::collections::BTreeSet;
 use std::path::Path;
 

@@ -3,9 +3,7 @@
 //! world's setup and statistics; then the real binary in tmux, paging
 //! through the robots of a world that waits for its 300 agents.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use mrsim_proto::{RobotStats, StatsHeader, agent_state, run_phase};
 use mrsim_top::{TableView, TopModel, draw_with};
 use ratatui::Terminal;

@@ -1,9 +1,7 @@
 //! `[output]`: the trajectory as CSV, Parquet or not at all, every tick or
 //! every K-th, on real runs; the metrics and the report whatever it says.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use std::path::{Path, PathBuf};
 
 /// Runs the lockstep crossing scene (8 robots, 5 s) in-process with

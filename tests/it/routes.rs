@@ -6,8 +6,7 @@
 //! tolerance and a scan planner without a scanner are refused with the
 //! file, the line and why (exit 2).
 
-mod common;
-use common::*;
+use crate::common::*;
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 

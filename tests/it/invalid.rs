@@ -1,8 +1,7 @@
 //! Invalid scenarios are refused before any process starts, with the file,
 //! the line and the reason, and exit status 2.
 
-mod common;
-use common::*;
+use crate::common::*;
 
 const GOOD: &str = r#"name = "t"
 [world]

@@ -1,9 +1,7 @@
 //! `mrsim report DIR` on a finished run, a run cut short, and folders that
 //! are not runs.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use std::path::Path;
 
 fn report(dir: &Path) -> std::process::Output {

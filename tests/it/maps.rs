@@ -2,8 +2,7 @@
 //! and none through a map wall; a robot aimed through a wall is stopped by
 //! it; bad maps are refused with the file and the reason, exit status 2.
 
-mod common;
-use common::*;
+use crate::common::*;
 use std::path::{Path, PathBuf};
 
 /// Runs `scenario` in lockstep in-process; returns the run folder.
