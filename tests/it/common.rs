@@ -397,9 +397,10 @@ pub fn skip(test: &str, require: &str, why: &str) {
 }
 
 /// Held by a test whose assertions need the machine's cores to themselves
-/// (realtime runs of many agents, a link cut and its lease): such tests of
-/// one test binary run one at a time (cargo runs the binaries one after
-/// another). A test that failed while holding it does not block the others.
+/// (realtime runs of many agents, a link cut and its lease): such tests run
+/// one at a time, whatever their module (every end-to-end test is in this
+/// one binary). A test that failed while holding it does not block the
+/// others.
 pub fn heavy() -> std::sync::MutexGuard<'static, ()> {
     static HEAVY: std::sync::Mutex<()> = std::sync::Mutex::new(());
     HEAVY.lock().unwrap_or_else(|e| e.into_inner())

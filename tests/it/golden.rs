@@ -9,7 +9,7 @@
 //!
 //! The hashes were recorded from the tree before the structural split of the
 //! runtime; a change that is meant to alter them re-records them with
-//! `MRSIM_BLESS=1 cargo test --release --test golden` (only the value `1`
+//! `MRSIM_BLESS=1 cargo test --release --test it golden::` (only the value `1`
 //! blesses), which prints every entry it changes, and says why in its
 //! commit. The runs are in-process (`--transport inproc`), which the spine
 //! tests already show gives the same bytes as one process per robot.
@@ -261,17 +261,17 @@ fn every_shipped_scenario_in_lockstep_writes_the_recorded_trajectory_and_outcome
     let _ = std::fs::remove_dir_all(&pq);
     let mut wrong = check_or_bless(
         &root().join("tests/golden/trajectories.txt"),
-        "# scenario fnv1a64:bytes of its lockstep trajectory.csv (tests/golden.rs)",
+        "# scenario fnv1a64:bytes of its lockstep trajectory.csv (tests/it/golden.rs)",
         &trajectories,
     );
     wrong.extend(check_or_bless(
         &root().join("tests/golden/outputs.txt"),
-        "# scenario and output, fnv1a64:bytes of it (tests/golden.rs: metrics.json's exact keys, scan.csv, Parquet rows)",
+        "# scenario and output, fnv1a64:bytes of it (tests/it/golden.rs: metrics.json's exact keys, scan.csv, Parquet rows)",
         &outputs,
     ));
     assert!(
         wrong.is_empty(),
-        "outputs changed (MRSIM_BLESS=1 re-records them):\n{}",
+        "outputs changed (`MRSIM_BLESS=1 cargo test --release --test it golden::` re-records them):\n{}",
         wrong.join("\n")
     );
 }

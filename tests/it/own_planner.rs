@@ -26,15 +26,15 @@ fn block(text: &str, heading: &str, lang: &str) -> String {
 }
 
 /// The example binary cargo built beside the test (target/release/examples):
-/// `cargo test` builds the examples, `cargo test --test own_planner` alone
-/// does not.
+/// `cargo test` builds the examples, `cargo test --test it` alone does
+/// not.
 fn example_binary() -> PathBuf {
     let exe = std::env::current_exe().expect("test binary");
     let dir = exe.parent().and_then(Path::parent).expect("target dir");
     let bin = dir.join("examples").join("my_agent");
     assert!(
         bin.is_file(),
-        "{} is not built: `cargo test --release` builds it (with `--test own_planner` alone, \
+        "{} is not built: `cargo test --release` builds it (with `--test it` alone, \
          first `cargo build --release --example my_agent`)",
         bin.display()
     );

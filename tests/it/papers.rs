@@ -41,7 +41,7 @@ fn ko_choi_case_1_goes_ahead_of_the_obstacle_without_touching_it() {
 /// from t_16 to t_29" and then takes the obstacle's back track. Not
 /// reproduced in number: at the file's max_speed (23.3 cm/s) our robot
 /// reverses 4 times before crossing behind; six only at 23.7 cm/s (see
-/// tests/papers_band.rs). The test asserts the 4 we get.
+/// tests/it/papers_band.rs). The test asserts the 4 we get.
 #[test]
 fn ko_choi_case_2_moves_back_and_forth_then_passes_behind_the_obstacle() {
     let dir = run_paper("ko-choi-case-2");
