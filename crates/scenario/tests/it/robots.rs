@@ -1,8 +1,7 @@
 //! The unicycle and lidar robot keys: defaults, values taken, bad values
 //! refused at their line.
 
-mod common;
-use common::*;
+use crate::common::*;
 use mrsim_scenario::{Kinematics, Lidar};
 
 #[test]

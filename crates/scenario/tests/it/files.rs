@@ -1,7 +1,6 @@
 //! The shipped scenario files load, and a resolved scenario survives JSON.
 
-mod common;
-use common::*;
+use crate::common::*;
 use mrsim_scenario::{Mode, Scenario, demo, load};
 use std::path::Path;
 

@@ -1,7 +1,6 @@
 //! `[output]`: the trajectory's format and how often it records.
 
-mod common;
-use common::*;
+use crate::common::*;
 use mrsim_scenario::{OutputConfig, TrajectoryFormat, parse_with_overrides};
 
 fn with_output(table: &str) -> String {

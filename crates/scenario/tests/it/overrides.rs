@@ -1,7 +1,6 @@
 //! Defaults and overrides: who wins, and where errors point.
 
-mod common;
-use common::*;
+use crate::common::*;
 use mrsim_scenario::{ParamValue, ScenarioError, parse_with_overrides};
 
 const GEN: &str =

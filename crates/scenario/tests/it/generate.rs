@@ -1,7 +1,6 @@
 //! `[generate]`: every kind gives robots that do not overlap.
 
-mod common;
-use common::*;
+use crate::common::*;
 use mrsim_scenario::{RobotSpec, Scenario};
 
 fn generated(kind: &str, count: usize, extra: &str) -> Scenario {

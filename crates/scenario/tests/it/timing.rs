@@ -1,8 +1,7 @@
 //! `[defaults.timing]` and `[robot.timing]`: resolved per robot, reachable
 //! with overrides, and every bad value refused at its line.
 
-mod common;
-use common::*;
+use crate::common::*;
 use mrsim_scenario::parse_with_overrides;
 use mrsim_scenario::timing::{Compute, Timing};
 

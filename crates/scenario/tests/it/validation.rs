@@ -1,7 +1,6 @@
 //! Every validation rule: refused, at the right line, with a reason.
 
-mod common;
-use common::*;
+use crate::common::*;
 use mrsim_scenario::ScenarioError;
 
 #[test]
