@@ -1,0 +1,14 @@
+//! The scenario loader's tests, one test binary with one module per theme
+//! (`cargo test --release -p mrsim-scenario --test it maps::` runs one).
+
+mod common;
+
+mod files;
+mod fuzz;
+mod generate;
+mod maps;
+mod output;
+mod overrides;
+mod robots;
+mod timing;
+mod validation;

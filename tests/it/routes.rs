@@ -1,0 +1,311 @@
+//! Robots that arrive in maps: the shipped office scene of TurtleBot3-like
+//! differential drives with `route = "shortest"` and dwa from the scan, the
+//! same with dwa on true states and with orca; two robots started touching
+//! get apart and arrive; two passing close keep their padding; the route
+//! is written and drawn; unreachable goals, a look-ahead at the goal
+//! tolerance and a scan planner without a scanner are refused with the
+//! file, the line and why (exit 2).
+
+use crate::common::*;
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+/// Runs `scenario` in lockstep in-process with `extra` arguments; returns
+/// the run folder.
+fn run_lockstep(scenario: &Path, tag: &str, extra: &[&str]) -> PathBuf {
+    let out = fresh_dir(tag).join("out");
+    let mut args = vec!["--mode", "lockstep", "--transport", "inproc"];
+    args.extend_from_slice(extra);
+    let o = run(scenario, &out, &run_id(tag), &args);
+    assert_ok(&o);
+    out
+}
+
+/// What a run of robots swapping places came to: the share of goals
+/// reached, robot-robot contacts, and the deepest any robot went into a
+/// map wall (negative clearance, from trajectory.csv).
+struct Outcome {
+    success: f64,
+    robot_contacts: usize,
+    robots: usize,
+    deepest: f64,
+}
+
+fn outcome(scenario: &Path, out: &Path) -> Outcome {
+    let s = mrsim_scenario::load(scenario).expect("scenario").scenario;
+    let m = metrics(out);
+    let names: BTreeSet<String> = s.robots.iter().map(|r| r.name.clone()).collect();
+    let robot_contacts = events(out)
+        .iter()
+        .filter(|e| e["type"] == "collision")
+        .filter(|e| {
+            [&e["a"], &e["b"]]
+                .iter()
+                .all(|n| n.as_str().is_some_and(|n| names.contains(n)))
+        })
+        .count();
+    let walls: Vec<[[f64; 2]; 2]> = s.walls.iter().map(|w| w.segment).collect();
+    // trajectory.csv with its theta column (unicycles): body, x, y.
+    let text = std::fs::read_to_string(out.join("trajectory.csv")).expect("trajectory.csv");
+    let radius: std::collections::BTreeMap<&str, f64> = s
+        .robots
+        .iter()
+        .map(|r| (r.name.as_str(), r.radius))
+        .collect();
+    let mut deepest = f64::INFINITY;
+    for line in text.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        let Some(r) = radius.get(f[2]) else { continue };
+        let p = [f[4].parse().expect("x"), f[5].parse().expect("y")];
+        for w in &walls {
+            deepest = deepest.min(segment_distance(p, *w) - r);
+        }
+    }
+    Outcome {
+        success: m["success_rate"].as_f64().expect("success_rate"),
+        robot_contacts,
+        robots: s.robots.len(),
+        deepest,
+    }
+}
+
+/// The bar for robots swapping places in a map: 90 % of the goals,
+/// never more than 1 mm into a wall, at most one contact per ten robots.
+fn assert_arrived(o: &Outcome, what: &str) {
+    assert!(o.success >= 0.9, "{what}: success {}", o.success);
+    assert!(o.deepest >= -1e-3, "{what}: {} m into a wall", -o.deepest);
+    assert!(
+        o.robot_contacts * 10 <= o.robots,
+        "{what}: {} robot-robot contacts among {} robots",
+        o.robot_contacts,
+        o.robots
+    );
+}
+
+fn office_turtlebots() -> PathBuf {
+    root().join("scenarios/maps/office-turtlebots.toml")
+}
+
+#[test]
+fn turtlebots_with_dwa_from_the_scan_reach_their_goals_across_the_office_by_their_routes() {
+    let scenario = office_turtlebots();
+    let out = run_lockstep(&scenario, "tb-scan", &[]);
+    assert_arrived(&outcome(&scenario, &out), "dwa, scan");
+    // The routes are in the run folder, start to goal, and drawn.
+    let routes = std::fs::read_to_string(out.join("routes.csv")).expect("routes.csv");
+    assert!(routes.starts_with("robot,seq,x,y\n"));
+    assert!(routes.lines().any(|l| l.starts_with("tb-a,0,-7.5,5.5")));
+    let page = std::fs::read_to_string(out.join("replay.html")).expect("replay.html");
+    assert!(page.contains("\"route\":[["));
+    // spl measures each robot's path against its route, not against the
+    // straight line through the walls: l / max(p, l), l the route's length.
+    let mut length: std::collections::BTreeMap<&str, (f64, Option<[f64; 2]>)> = Default::default();
+    for line in routes.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        let p = [
+            f[2].parse::<f64>().expect("x"),
+            f[3].parse::<f64>().expect("y"),
+        ];
+        let e = length.entry(f[0]).or_insert((0.0, None));
+        if let Some(q) = e.1 {
+            e.0 += (p[0] - q[0]).hypot(p[1] - q[1]);
+        }
+        e.1 = Some(p);
+    }
+    let m = metrics(&out);
+    let mut mean = 0.0;
+    for (name, (l, _)) in &length {
+        let r = &m["robots"][*name];
+        let p = r["path_length"].as_f64().expect("path_length");
+        let want = if r["reached_goal"] == true {
+            l / l.max(p)
+        } else {
+            0.0
+        };
+        let spl = r["spl"].as_f64().expect("spl");
+        assert!((spl - want).abs() < 1e-9, "{name}: spl {spl}, l {l}, p {p}");
+        mean += spl / length.len() as f64;
+    }
+    let run_spl = m["spl"].as_f64().expect("spl");
+    assert!(
+        (run_spl - mean).abs() < 1e-9,
+        "run spl {run_spl}, mean {mean}"
+    );
+}
+
+#[test]
+fn turtlebots_with_dwa_on_true_states_reach_their_goals_across_the_office() {
+    let scenario = office_turtlebots();
+    let out = run_lockstep(
+        &scenario,
+        "tb-truth",
+        &["--set", "robot.*.params.obstacles=truth"],
+    );
+    assert_arrived(&outcome(&scenario, &out), "dwa, truth");
+}
+
+#[test]
+fn turtlebots_with_orca_reach_their_goals_across_the_office() {
+    let scenario = office_turtlebots();
+    let dir = fresh_dir("tb-orca-src");
+    let file = dir.join("orca.toml");
+    let src = std::fs::read_to_string(&scenario)
+        .unwrap()
+        .replace(
+            "planner = \"dwa\"\nparams = { obstacles = \"scan\" }",
+            "planner = \"orca\"",
+        )
+        .replace(
+            "file = \"office.yaml\"",
+            &format!(
+                "file = {:?}",
+                root()
+                    .join("scenarios/maps/office.yaml")
+                    .display()
+                    .to_string()
+            ),
+        );
+    std::fs::write(&file, src).unwrap();
+    let out = run_lockstep(&file, "tb-orca", &[]);
+    assert_arrived(&outcome(&file, &out), "orca");
+}
+
+/// Writes `src` as a scenario in a fresh folder.
+fn scenario_file(tag: &str, src: &str) -> PathBuf {
+    let dir = fresh_dir(tag);
+    let file = dir.join("s.toml");
+    std::fs::write(&file, src).unwrap();
+    file
+}
+
+#[test]
+fn two_differential_drives_started_touching_get_apart_and_arrive() {
+    // Face to face, discs touching (0.6 mm apart, radius 0.105),
+    // each with its goal behind the other.
+    for obstacles in ["truth", "scan"] {
+        let src = format!(
+            "[world]\nduration = 60.0\narena = {{ min = [-3.0, -3.0], max = [3.0, 3.0] }}\n\
+             [defaults]\nplanner = \"dwa\"\nparams = {{ obstacles = \"{obstacles}\" }}\n\
+             kinematics = \"unicycle\"\nradius = 0.105\nmax_speed = 0.22\nmax_accel = 2.5\n\
+             max_angular_speed = 2.84\nmax_angular_accel = 3.2\ngoal_tolerance = 0.1\n\
+             sensor = {{ kind = \"lidar\", beams = 360, range = 3.5 }}\n\
+             [[robot]]\nname = \"a\"\nstart = [-0.1053, 0.0]\ngoal = [2.0, 0.0]\n\
+             [[robot]]\nname = \"b\"\nstart = [0.1053, 0.0]\ngoal = [-2.0, 0.0]\n"
+        );
+        let file = scenario_file(&format!("touch-{obstacles}"), &src);
+        let out = run_lockstep(&file, &format!("tch-{obstacles}"), &[]);
+        let m = metrics(&out);
+        for r in ["a", "b"] {
+            assert_eq!(
+                m["robots"][r]["reached_goal"], true,
+                "{obstacles}: {r}: {m:#}"
+            );
+        }
+    }
+}
+
+#[test]
+fn two_differential_drives_grazing_past_each_other_keep_the_padding() {
+    // Pioneer-like, head-on on lines 0.5 m apart: going straight, their
+    // discs (radius 0.25) would just touch. dwa keeps its padding (a
+    // quarter of the radius, 0.0625 m) from the other, from true states
+    // and from the scan alike, and both arrive.
+    for obstacles in ["truth", "scan"] {
+        let src = format!(
+            "[world]\nduration = 40.0\narena = {{ min = [-4.0, -3.0], max = [4.0, 3.0] }}\n\
+             [defaults]\nplanner = \"dwa\"\nparams = {{ obstacles = \"{obstacles}\" }}\n\
+             kinematics = \"unicycle\"\nradius = 0.25\nmax_speed = 0.6\nmax_accel = 1.0\n\
+             max_angular_speed = 1.8\nmax_angular_accel = 3.0\ngoal_tolerance = 0.2\n\
+             sensor = {{ kind = \"lidar\", beams = 180, range = 8.0 }}\n\
+             [[robot]]\nname = \"a\"\nstart = [-3.0, 0.25]\ngoal = [3.0, 0.25]\n\
+             [[robot]]\nname = \"b\"\nstart = [3.0, -0.25]\ngoal = [-3.0, -0.25]\n"
+        );
+        let file = scenario_file(&format!("graze-{obstacles}"), &src);
+        let out = run_lockstep(&file, &format!("grz-{obstacles}"), &[]);
+        let m = metrics(&out);
+        for r in ["a", "b"] {
+            assert_eq!(
+                m["robots"][r]["reached_goal"], true,
+                "{obstacles}: {r}: {m:#}"
+            );
+        }
+        // Per tick, the two centres (trajectory.csv: tick, time, body,
+        // kind, x, y, ...).
+        let text = std::fs::read_to_string(out.join("trajectory.csv")).expect("trajectory.csv");
+        let mut at: std::collections::BTreeMap<u64, [Option<[f64; 2]>; 2]> = Default::default();
+        for line in text.lines().skip(1) {
+            let f: Vec<&str> = line.split(',').collect();
+            let k = ["a", "b"].iter().position(|n| *n == f[2]);
+            if let Some(k) = k {
+                let p = [f[4].parse().expect("x"), f[5].parse().expect("y")];
+                at.entry(f[0].parse().expect("tick")).or_default()[k] = Some(p);
+            }
+        }
+        let gap = at
+            .values()
+            .filter_map(|[a, b]| Some((a.as_ref()?, b.as_ref()?)))
+            .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]) - 0.5)
+            .fold(f64::INFINITY, f64::min);
+        assert!(gap >= 0.0625, "{obstacles}: the discs came within {gap}");
+    }
+}
+
+/// Runs `mrsim run` on `src` and expects a refusal: exit 2, nothing run,
+/// stderr naming the file and line and holding each of `words`.
+fn refused(tag: &str, src: &str, line: usize, words: &[&str]) {
+    let file = scenario_file(tag, src);
+    let err = run_refused(&file);
+    let at = format!("{}:{line}", file.display());
+    assert!(err.contains(&at), "{tag}: no {at} in: {err}");
+    for w in words {
+        assert!(err.contains(w), "{tag}: no `{w}` in: {err}");
+    }
+}
+
+#[test]
+fn a_goal_no_route_reaches_is_refused_with_the_widest_gap() {
+    // A wall across the arena with a 0.3 m gap: a 0.4 m disc cannot pass.
+    let src = "[world]\narena = { min = [-3.0, -3.0], max = [3.0, 3.0] }\n\
+               [[wall]]\nsegment = [[0.0, -3.0], [0.0, -0.15]]\n\
+               [[wall]]\nsegment = [[0.0, 0.15], [0.0, 3.0]]\n\
+               [[robot]]\nname = \"r\"\nradius = 0.2\nroute = \"shortest\"\nstart = [-2.0, 0.0]\n\
+               goal = [2.0, 0.0]\n";
+    refused(
+        "unreachable",
+        src,
+        12,
+        &[
+            "robot `r`",
+            "cannot be reached",
+            "radius 0.2",
+            "clearance of 0.1",
+        ],
+    );
+}
+
+#[test]
+fn a_lookahead_not_below_the_goal_tolerance_is_refused_with_the_reason() {
+    let src = "[[robot]]\nname = \"r\"\nkinematics = \"unicycle\"\ngoal_tolerance = 0.1\n\
+               lookahead = 0.2\nstart = [0.0, 0.0]\ngoal = [2.0, 0.0]\n";
+    refused(
+        "lookahead",
+        src,
+        5,
+        &["lookahead 0.2 must be below goal_tolerance 0.1"],
+    );
+}
+
+#[test]
+fn a_unicycle_without_a_lookahead_gets_half_its_tolerance() {
+    let src = "[[robot]]\nname = \"r\"\nkinematics = \"unicycle\"\ngoal_tolerance = 0.1\n\
+               start = [0.0, 0.0]\ngoal = [2.0, 0.0]\n";
+    let l = mrsim_scenario::parse(src, "s.toml").expect("valid");
+    assert_eq!(l.scenario.robots[0].lookahead, 0.05);
+}
+
+#[test]
+fn dwa_from_the_scan_without_a_scanner_is_refused() {
+    let src = "[[robot]]\nname = \"r\"\nplanner = \"dwa\"\nparams = { obstacles = \"scan\" }\n\
+               start = [0.0, 0.0]\ngoal = [2.0, 0.0]\n";
+    refused("noscan", src, 4, &["no scanner", "sensor"]);
+}

@@ -1,0 +1,7 @@
+//! The world's tests against numbers computed by hand, one test binary with
+//! one module per theme (`cargo test --release -p mrsim-world --test it
+//! dynamics::` runs one).
+
+mod dynamics;
+mod obstacles;
+mod unicycle;
