@@ -25,7 +25,7 @@ fn main() {
     };
     let script = Path::new(&dir).join("link").join("wake.ld");
     let script = script.to_string_lossy();
-    // Tells the tests the layout was asked for (tests/bench.rs checks it).
+    // Tells the tests the layout was asked for (tests/it/bench.rs checks it).
     println!("cargo:rustc-env=MRSIM_WAKE_LAYOUT=1");
     // `-Wl,` splits at commas: a path with one goes as the driver's `-T`.
     if script.contains(',') {
