@@ -90,15 +90,19 @@
 //! so a robot that cannot advance turns towards its goal and waits for the
 //! way to clear; the back-off is what gets two robots that touch apart.
 //!
-//! **Going round** (unicycle; DWA's objective alone keeps a robot facing
-//! what blocks the way to its goal, a local minimum): a robot that has not
+//! **Going round** (unicycle, from the scan; DWA's objective alone keeps a
+//! robot facing what blocks the way to its goal, a local minimum, and
+//! keeping to half the gap to every return holds it there): a robot that has not
 //! moved half its radius for 1.5 s, facing its goal (within 45 degrees),
 //! with the nearest obstacle within its radius, ahead and between it and
 //! its goal, goes round it for up to 2 s: its heading term aims along the
 //! nearest obstacle's edge (its direction turned a right angle) on the side
 //! away from it, or on the right when it is within 10 degrees of straight
 //! in the way, until it is past (no longer towards the goal) or two radii
-//! off. Two robots stopped face to face both go round to their right.
+//! off. Two robots stopped face to face both go round to their right. (On
+//! true states the ties below suffice for two robots head-on, and going
+//! round jammed the robots crossing the hospital map's main corridor: 1
+//! of 10 arrived, against 10 of 10 without.)
 //!
 //! **Ties** (unicycle): samples scored within 1e-6 of the objective's range
 //! of the best are a tie, taken by the right-most turn. Two robots meeting

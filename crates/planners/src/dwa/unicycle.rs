@@ -360,6 +360,7 @@ pub(super) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
         rec.detour = None;
     }
     if rec.detour.is_none()
+        && scan
         && !at_goal
         && between
         && gap < me.radius
