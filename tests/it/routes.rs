@@ -1,7 +1,8 @@
 //! Robots that arrive in maps: the shipped office scene of TurtleBot3-like
 //! differential drives with `route = "shortest"` and dwa from the scan, the
 //! same with dwa on true states and with orca; two robots started touching
-//! get apart and arrive; two passing close keep their padding; the route
+//! get apart and arrive; two passing close keep their padding; two
+//! meeting exactly head-on pass and arrive; the route
 //! is written and drawn; unreachable goals, a look-ahead at the goal
 //! tolerance and a scan planner without a scanner are refused with the
 //! file, the line and why (exit 2).
@@ -247,6 +248,47 @@ fn two_differential_drives_grazing_past_each_other_keep_the_padding() {
             .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]) - 0.5)
             .fold(f64::INFINITY, f64::min);
         assert!(gap >= 0.0625, "{obstacles}: the discs came within {gap}");
+    }
+}
+
+#[test]
+fn two_differential_drives_meeting_exactly_head_on_pass_and_arrive() {
+    // On one line, each with its goal where the other starts: the scene is
+    // its own mirror image, and without a rule each swerves to the side
+    // the other does, or both stop face to face. From the scan and from
+    // true states, TurtleBot3-like and Pioneer-like, both arrive untouched.
+    let limits = [
+        (
+            "tb3",
+            "radius = 0.105\nmax_speed = 0.22\nmax_accel = 2.5\nmax_angular_speed = 2.84\n\
+             max_angular_accel = 3.2\ngoal_tolerance = 0.1\n\
+             sensor = { kind = \"lidar\", beams = 360, range = 3.5 }\n",
+        ),
+        (
+            "pio",
+            "radius = 0.25\nmax_speed = 0.6\nmax_accel = 1.0\nmax_angular_speed = 1.8\n\
+             max_angular_accel = 3.0\ngoal_tolerance = 0.2\n\
+             sensor = { kind = \"lidar\", beams = 180, range = 8.0 }\n",
+        ),
+    ];
+    for obstacles in ["truth", "scan"] {
+        for (robot, limits) in limits {
+            let src = format!(
+                "[world]\nduration = 60.0\narena = {{ min = [-4.0, -3.0], max = [4.0, 3.0] }}\n\
+                 [defaults]\nplanner = \"dwa\"\nparams = {{ obstacles = \"{obstacles}\" }}\n\
+                 kinematics = \"unicycle\"\n{limits}\
+                 [[robot]]\nname = \"a\"\nstart = [-3.0, 0.0]\ngoal = [3.0, 0.0]\n\
+                 [[robot]]\nname = \"b\"\nstart = [3.0, 0.0]\ngoal = [-3.0, 0.0]\n"
+            );
+            let tag = format!("headon-{obstacles}-{robot}");
+            let file = scenario_file(&tag, &src);
+            let out = run_lockstep(&file, &format!("ho-{}-{robot}", &obstacles[..1]), &[]);
+            let m = metrics(&out);
+            for r in ["a", "b"] {
+                assert_eq!(m["robots"][r]["reached_goal"], true, "{tag}: {r}: {m:#}");
+                assert_eq!(m["robots"][r]["collisions"], 0, "{tag}: {r}: {m:#}");
+            }
+        }
     }
 }
 

@@ -99,6 +99,12 @@ pub(super) struct Recovery {
     pub(super) still_since: f64,
     /// Backing off: until when, at which (v, omega).
     pub(super) backing: Option<(f64, f64, f64)>,
+    /// Where the robot last was, and when, half a radius from the place
+    /// before (its progress; NaN time: not yet).
+    pub(super) mark: (crate::Vec2, f64),
+    /// Going round what blocks it: until when, and on which side (-1:
+    /// turning right of it, +1: left).
+    pub(super) detour: Option<(f64, f64)>,
 }
 
 impl Default for Recovery {
@@ -106,6 +112,8 @@ impl Default for Recovery {
         Self {
             still_since: f64::NAN,
             backing: None,
+            mark: (crate::Vec2::zeros(), f64::NAN),
+            detour: None,
         }
     }
 }

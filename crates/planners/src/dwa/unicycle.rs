@@ -59,12 +59,12 @@ fn arc_contact(
             }
         }
         if walls.any {
-            let pad = Vec2::repeat(radius * (1.0 + 1e-9) + 1e-9);
+            let pad = Vec2::repeat(walls.radius * (1.0 + 1e-9) + 1e-9);
             walls
                 .grid
                 .query_near(p.inf(&q) - pad, p.sup(&q) + pad, &mut walls.buf);
             for &k in &walls.buf {
-                if let Some(h) = time_to_segment(p, vel, radius, &walls.all[k as usize]) {
+                if let Some(h) = time_to_segment(p, vel, walls.radius, &walls.all[k as usize]) {
                     hit = hit.min(h);
                 }
             }
@@ -86,6 +86,11 @@ struct ArcWalls<'a> {
     buf: Vec<u32>,
     /// Whether any wall is within reach.
     any: bool,
+    /// The disc's radius against the walls: the padded radius, or, when
+    /// the centre is already nearer a wall than that, just under its
+    /// distance to the nearest (module documentation of `dwa`, "Walls on
+    /// true states").
+    radius: f64,
 }
 
 /// Time to the first contact of the disc of radius `r` with any of the
@@ -151,6 +156,28 @@ fn reciprocal_stop(ahead: &[(f64, f64)], v: f64, a: f64, dt: f64) -> bool {
     })
 }
 
+/// Scores closer than this (relative to the objective's range) are a tie.
+const TIE: f64 = 1e-6;
+
+/// The best of the scored samples `(score, v, omega)`: among those within
+/// `tie` of the highest score, the one turning furthest right (least
+/// omega), and of those the highest scored (the first of equals). A scene
+/// that is its own mirror image (two robots meeting exactly head-on) scores
+/// each turn as its mirror turn; rounding, different in each robot's
+/// frame, would pick the left turn for one and the right for the other,
+/// which is the same side of the line between them: they would meet
+/// again. Within rounding, both turn right.
+fn rightmost_best(scored: &[(f64, f64, f64)], tie: f64) -> Option<(f64, f64, f64)> {
+    let top = scored.iter().map(|s| s.0).fold(f64::NEG_INFINITY, f64::max);
+    let mut best: Option<(f64, f64, f64)> = None;
+    for &s in scored.iter().filter(|s| s.0 >= top - tie) {
+        if best.is_none_or(|b| s.2 < b.2 || (s.2 == b.2 && s.0 > b.0)) {
+            best = Some(s);
+        }
+    }
+    best
+}
+
 /// Angle `a` wrapped to (-pi, pi].
 fn wrap(a: f64) -> f64 {
     let w = a.rem_euclid(2.0 * PI);
@@ -161,6 +188,27 @@ fn wrap(a: f64) -> f64 {
 const STILL_FOR: f64 = 3.0;
 /// Seconds a back-off lasts at most.
 const BACK_OFF_FOR: f64 = 1.5;
+/// Seconds without progress, blocked, before the robot goes round.
+const STALL_FOR: f64 = 1.5;
+/// Seconds a detour lasts at most.
+const DETOUR_FOR: f64 = 2.0;
+/// Within this angle of straight in the way, an obstacle is passed on
+/// the right (10 degrees, as its sine).
+const DEAD_AHEAD: f64 = 0.17364817766693033;
+
+/// Which way to turn from what lies in direction `toward` (a unit vector)
+/// for one going along `along`: away from its side, -1 (right) when it is
+/// on the left, +1 (left) when on the right; right when it is (within
+/// DEAD_AHEAD) straight in the way, whatever rounding says, so that two
+/// robots face to face both turn right and pass.
+fn side_of(toward: Vec2, along: Vec2) -> f64 {
+    let lateral = along.x * toward.y - along.y * toward.x;
+    if lateral < -DEAD_AHEAD * toward.norm() {
+        1.0
+    } else {
+        -1.0
+    }
+}
 
 /// The nearest obstacle's surface distance from the disc and its
 /// direction in the robot's frame (a unit vector; zero if none).
@@ -225,11 +273,16 @@ pub(super) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
         dwa.walls.near(obs.walls, me.position, reach)
     };
     let walls: Vec<&Segment> = near.iter().map(|&k| &obs.walls[k as usize]).collect();
+    let wall_distance = walls
+        .iter()
+        .map(|w| (w.closest_point(me.position) - me.position).norm())
+        .fold(f64::INFINITY, f64::min);
     let mut arc_walls = ArcWalls {
         all: obs.walls,
         grid: &mut dwa.walls,
         buf: Vec::new(),
         any: !walls.is_empty(),
+        radius: padded.min(wall_distance * (1.0 - 1e-6)),
     };
     let others: &[Sensed] = if scan { &[] } else { obs.others };
     let step = dt / 2.0;
@@ -278,7 +331,7 @@ pub(super) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
         let v = if toward.x > 0.0 { -back } else { back };
         let v = if contact_time(v, 0.0) > dt { v } else { 0.0 };
         let w = if toward.x > 0.0 {
-            -toward.y.signum() * 0.5 * w_max
+            side_of(toward, Vec2::new(1.0, 0.0)) * 0.5 * w_max
         } else {
             0.0
         };
@@ -286,6 +339,45 @@ pub(super) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
         rec.still_since = f64::NAN;
         return Command::Unicycle { v, omega: w };
     }
+
+    // Blocked: no progress (half a radius) for STALL_FOR s, facing the
+    // goal, something near ahead and in the way. Go round it for up to
+    // DETOUR_FOR s.
+    let (hs, hc) = me.heading.sin_cos();
+    let toward_world = Vec2::new(hc * toward.x - hs * toward.y, hs * toward.x + hc * toward.y);
+    let goal_dir = if d_goal > 1e-12 {
+        to_goal / d_goal
+    } else {
+        Vec2::new(hc, hs)
+    };
+    if rec.mark.1.is_nan() || (me.position - rec.mark.0).norm() >= 0.5 * me.radius {
+        rec.mark = (me.position, obs.time);
+    }
+    let between = toward_world.dot(&goal_dir) > 0.0;
+    if let Some((until, _)) = rec.detour
+        && (at_goal || obs.time >= until || !between || gap >= 2.0 * me.radius)
+    {
+        rec.detour = None;
+    }
+    if rec.detour.is_none()
+        && scan
+        && !at_goal
+        && between
+        && gap < me.radius
+        && toward.x > 0.0
+        && alpha.abs() <= PI / 4.0
+        && obs.time - rec.mark.1 >= STALL_FOR
+    {
+        rec.detour = Some((obs.time + DETOUR_FOR, side_of(toward_world, goal_dir)));
+        rec.mark.1 = obs.time;
+    }
+    // The heading to aim for: the goal's, or going round, along the
+    // nearest obstacle's edge on the detour's side.
+    let aim = rec.detour.map(|(_, side)| {
+        let t = Vec2::new(-side * toward_world.y, side * toward_world.x);
+        t.y.atan2(t.x)
+    });
+    let alpha = aim.map_or(alpha, |g| wrap(g - me.heading));
 
     // The speed to aim for: the top speed, less near the goal (a braking
     // profile), less when the goal is off the heading (the arc through the
@@ -320,7 +412,7 @@ pub(super) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
         .collect();
     let n = dwa.samples;
     let at = |k: usize, lo: f64, hi: f64| lo + (hi - lo) * k as f64 / (n - 1) as f64;
-    let mut best: Option<(f64, f64, f64)> = None;
+    let mut scored: Vec<(f64, f64, f64)> = Vec::with_capacity(n * n);
     let mut least_bad = (f64::NEG_INFINITY, 0.0, w_c.clamp(w_lo, w_hi));
     for i in 0..n {
         for j in 0..n {
@@ -350,7 +442,9 @@ pub(super) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
             } else {
                 let (p, th) = arc(me.position, me.heading, v, w, dt);
                 let ahead = obs.goal - p;
-                let heading = if ahead.norm() <= f64::EPSILON {
+                let heading = if let Some(g) = aim {
+                    1.0 - wrap(g - th).abs() / PI
+                } else if ahead.norm() <= f64::EPSILON {
                     1.0
                 } else {
                     1.0 - wrap(ahead.y.atan2(ahead.x) - th).abs() / PI
@@ -359,11 +453,15 @@ pub(super) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
                 let speed = 1.0 - (v - v_goal).abs() / me.max_speed;
                 dwa.w_heading * heading + dwa.w_clearance * clearance + dwa.w_speed * speed
             };
-            if best.is_none_or(|(b, _, _)| score > b) {
-                best = Some((score, v, w));
-            }
+            scored.push((score, v, w));
         }
     }
+    let scale = if at_goal {
+        me.max_speed + w_max * me.radius.max(0.1)
+    } else {
+        dwa.w_heading + dwa.w_clearance + dwa.w_speed
+    };
+    let best = rightmost_best(&scored, TIE * scale.max(f64::MIN_POSITIVE));
     let (v, omega) = best.map_or((least_bad.1, least_bad.2), |(_, v, w)| (v, w));
     Command::Unicycle { v, omega }
 }
@@ -438,6 +536,49 @@ mod tests {
         assert!((t - 1.9).abs() < 1e-12, "{t}");
         // Turning in place meets nothing.
         assert!(arc_points(&[Vec2::new(0.15, 0.0)], 0.1, 0.0, 1.0, 10.0).is_infinite());
+    }
+
+    #[test]
+    fn a_robot_within_its_padding_of_a_wall_of_short_segments_drives_along_it() {
+        // A wall of 5 cm segments (a map's traced outline) 0.29 from the
+        // centre, inside the padded radius 0.3125: each segment ahead is
+        // nearer than its padded radius, but driving along the wall comes no
+        // nearer to it than the robot is.
+        let walls: Vec<Segment> = (0..80)
+            .map(|k| Segment {
+                a: Vec2::new(-1.0 + 0.05 * k as f64, -0.29),
+                b: Vec2::new(-0.95 + 0.05 * k as f64, -0.29),
+            })
+            .collect();
+        let obs = Observation {
+            walls: &walls,
+            ..observation(me(0.0), Vec2::new(5.0, -0.29), &[])
+        };
+        let Command::Unicycle { v, .. } = crate::Planner::plan(&mut Dwa::default(), &obs) else {
+            panic!("unicycle command expected");
+        };
+        assert!(v > 0.1, "{v}");
+    }
+
+    #[test]
+    fn among_equal_scores_the_right_turn_is_taken_whatever_rounding_says() {
+        // A turn and its mirror image, scored within rounding of each other
+        // either way round: the right turn (negative omega) both times.
+        let tie = TIE * 2.4;
+        for eps in [1e-12, -1e-12] {
+            let scored = [(1.0, 0.1, 0.5), (1.0 + eps, 0.1, -0.5), (0.5, 0.0, 0.0)];
+            assert_eq!(rightmost_best(&scored, tie).map(|b| b.2), Some(-0.5));
+        }
+        // A clearly better left turn is still taken.
+        let scored = [(1.1, 0.1, 0.5), (1.0, 0.1, -0.5)];
+        assert_eq!(rightmost_best(&scored, tie).map(|b| b.2), Some(0.5));
+        // Something straight in the way (within 10 degrees) is passed on the
+        // right; one off to a side, on the side away from it.
+        let along = Vec2::new(1.0, 0.0);
+        assert_eq!(side_of(Vec2::new(1.0, 1e-9), along), -1.0);
+        assert_eq!(side_of(Vec2::new(1.0, -1e-9), along), -1.0);
+        assert_eq!(side_of(Vec2::new(1.0, -0.5), along), 1.0);
+        assert_eq!(side_of(Vec2::new(1.0, 0.5), along), -1.0);
     }
 
     #[test]
