@@ -21,8 +21,8 @@
 //! scenario has a `[map]`, else half the radius.
 
 use mrsim_planners::{Command, Diagnostic, Observation, Planner, Segment, Vec2};
-use mrsim_route::{Clearance, Follower, P, Path, RouteError, Scene};
-use mrsim_scenario::{Motion, ObstacleSpec, RobotSpec, Scenario};
+use mrsim_route::{Clearance, Follower, P, Path, RouteError, Scene, Side};
+use mrsim_scenario::{Lane, Motion, ObstacleSpec, RobotSpec, Scenario};
 
 /// Seconds without progress along the route before it is planned again.
 pub const PATIENCE: f64 = 8.0;
@@ -30,6 +30,38 @@ pub const PATIENCE: f64 = 8.0;
 /// Extra clearance a route keeps over the radius where it can.
 pub fn margin(spec: &RobotSpec) -> f64 {
     spec.radius
+}
+
+/// How far sideways a route with a `lane` is moved at most, where the
+/// walls leave room: a radius and half the [`margin`] (one and a half
+/// radii), so that two robots in opposite lanes of a corridor pass with
+/// their discs half a radius apart, more than the local planners' own
+/// padding.
+pub fn lane_offset(spec: &RobotSpec) -> f64 {
+    spec.radius + margin(spec) / 2.0
+}
+
+/// The side robot `spec`'s route keeps to, if any.
+fn side(spec: &RobotSpec) -> Option<Side> {
+    match spec.lane {
+        Lane::None => None,
+        Lane::Right => Some(Side::Right),
+        Lane::Left => Some(Side::Left),
+    }
+}
+
+/// `path` moved into robot `spec`'s lane, if it keeps to one.
+fn in_lane(grid: &Clearance, path: Path, spec: &RobotSpec) -> Path {
+    match side(spec) {
+        Some(side) => grid.keep_to(
+            &path,
+            side,
+            lane_offset(spec),
+            spec.radius + margin(spec),
+            spec.radius,
+        ),
+        None => path,
+    }
 }
 
 /// How far along the route, beyond the robot's progress, its planner's
@@ -113,6 +145,7 @@ impl RouteScene {
             pad: 2.0 * (spec.radius + margin(spec)),
         });
         let path = grid.route(spec.start, spec.goal, spec.radius, margin(spec), &[])?;
+        let path = in_lane(&grid, path, spec);
         Ok((grid, path))
     }
 }
@@ -134,6 +167,7 @@ pub fn fit_route(
 /// A planner steered along its robot's route (module documentation).
 pub struct Routed {
     inner: Box<dyn Planner>,
+    spec: RobotSpec,
     grid: Clearance,
     follower: Follower,
     goal: P,
@@ -151,6 +185,7 @@ impl Routed {
         let ahead = ahead(spec);
         Self {
             inner,
+            spec: spec.clone(),
             grid,
             follower: Follower::new(path, ahead, PATIENCE),
             goal: spec.goal,
@@ -179,6 +214,7 @@ impl Routed {
             .route(p, self.goal, self.radius, self.margin, &blocked)
             .or_else(|_| self.grid.route(p, self.goal, self.radius, self.margin, &[]));
         if let Ok(path) = path {
+            let path = in_lane(&self.grid, path, &self.spec);
             self.follower.replace(path, obs.time);
             self.replans += 1;
         }

@@ -4,8 +4,9 @@
 //! get apart and arrive; two passing close keep their padding; two
 //! meeting exactly head-on pass and arrive; the route
 //! is written and drawn; unreachable goals, a look-ahead at the goal
-//! tolerance and a scan planner without a scanner are refused with the
-//! file, the line and why (exit 2).
+//! tolerance, a scan planner without a scanner and a lane without a route
+//! are refused with the file, the line and why (exit 2); routes with a lane
+//! keep to opposite sides of a corridor.
 
 use crate::common::*;
 use std::collections::BTreeSet;
@@ -350,4 +351,60 @@ fn dwa_from_the_scan_without_a_scanner_is_refused() {
     let src = "[[robot]]\nname = \"r\"\nplanner = \"dwa\"\nparams = { obstacles = \"scan\" }\n\
                start = [0.0, 0.0]\ngoal = [2.0, 0.0]\n";
     refused("noscan", src, 4, &["no scanner", "sensor"]);
+}
+
+#[test]
+fn a_lane_without_a_route_is_refused() {
+    let src = "[[robot]]\nname = \"r\"\nlane = \"right\"\nstart = [0.0, 0.0]\ngoal = [2.0, 0.0]\n";
+    refused("lanenoroute", src, 3, &["lane needs route = \"shortest\""]);
+}
+
+#[test]
+fn routes_with_a_lane_keep_opposite_sides_of_a_corridor_and_without_one_share_its_middle() {
+    // A corridor 1.9 m wide along x; two Pioneer-like robots swap its ends.
+    // routes.csv: robot, seq, x, y. Each route's points other than its
+    // ends, and how far they lie off the middle line (y = 0).
+    let inner = |lane: &str| {
+        let src = format!(
+            "[world]\nduration = 0.2\narena = {{ min = [-7.0, -1.0], max = [7.0, 1.0] }}\n\
+             [[wall]]\nsegment = [[-7.0, -0.95], [7.0, -0.95]]\n\
+             [[wall]]\nsegment = [[-7.0, 0.95], [7.0, 0.95]]\n\
+             [defaults]\nplanner = \"dwa\"\nroute = \"shortest\"\nlane = \"{lane}\"\n\
+             kinematics = \"unicycle\"\nradius = 0.25\nmax_speed = 0.6\ngoal_tolerance = 0.2\n\
+             [[robot]]\nname = \"e\"\nstart = [-6.0, 0.0]\ngoal = [6.0, 0.0]\n\
+             [[robot]]\nname = \"w\"\nstart = [6.0, 0.0]\ngoal = [-6.0, 0.0]\n"
+        );
+        let file = scenario_file(&format!("lane-{lane}"), &src);
+        let out = run_lockstep(&file, &format!("ln-{lane}"), &["--no-report"]);
+        let text = std::fs::read_to_string(out.join("routes.csv")).expect("routes.csv");
+        let mut by: std::collections::BTreeMap<String, Vec<[f64; 2]>> = Default::default();
+        for line in text.lines().skip(1) {
+            let f: Vec<&str> = line.split(',').collect();
+            by.entry(f[0].to_string())
+                .or_default()
+                .push([f[2].parse().expect("x"), f[3].parse().expect("y")]);
+        }
+        by.into_iter()
+            .map(|(r, pts)| {
+                assert_eq!(pts.first().map(|p| p[1]), Some(0.0), "{lane} {r}: {pts:?}");
+                assert_eq!(pts.last().map(|p| p[1]), Some(0.0), "{lane} {r}: {pts:?}");
+                (r, pts[1..pts.len() - 1].to_vec())
+            })
+            .collect::<std::collections::BTreeMap<_, _>>()
+    };
+    // Keeping right: eastwards to -y, westwards to +y, by a radius and a
+    // half (0.375) along the corridor, leaving 0.5 (radius + margin) to the
+    // wall.
+    let right = inner("right");
+    for (r, sign) in [("e", -1.0), ("w", 1.0)] {
+        let pts = &right[r];
+        assert!(!pts.is_empty(), "{r}: {pts:?}");
+        for p in pts {
+            assert!(sign * p[1] > 0.3 && sign * p[1] < 0.376, "{r}: {pts:?}");
+        }
+    }
+    // Without: both down the middle.
+    for pts in inner("none").values() {
+        assert!(pts.iter().all(|p| p[1].abs() < 1e-9), "{pts:?}");
+    }
 }

@@ -37,15 +37,37 @@
 //! only when no roomier way is much longer, and cells with less than the
 //! radius are not crossed at all (but near the start and the goal, which
 //! the scenario has already checked).
+//!
+//! **Lanes.** A shortest route runs down the middle of a corridor, or
+//! grazes its inner corners, whichever way it is travelled, so robots going
+//! opposite ways along it meet head-on and must both swerve, to the same
+//! side as often as not. [`Clearance::keep_to`] moves a route sideways, to
+//! the right (or the left) of its direction of travel, by up to a given
+//! offset wherever the walls leave room: at each point (every half cell
+//! along it) as far towards that side as the clearance stays at least a
+//! given `need` (the route's `radius + margin`), at most the offset, and
+//! nowhere more than half the distance from the route's nearer end, nor
+//! changing faster than half a metre sideways a metre along (so it leaves
+//! the start and reaches the goal exactly and enters and leaves a lane at
+//! about 27 degrees). Two routes travelled opposite ways along a corridor
+//! wide enough for two then lie up to twice the offset apart, and each
+//! robot's look-ahead waypoint leads it into its own lane: the traffic rule
+//! of keeping to one side, which people and vehicles follow so that
+//! opposing flows pass instead of meeting. Through a door or a corridor
+//! that leaves no room beyond `need` the route is unchanged. The moved
+//! polyline is simplified (Douglas-Peucker, a quarter cell) and kept only
+//! if every leg still clears the bare radius.
 
 #![warn(missing_docs)]
 
 mod follow;
 mod grid;
+mod lanes;
 mod search;
 
 pub use follow::{Follower, Path};
 pub use grid::{Clearance, Scene};
+pub use lanes::Side;
 
 /// A point, in the scenario's units.
 pub type P = [f64; 2];

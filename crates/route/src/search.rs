@@ -229,7 +229,7 @@ impl Clearance {
 
     /// Does every cell the line from `a` to `b` crosses have at least
     /// `need` of clearance?
-    fn line_clear(&self, a: P, b: P, need: f64, clear: &dyn Fn(usize) -> f64) -> bool {
+    pub(crate) fn line_clear(&self, a: P, b: P, need: f64, clear: &dyn Fn(usize) -> f64) -> bool {
         let n = (crate::dist(a, b) / (self.res * 0.5)).ceil().max(1.0) as usize;
         (0..=n).all(|k| {
             let t = k as f64 / n as f64;

@@ -2,8 +2,8 @@
 //! keys refused. `resolve` turns it into the types of `types.rs`.
 
 use crate::types::{
-    Kinematics, LengthUnit, MissPolicy, Mode, ParamValue, Route, TrajectoryFormat, UnknownCells,
-    VelocitySource,
+    Kinematics, Lane, LengthUnit, MissPolicy, Mode, ParamValue, Route, TrajectoryFormat,
+    UnknownCells, VelocitySource,
 };
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -120,6 +120,7 @@ pub(crate) struct RawRobot {
     pub max_angular_accel: Option<S<f64>>,
     pub lookahead: Option<S<f64>>,
     pub route: Option<S<Route>>,
+    pub lane: Option<S<Lane>>,
     pub sensor: Option<S<RawSensor>>,
     pub timing: Option<S<RawTiming>>,
 }

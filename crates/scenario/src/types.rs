@@ -190,6 +190,30 @@ impl Route {
     }
 }
 
+/// Which side of a corridor a robot's route keeps to (the `lane` robot
+/// key; only with `route = "shortest"`): the route is moved towards that
+/// side of the way it is travelled where the walls leave room, so that
+/// robots going opposite ways along a corridor wide enough for two pass
+/// beside each other instead of meeting head-on (`mrsim-route`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Lane {
+    /// The route as searched, through the middle of its way (default).
+    #[default]
+    None,
+    /// Keep to the right of the direction of travel.
+    Right,
+    /// Keep to the left of the direction of travel.
+    Left,
+}
+
+impl Lane {
+    /// Is this the default (left out of scenario.json)?
+    pub fn is_none(&self) -> bool {
+        *self == Lane::None
+    }
+}
+
 /// A robot's laser scanner (`sensor = { kind = "lidar", ... }`): `beams`
 /// rays spread evenly over `fov_deg` centred on the robot's heading, each
 /// giving the distance to the first surface within `range` (ROS
@@ -268,6 +292,9 @@ pub struct RobotSpec {
     /// How the planner is led to the goal (default direct).
     #[serde(default, skip_serializing_if = "Route::is_direct")]
     pub route: Route,
+    /// Which side of a corridor its route keeps to (default none).
+    #[serde(default, skip_serializing_if = "Lane::is_none")]
+    pub lane: Lane,
     /// The robot's laser scanner, if it has one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sensor: Option<Lidar>,

@@ -74,6 +74,7 @@ fn robot(name: &str, start: [f64; 2], goal: [f64; 2]) -> RobotSpec {
         max_angular_accel: mrsim_scenario::DEFAULT_MAX_ANGULAR_ACCEL,
         lookahead: mrsim_scenario::DEFAULT_LOOKAHEAD,
         route: Default::default(),
+        lane: Default::default(),
         sensor: None,
         timing: None,
         replay: None,

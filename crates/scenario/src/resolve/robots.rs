@@ -259,12 +259,24 @@ pub(super) fn resolve_robot(
         )?,
         lookahead: 0.0,
         route: pick(layers, |r| &r.route).map_or(Route::Direct, |(v, _)| *v.get_ref()),
+        lane: pick(layers, |r| &r.lane).map_or(Lane::None, |(v, _)| *v.get_ref()),
         sensor,
         timing,
         replay: None,
     };
     let mut spec = spec;
     spec.lookahead = lookahead(layers, &spec)?;
+    if spec.lane != Lane::None
+        && spec.route != Route::Shortest
+        && let Some((v, what)) = pick(layers, |r| &r.lane)
+    {
+        return Err(Fail::new(
+            Some(v.span()),
+            what,
+            "lane needs route = \"shortest\": it says which side of a corridor the robot's \
+             route keeps to, and a robot without a route drives straight at its goal",
+        ));
+    }
     let spans = RobotSpans {
         table,
         start: start_span,
