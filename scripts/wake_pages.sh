@@ -18,7 +18,7 @@ sym=$(nm "$bin" | awk '/_ZN15mrsim_transport3shm8doorbell10futex_wait/ && !s {s 
 [ -n "$sym" ] || { echo "$bin: no doorbell futex_wait symbol" >&2; exit 2; }
 # valgrind loads a position-independent program at 0x108000.
 split=$(printf '%x' $((0x108000 + 0x$sym)))
-dir=$(mktemp -d /tmp/mrsim-wake-XXXXXX)
+dir=$(mktemp -d -t mrsim-wake-XXXXXX)
 trap 'rm -rf "$dir"' EXIT
 run="wake$$"
 cat >"$dir/crossing-64.toml" <<'TOML'
