@@ -158,18 +158,14 @@ impl DiagnosticsWriter {
         })
     }
 
-    /// Queues one tick's values (nothing is queued when there are none:
-    /// a planner that reports nothing costs its agent no call here).
-    #[inline]
-    pub fn push(&mut self, tick: u64, time: f64, values: Vec<Diagnostic>) {
+    /// Queues one tick's values, gathered already (the tests' way in; an
+    /// agent calls [`DiagnosticsWriter::record`]). Nothing is queued when
+    /// there are none.
+    #[cfg(test)]
+    fn push(&mut self, tick: u64, time: f64, values: Vec<Diagnostic>) {
         if !values.is_empty() {
             self.values.extend(values);
             self.queue(tick, time);
-        } else if values.capacity() == 0 {
-            // Nothing in it and nothing allocated: nothing to drop. Left
-            // to drop, it costs each tick a call of the vector's drop,
-            // code away from the rest of the wake-up's (link/wake.ld).
-            std::mem::forget(values);
         }
     }
 
