@@ -159,6 +159,7 @@
 //! good).
 
 mod contact;
+mod meeting;
 mod planner;
 mod unicycle;
 mod walls;

@@ -3,6 +3,7 @@
 //! the window, the admissibility test and the objective).
 
 use super::contact::{scan_points, time_to_disc, time_to_segment};
+use super::meeting::keep_right;
 use super::planner::{Dwa, Obstacles};
 use super::walls::WallGrid;
 use crate::{Command, Observation, Segment, Sensed, Vec2};
@@ -273,6 +274,15 @@ pub(super) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
         dwa.walls.near(obs.walls, me.position, reach)
     };
     let walls: Vec<&Segment> = near.iter().map(|&k| &obs.walls[k as usize]).collect();
+    // From the scan, whether something that is not a wall is in the way
+    // (keeping right, below).
+    let meeting = if scan && !at_goal {
+        dwa.walls.prepare(obs.walls, 2.0 * padded);
+        let shift = (1.5 * me.radius).min(d_goal / 3.0);
+        keep_right(obs, &points, &mut dwa.walls, padded, shift, dwa.horizon)
+    } else {
+        None
+    };
     let wall_distance = walls
         .iter()
         .map(|w| (w.closest_point(me.position) - me.position).norm())
@@ -377,7 +387,15 @@ pub(super) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
         let t = Vec2::new(-side * toward_world.y, side * toward_world.x);
         t.y.atan2(t.x)
     });
-    let alpha = aim.map_or(alpha, |g| wrap(g - me.heading));
+    // From the scan, meeting something in the way that is not a wall: aim
+    // to the right of the goal (keeping right).
+    let target = if aim.is_none() { meeting } else { None };
+    let goal = target.unwrap_or(obs.goal);
+    let alpha = match (aim, target) {
+        (Some(g), _) => wrap(g - me.heading),
+        (None, Some(t)) => wrap((t - me.position).y.atan2((t - me.position).x) - me.heading),
+        (None, None) => alpha,
+    };
 
     // The speed to aim for: the top speed, less near the goal (a braking
     // profile), less when the goal is off the heading (the arc through the
@@ -441,7 +459,7 @@ pub(super) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
                 -(v + w.abs() * me.radius.max(0.1))
             } else {
                 let (p, th) = arc(me.position, me.heading, v, w, dt);
-                let ahead = obs.goal - p;
+                let ahead = goal - p;
                 let heading = if let Some(g) = aim {
                     1.0 - wrap(g - th).abs() / PI
                 } else if ahead.norm() <= f64::EPSILON {
