@@ -104,6 +104,26 @@
 //! round jammed the robots crossing the hospital map's main corridor: 1
 //! of 10 arrived, against 10 of 10 without.)
 //!
+//! **Keeping right** (unicycle, from the scan): robots that meet in a
+//! corridor, each swerving its own way or all keeping to the middle line
+//! their routes share, stop face to face and those behind them pile up
+//! (ten Pioneers crossing the hospital map's 1.85 m main corridor from the
+//! scan: 1 of 10 arrived). So a robot keeps right when it meets something,
+//! as people and traffic do: when a return that the map does not explain
+//! (none of the walls within a quarter of the radius of it: another robot,
+//! a person, an obstacle not on the map) lies ahead in the way to its goal
+//! (the strip its padded disc sweeps towards the goal, widened by another
+//! padded disc, up to max_speed x horizon ahead), the heading term aims at
+//! a point one and a half radii to the right of the goal (a third of the
+//! distance to the goal at most, so that the robot still arrives), less
+//! where the walls there leave its padded disc less room: in a corridor
+//! one robot wide, not at all. It keeps right for 3 s after it last met
+//! something, so that it does not swing back to the middle between two
+//! robots coming the other way. Robots coming the other way that both keep
+//! right pass each other left to left, and those going the same way fall
+//! into a lane. Otherwise the goal is aimed at as the route gives it. The
+//! walls only tell returns apart: what the robot avoids is still the scan.
+//!
 //! **Ties** (unicycle): samples scored within 1e-6 of the objective's range
 //! of the best are a tie, taken by the right-most turn. Two robots meeting
 //! exactly head-on see mirror images of one scene and score each turn as

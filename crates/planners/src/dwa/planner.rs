@@ -12,7 +12,8 @@ pub enum Obstacles {
     #[default]
     Truth,
     /// The robot's laser scan alone: every return is a still point in the
-    /// robot's frame; no body's state and no wall is used.
+    /// robot's frame; no body's state is used, and the walls only to tell
+    /// a return that is not a wall (keeping right on meeting).
     Scan,
 }
 
@@ -105,6 +106,9 @@ pub(super) struct Recovery {
     /// Going round what blocks it: until when, and on which side (-1:
     /// turning right of it, +1: left).
     pub(super) detour: Option<(f64, f64)>,
+    /// When the robot, from the scan, last met something in its way (NaN:
+    /// never).
+    pub(super) met: f64,
 }
 
 impl Default for Recovery {
@@ -114,6 +118,7 @@ impl Default for Recovery {
             backing: None,
             mark: (crate::Vec2::zeros(), f64::NAN),
             detour: None,
+            met: f64::NAN,
         }
     }
 }

@@ -3,7 +3,7 @@
 //! the window, the admissibility test and the objective).
 
 use super::contact::{scan_points, time_to_disc, time_to_segment};
-use super::meeting::keep_right;
+use super::meeting::{in_the_way, right_of_goal};
 use super::planner::{Dwa, Obstacles};
 use super::walls::WallGrid;
 use crate::{Command, Observation, Segment, Sensed, Vec2};
@@ -191,6 +191,8 @@ const STILL_FOR: f64 = 3.0;
 const BACK_OFF_FOR: f64 = 1.5;
 /// Seconds without progress, blocked, before the robot goes round.
 const STALL_FOR: f64 = 1.5;
+/// Seconds the robot keeps right after it last met something in its way.
+const KEEP_RIGHT_FOR: f64 = 3.0;
 /// Seconds a detour lasts at most.
 const DETOUR_FOR: f64 = 2.0;
 /// Within this angle of straight in the way, an obstacle is passed on
@@ -279,7 +281,11 @@ pub(super) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
     let meeting = if scan && !at_goal {
         dwa.walls.prepare(obs.walls, 2.0 * padded);
         let shift = (1.5 * me.radius).min(d_goal / 3.0);
-        keep_right(obs, &points, &mut dwa.walls, padded, shift, dwa.horizon)
+        if in_the_way(obs, &points, &mut dwa.walls, padded, dwa.horizon) {
+            dwa.recovery.met = obs.time;
+        }
+        (obs.time - dwa.recovery.met <= KEEP_RIGHT_FOR)
+            .then(|| right_of_goal(obs, &mut dwa.walls, padded, shift))
     } else {
         None
     };
