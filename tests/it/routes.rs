@@ -2,7 +2,8 @@
 //! differential drives with `route = "shortest"` and dwa from the scan, the
 //! same with dwa on true states and with orca; two robots started touching
 //! get apart and arrive; two passing close keep their padding; two
-//! meeting exactly head-on pass and arrive; the route
+//! meeting exactly head-on pass and arrive; robots crossing a corridor
+//! both ways from the scan keep right and arrive; the route
 //! is written and drawn; unreachable goals, a look-ahead at the goal
 //! tolerance, a scan planner without a scanner and a lane without a route
 //! are refused with the file, the line and why (exit 2); routes with a lane
@@ -291,6 +292,58 @@ fn two_differential_drives_meeting_exactly_head_on_pass_and_arrive() {
             }
         }
     }
+}
+
+#[test]
+fn pioneers_crossing_a_corridor_both_ways_from_the_scan_keep_right_and_all_arrive() {
+    // Two halls joined by a corridor 1.85 m wide and 8 m long (room for
+    // three Pioneers abreast); four Pioneer-like robots cross it each way
+    // by their routes, all of which run down its middle, with dwa from the
+    // scan. Meeting there, each keeping to the middle or swerving its own
+    // way, they stood face to face and none arrived; keeping right when
+    // something that is not a wall is in the way, all arrive untouched.
+    let walls = [
+        ([-4.0, 0.925], [4.0, 0.925]),
+        ([-4.0, -0.925], [4.0, -0.925]),
+        ([-4.0, 0.925], [-4.0, 3.0]),
+        ([-4.0, -0.925], [-4.0, -3.0]),
+        ([4.0, 0.925], [4.0, 3.0]),
+        ([4.0, -0.925], [4.0, -3.0]),
+        ([-8.0, -3.0], [-4.0, -3.0]),
+        ([-8.0, 3.0], [-4.0, 3.0]),
+        ([4.0, -3.0], [8.0, -3.0]),
+        ([4.0, 3.0], [8.0, 3.0]),
+        ([-8.0, -3.0], [-8.0, 3.0]),
+        ([8.0, -3.0], [8.0, 3.0]),
+    ];
+    let robots = [
+        ([-5.0, 1.1], [5.0, -1.1]),
+        ([-5.0, 2.2], [5.0, -2.2]),
+        ([-5.0, -1.1], [6.2, -1.1]),
+        ([-7.2, -1.1], [6.2, 1.1]),
+        ([6.2, -1.1], [-7.2, 2.2]),
+        ([6.2, 0.0], [-5.0, 2.2]),
+        ([5.0, 0.0], [-7.2, 0.0]),
+        ([5.0, -1.1], [-5.0, -2.2]),
+    ];
+    let mut src = String::from("[world]\nduration = 90.0\n");
+    for (a, b) in walls {
+        src += &format!("[[wall]]\nsegment = [{a:?}, {b:?}]\n");
+    }
+    src += "[defaults]\nplanner = \"dwa\"\nparams = { obstacles = \"scan\" }\n\
+            route = \"shortest\"\nkinematics = \"unicycle\"\nradius = 0.25\n\
+            max_speed = 0.6\nmax_accel = 1.0\nmax_angular_speed = 1.8\n\
+            max_angular_accel = 3.0\ngoal_tolerance = 0.2\n\
+            sensor = { kind = \"lidar\", beams = 180, range = 8.0 }\n";
+    for (k, (start, goal)) in robots.iter().enumerate() {
+        src += &format!("[[robot]]\nname = \"r{k}\"\nstart = {start:?}\ngoal = {goal:?}\n");
+    }
+    let file = scenario_file("corridor-crossing", &src);
+    let out = run_lockstep(&file, "xcor", &[]);
+    let o = outcome(&file, &out);
+    assert_eq!(o.success, 1.0, "goals reached: {}", o.success);
+    assert_eq!(o.robot_contacts, 0);
+    assert!(o.deepest >= -1e-3, "{} m into a wall", -o.deepest);
 }
 
 /// Runs `mrsim run` on `src` and expects a refusal: exit 2, nothing run,

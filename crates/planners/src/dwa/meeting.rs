@@ -91,3 +91,93 @@ pub(super) fn right_of_goal(
         .fold(shift, f64::min);
     obs.goal + right * room.max(0.0)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testkit::{RobotModel, observation};
+
+    const ROBOT: RobotModel = RobotModel::unit(0.25);
+    const PADDED: f64 = 0.3125;
+
+    fn wall(ax: f64, ay: f64, bx: f64, by: f64) -> Segment {
+        Segment {
+            a: Vec2::new(ax, ay),
+            b: Vec2::new(bx, by),
+        }
+    }
+
+    /// The returns of a disc of radius 0.25 at `c` that face the origin.
+    fn disc_returns(c: Vec2) -> Vec<Vec2> {
+        (0..16)
+            .map(|k| {
+                let a = std::f64::consts::PI * (0.5 + k as f64 / 15.0);
+                c + Vec2::new(a.cos(), a.sin()) * 0.25
+            })
+            .collect()
+    }
+
+    #[test]
+    fn another_body_in_the_way_is_met_and_a_wall_or_what_is_behind_is_not() {
+        // A corridor along x, 1.85 m wide, with a pillar wall across its
+        // middle 2 m ahead; the robot at the origin heading for (5, 0).
+        let walls = [
+            wall(-5.0, 0.925, 5.0, 0.925),
+            wall(-5.0, -0.925, 5.0, -0.925),
+            wall(2.0, -0.2, 2.0, 0.2),
+        ];
+        let me = ROBOT.unicycle(Vec2::zeros(), Vec2::zeros(), 0.0, 0.0, 2.0, 4.0);
+        let obs = Observation {
+            walls: &walls,
+            ..observation(me, Vec2::new(5.0, 0.0), &[])
+        };
+        let mut grid = WallGrid::default();
+        grid.prepare(&walls, 2.0 * PADDED);
+        let met =
+            |points: &[Vec2], grid: &mut WallGrid| in_the_way(&obs, points, grid, PADDED, 3.0);
+        // The walls' own returns: the pillar ahead, the sides.
+        let on_walls: Vec<Vec2> = (0..9)
+            .map(|k| Vec2::new(2.0, -0.2 + 0.05 * k as f64))
+            .chain((0..30).map(|k| Vec2::new(0.1 * k as f64, 0.925)))
+            .collect();
+        assert!(!met(&on_walls, &mut grid));
+        // A robot 1.5 m ahead, a little off the middle: met.
+        assert!(met(&disc_returns(Vec2::new(1.5, 0.3)), &mut grid));
+        // The same behind, beside (out of the strip) or beyond the
+        // look-ahead (3 m at top speed 1 over 3 s): not.
+        assert!(!met(&disc_returns(Vec2::new(-1.5, 0.0)), &mut grid));
+        assert!(!met(&disc_returns(Vec2::new(0.0, 0.9)), &mut grid));
+        assert!(!met(&disc_returns(Vec2::new(3.6, 0.0)), &mut grid));
+    }
+
+    #[test]
+    fn keeping_right_moves_the_goal_right_as_far_as_the_walls_leave_room() {
+        let me = ROBOT.unicycle(Vec2::zeros(), Vec2::zeros(), 0.0, 0.0, 2.0, 4.0);
+        let goal = Vec2::new(1.2, 0.0);
+        let shifted = |half_width: f64| {
+            let walls = [
+                wall(-5.0, half_width, 5.0, half_width),
+                wall(-5.0, -half_width, 5.0, -half_width),
+            ];
+            let obs = Observation {
+                walls: &walls,
+                ..observation(me, goal, &[])
+            };
+            let mut grid = WallGrid::default();
+            grid.prepare(&walls, 2.0 * PADDED);
+            right_of_goal(&obs, &mut grid, PADDED, 0.375)
+        };
+        // A corridor 1.85 m wide: the whole shift, to the right (-y).
+        let p = shifted(0.925);
+        assert!((p - Vec2::new(1.2, -0.375)).norm() < 1e-12, "{p:?}");
+        // One robot wide (0.8 m): only as far as the padded disc fits.
+        let p = shifted(0.4);
+        assert!(
+            (p - Vec2::new(1.2, -(0.4 - PADDED))).norm() < 1e-12,
+            "{p:?}"
+        );
+        // No wider than the padded disc: not at all.
+        let p = shifted(0.3);
+        assert!((p - goal).norm() < 1e-12, "{p:?}");
+    }
+}
