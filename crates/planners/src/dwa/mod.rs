@@ -158,6 +158,7 @@
 //! outline ahead was already in contact, and the robot stood still for
 //! good).
 
+mod brake;
 mod contact;
 mod planner;
 mod unicycle;

@@ -38,6 +38,9 @@ pub struct Dwa {
     pub(super) recovery: Recovery,
     /// The walls' grid (true states), built at the first tick.
     pub(super) walls: super::walls::WallGrid,
+    /// The others' turn rates (true states, unicycle), from their last
+    /// velocities.
+    pub(super) turns: super::brake::TurnRates,
 }
 
 impl Default for Dwa {
@@ -52,6 +55,7 @@ impl Default for Dwa {
             padding: None,
             recovery: Default::default(),
             walls: Default::default(),
+            turns: Default::default(),
         }
     }
 }
@@ -87,6 +91,7 @@ impl Dwa {
             padding,
             recovery: Default::default(),
             walls: Default::default(),
+            turns: Default::default(),
         })
     }
 }

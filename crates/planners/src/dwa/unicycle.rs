@@ -2,6 +2,7 @@
 //! Burgard & Thrun's section 3 (the module documentation of `dwa` gives
 //! the window, the admissibility test and the objective).
 
+use super::brake::Braking;
 use super::contact::{scan_points, time_to_disc, time_to_segment};
 use super::planner::{Dwa, Obstacles};
 use super::walls::WallGrid;
@@ -273,6 +274,20 @@ pub(super) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
         dwa.walls.near(obs.walls, me.position, reach)
     };
     let walls: Vec<&Segment> = near.iter().map(|&k| &obs.walls[k as usize]).collect();
+    // On true states, the others' turn rates (from their velocity's
+    // direction a tick ago) and the robot's braking, for "both could stop".
+    let turns = if scan {
+        Vec::new()
+    } else {
+        dwa.turns.update(obs.others, obs.time, dt, w_max)
+    };
+    let braking = Braking {
+        position: me.position,
+        heading: me.heading,
+        radius: padded,
+        a,
+        dt,
+    };
     let wall_distance = walls
         .iter()
         .map(|w| (w.closest_point(me.position) - me.position).norm())
@@ -435,6 +450,11 @@ pub(super) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
                 continue;
             }
             if !reciprocal_stop(&ahead, v, a, dt) {
+                continue;
+            }
+            // On true states: at rest, after a tick and braking, before
+            // touching another robot that goes on for a tick and brakes.
+            if !scan && !braking.both_stop(others, &turns, v, w) {
                 continue;
             }
             let score = if at_goal {
