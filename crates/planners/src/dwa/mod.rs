@@ -158,7 +158,31 @@
 //! bearing off the heading (what is beside it does not slow it): two
 //! robots that each keep to their half stop apart whatever the other does
 //! (the responsibility shared as ORCA shares it). On true states the
-//! others' velocities are known and the arcs are checked against them.
+//! others' velocities are known and the arcs are checked against them,
+//! and both must be able to stop (below).
+//!
+//! **Both could stop** (unicycle, true states; module `brake`): Fox et
+//! al.'s V_a lets the robot stop before the first obstacle on its arc,
+//! the obstacle standing still. Another robot keeps coming while this one
+//! stops, and every command is held for a tick: v <= sqrt(2 dist a) with
+//! dist taken from the closing motion let two Pioneers meeting head-on at
+//! 0.6 m/s each keep their speed until about 0.41 m apart, where the two
+//! together need about 0.5 m to stop after a tick, and two TurtleBot3s
+//! touched when one turned into the other's path.
+//! So, after the paper's test, an arc is admitted only if the robot,
+//! driving it for a tick and then braking as hard as it can along the same
+//! curve, is at rest before it could touch any other body, each other
+//! robot going on for a tick as it moves, straight on and along the turn
+//! its velocity's direction shows over successive ticks (per id, bounded
+//! by the robot's own turn-rate limit), and then braking as hard as this
+//! robot can; a scripted obstacle does not brake. This is passive-friendly
+//! motion safety (Macek, Vasquez, Fraichard & Siegwart 2009; Bouraine,
+//! Fraichard & Salhi 2012): should a contact come, the robot is at rest
+//! and the other had room to stop. A contact after the robot is at rest,
+//! or one it does not drive into (the other coming on from behind or the
+//! side as it drives away), is not counted: were it, a robot coming on
+//! would forbid every arc, driving away included. Turning in place is
+//! always admitted. From the scan, the gap rules above do this work.
 //!
 //! **Walls on true states**: a map's traced outlines hold thousands of
 //! wall segments, and every chord of every arc would be checked against
@@ -178,6 +202,7 @@
 //! outline ahead was already in contact, and the robot stood still for
 //! good).
 
+mod brake;
 mod contact;
 mod meeting;
 mod planner;

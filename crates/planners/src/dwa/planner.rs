@@ -39,6 +39,9 @@ pub struct Dwa {
     pub(super) recovery: Recovery,
     /// The walls' grid (true states), built at the first tick.
     pub(super) walls: super::walls::WallGrid,
+    /// The others' turn rates (true states, unicycle), from their last
+    /// velocities.
+    pub(super) turns: super::brake::TurnRates,
 }
 
 impl Default for Dwa {
@@ -53,6 +56,7 @@ impl Default for Dwa {
             padding: None,
             recovery: Default::default(),
             walls: Default::default(),
+            turns: Default::default(),
         }
     }
 }
@@ -88,6 +92,7 @@ impl Dwa {
             padding,
             recovery: Default::default(),
             walls: Default::default(),
+            turns: Default::default(),
         })
     }
 }

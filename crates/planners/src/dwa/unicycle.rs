@@ -2,6 +2,7 @@
 //! Burgard & Thrun's section 3 (the module documentation of `dwa` gives
 //! the window, the admissibility test and the objective).
 
+use super::brake::Braking;
 use super::contact::{scan_points, time_to_disc, time_to_segment};
 use super::meeting::{in_the_way, right_of_goal};
 use super::planner::{Dwa, Obstacles};
@@ -289,6 +290,20 @@ pub(super) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
     } else {
         None
     };
+    // On true states, the others' turn rates (from their velocity's
+    // direction a tick ago) and the robot's braking, for "both could stop".
+    let turns = if scan {
+        Vec::new()
+    } else {
+        dwa.turns.update(obs.others, obs.time, dt, w_max)
+    };
+    let braking = Braking {
+        position: me.position,
+        heading: me.heading,
+        radius: padded,
+        a,
+        dt,
+    };
     let wall_distance = walls
         .iter()
         .map(|w| (w.closest_point(me.position) - me.position).norm())
@@ -461,6 +476,11 @@ pub(super) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
             if !reciprocal_stop(&ahead, v, a, dt) {
                 continue;
             }
+            // On true states: at rest, after a tick and braking, before
+            // touching another robot that goes on for a tick and brakes.
+            if !scan && !braking.both_stop(others, &turns, v, w) {
+                continue;
+            }
             let score = if at_goal {
                 -(v + w.abs() * me.radius.max(0.1))
             } else {
@@ -615,6 +635,34 @@ mod tests {
         };
         // Ahead and to the left: backwards, the nose turned right.
         assert!(v < 0.0 && omega < 0.0, "{v} {omega}");
+    }
+
+    #[test]
+    fn on_true_states_a_robot_meeting_another_head_on_brakes_while_both_can_stop() {
+        // Pioneer-like (radius 0.25, 0.6 m/s, 1 m/s^2) at 0.57 m/s, another
+        // coming the other way at 0.6 m/s, 0.48 m of gap between the discs
+        // (0.41 to the padded disc). Stopping after a tick takes each
+        // 0.057 + 0.16 m: the two together no longer fit in the gap. The
+        // arc straight on meets the other only in 0.35 s, in which the
+        // robot alone could stop (v <= 2 a t_c), but the other keeps
+        // coming: it brakes now, and every arc it keeps to comes to rest
+        // clear of the other braking too.
+        let mut s = ROBOT.unicycle(Vec2::zeros(), Vec2::new(0.57, 0.0), 0.0, 0.0, 1.8, 3.0);
+        (s.max_speed, s.max_accel) = (0.6, 1.0);
+        let other = [robot(1, Vec2::new(0.976, 0.0), Vec2::new(-0.6, 0.0), 0.25)];
+        let obs = observation(s, Vec2::new(5.0, 0.0), &other);
+        let Command::Unicycle { v, omega } = crate::Planner::plan(&mut Dwa::default(), &obs) else {
+            panic!("unicycle command expected");
+        };
+        assert!(v < 0.57 - 1e-9, "{v} {omega}");
+        let braking = Braking {
+            position: Vec2::zeros(),
+            heading: 0.0,
+            radius: 0.3125,
+            a: 1.0,
+            dt: 0.1,
+        };
+        assert!(braking.both_stop(&other, &[0.0], v, omega));
     }
 
     #[test]
