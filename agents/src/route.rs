@@ -19,6 +19,34 @@
 //! route, if need be, until the robot's disc (grown by half the margin)
 //! reaches it in a straight line, so that it never lies round a corner. The grid is the map's own cells when the
 //! scenario has a `[map]`, else half the radius.
+//!
+//! **Giving way.** Two robots meeting head-on in a passage wide enough for
+//! one (a door, a corridor narrowed by pillars) stop face to face, each
+//! waiting for the other: a deadlock no local planner on its own resolves.
+//! Routed robots give way, by a rule each applies to what it senses,
+//! without communication, the way traffic and multi-robot navigation
+//! stacks resolve it (one of the two, chosen by a fixed priority, backs
+//! off into a free place and waits). A robot that has stood still (within
+//! a quarter of [`ahead`]) for [`YIELD_AFTER`] s with another robot in its
+//! way (nearer to its route ahead, up to twice [`ahead`] on, than both
+//! radii and half the [`margin`], and not moving away from it faster than
+//! a tenth of its top speed) gives way if that robot's id is the higher;
+//! after [`YIELD_ESCALATE`] s it gives way to a standing robot in its way
+//! whatever the ids (the other, which should have, could not), so the rule
+//! never leaves both waiting. Both see the same ids, so only one of two
+//! robots stopped face to face gives way first. To give way it goes to the
+//! nearest place, by the way there (up to four times [`ahead`], around
+//! the bodies it senses), with room for its disc and a quarter of the
+//! margin, at least both radii and half the margin from the other's
+//! presumed way: the line from the other through this robot and on back
+//! along this robot's route (where it came from, where the other is
+//! going). It waits there until the other is no longer in its way ahead,
+//! or for [`YIELD_WAIT`] s at most, then plans its route again from where
+//! it stands. A robot that finds no such place does not give way (and
+//! looks again a second later): the other's escalation then does. The
+//! diagnostic `route_yield` is 1 while the robot gives way (`route_yields`
+//! counts the times). A planner that avoids from its laser scan alone has
+//! no other robot's id or state, so its robot does not give way.
 
 use mrsim_planners::{BodyKind, Command, Diagnostic, Observation, Planner, Segment, Sensed, Vec2};
 use mrsim_route::{Clearance, Follower, P, Path, Refuge, RouteError, Scene, Side, to_way};
@@ -380,7 +408,9 @@ impl Routed {
 impl Planner for Routed {
     fn plan(&mut self, obs: &Observation) -> Command {
         let p = [obs.me.position.x, obs.me.position.y];
-        if self.stand.0[0].is_nan() || (p[0] - self.stand.0[0]).hypot(p[1] - self.stand.0[1]) > self.ahead / 4.0 {
+        if self.stand.0[0].is_nan()
+            || (p[0] - self.stand.0[0]).hypot(p[1] - self.stand.0[1]) > self.ahead / 4.0
+        {
             self.stand = (p, obs.time);
         }
         if self.yielding.is_none() && self.follower.stuck(obs.time) {

@@ -203,7 +203,10 @@ mod tests {
         assert!(w[0] == 4.0 && (w[1] - 2.6).abs() < 1e-12, "{w:?}");
         assert_eq!(f.waypoint([4.0, 2.5], 0.3), [4.0, 3.0]);
         assert!((f.path().length() - 7.0).abs() < 1e-12);
-        assert_eq!(f.path().up_to(5.0), vec![[0.0, 0.0], [4.0, 0.0], [4.0, 1.0]]);
+        assert_eq!(
+            f.path().up_to(5.0),
+            vec![[0.0, 0.0], [4.0, 0.0], [4.0, 1.0]]
+        );
         assert_eq!(f.path().up_to(0.0), vec![[0.0, 0.0]]);
     }
 

@@ -97,7 +97,10 @@ impl Clearance {
         let mut open = BinaryHeap::new();
         let sk = s1 * w + s0;
         cost[sk] = 0.0;
-        open.push(Entry { cost: 0.0, cell: sk });
+        open.push(Entry {
+            cost: 0.0,
+            cell: sk,
+        });
         while let Some(Entry { cost: c0, cell }) = open.pop() {
             if c0 > cost[cell] {
                 continue;
@@ -142,7 +145,10 @@ impl Clearance {
                 }
                 cost[n] = next;
                 from[n] = cell;
-                open.push(Entry { cost: next, cell: n });
+                open.push(Entry {
+                    cost: next,
+                    cell: n,
+                });
             }
         }
         None
