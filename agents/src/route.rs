@@ -19,13 +19,53 @@
 //! route, if need be, until the robot's disc (grown by half the margin)
 //! reaches it in a straight line, so that it never lies round a corner. The grid is the map's own cells when the
 //! scenario has a `[map]`, else half the radius.
+//!
+//! **Giving way.** Two robots meeting head-on in a passage wide enough for
+//! one (a door, a corridor narrowed by pillars) stop face to face, each
+//! waiting for the other: a deadlock no local planner on its own resolves.
+//! Routed robots give way, by a rule each applies to what it senses,
+//! without communication, the way traffic and multi-robot navigation
+//! stacks resolve it (one of the two, chosen by a fixed priority, backs
+//! off into a free place and waits). A robot that has stood still (within
+//! a quarter of [`ahead`]) for [`YIELD_AFTER`] s with another robot in its
+//! way (nearer to its route ahead, up to twice [`ahead`] on, than both
+//! radii and half the [`margin`], and not moving away from it faster than
+//! a tenth of its top speed) gives way if that robot's id is the higher;
+//! after [`YIELD_ESCALATE`] s it gives way to a standing robot in its way
+//! whatever the ids (the other, which should have, could not), so the rule
+//! never leaves both waiting. Both see the same ids, so only one of two
+//! robots stopped face to face gives way first. To give way it goes to the
+//! nearest place, by the way there (up to four times [`ahead`], around
+//! the bodies it senses), with room for its disc and a quarter of the
+//! margin, at least both radii and half the margin from the other's
+//! presumed way: the line from the other through this robot and on back
+//! along this robot's route (where it came from, where the other is
+//! going). It waits there until the other is no longer in its way ahead,
+//! or for [`YIELD_WAIT`] s at most, then plans its route again from where
+//! it stands. A robot that finds no such place does not give way (and
+//! looks again a second later): the other's escalation then does. The
+//! diagnostic `route_yield` is 1 while the robot gives way (`route_yields`
+//! counts the times). A planner that avoids from its laser scan alone has
+//! no other robot's id or state, so its robot does not give way.
 
-use mrsim_planners::{Command, Diagnostic, Observation, Planner, Segment, Vec2};
-use mrsim_route::{Clearance, Follower, P, Path, RouteError, Scene, Side};
+use mrsim_planners::{BodyKind, Command, Diagnostic, Observation, Planner, Segment, Sensed, Vec2};
+use mrsim_route::{Clearance, Follower, P, Path, Refuge, RouteError, Scene, Side, to_way};
 use mrsim_scenario::{Lane, Motion, ObstacleSpec, RobotSpec, Scenario};
 
 /// Seconds without progress along the route before it is planned again.
 pub const PATIENCE: f64 = 8.0;
+
+/// Seconds a robot stands (within a quarter of [`ahead`] of where it
+/// stood) with another robot in its way before it yields to it, when the
+/// other's id is the higher.
+pub const YIELD_AFTER: f64 = 3.0;
+
+/// Seconds a robot stands with another robot in its way before it yields
+/// whatever their ids (the other, which should have yielded, could not).
+pub const YIELD_ESCALATE: f64 = 3.0 * YIELD_AFTER;
+
+/// Seconds a yielding robot waits at most before it routes again.
+pub const YIELD_WAIT: f64 = 2.0 * PATIENCE;
 
 /// Extra clearance a route keeps over the radius where it can.
 pub fn margin(spec: &RobotSpec) -> f64 {
@@ -177,6 +217,21 @@ pub struct Routed {
     reach: f64,
     slow: f64,
     replans: u32,
+    /// Where the robot last stood still and since when.
+    stand: (P, f64),
+    /// Whom it gives way to, when it does.
+    yielding: Option<Yielding>,
+    /// No new look for a refuge before this time (after a failed one).
+    next_look: f64,
+    yields: u32,
+}
+
+/// A robot giving way: to whom, along which of its own way ahead the other
+/// stood, and since when.
+struct Yielding {
+    to: u32,
+    way: Vec<P>,
+    since: f64,
 }
 
 impl Routed {
@@ -195,6 +250,135 @@ impl Routed {
             reach: 2.0 * ahead,
             slow: spec.max_speed / 10.0,
             replans: 0,
+            stand: ([f64::NAN; 2], 0.0),
+            yielding: None,
+            next_look: f64::NEG_INFINITY,
+            yields: 0,
+        }
+    }
+
+    /// How far from a way another robot must be to leave it free: both
+    /// radii and half the margin.
+    fn off(&self, other: &Sensed) -> f64 {
+        self.radius + other.radius + self.margin / 2.0
+    }
+
+    /// The robot's own way ahead: from where it stands along its route to
+    /// [`ahead`] twice beyond its progress.
+    fn way_ahead(&self, p: P) -> Vec<P> {
+        let s0 = self.follower.progress();
+        let step = self.ahead / 4.0;
+        let mut way = vec![p];
+        let mut s = s0;
+        while s <= s0 + self.reach {
+            way.push(self.follower.at(s));
+            s += step;
+        }
+        way
+    }
+
+    /// The robots in the way ahead (within the way's reach and nearer to
+    /// it than [`Routed::off`]) that are not leaving it (moving away from
+    /// this robot slower than a tenth of its top speed), nearest first.
+    fn blockers<'o>(&self, obs: &'o Observation, way: &[P]) -> Vec<&'o Sensed> {
+        let me = obs.me.position;
+        let mut found: Vec<&Sensed> = obs
+            .others
+            .iter()
+            .filter(|o| {
+                let d = o.position - me;
+                o.kind == BodyKind::Robot
+                    && d.norm() <= self.reach + o.radius
+                    && d.norm() > 0.0
+                    && o.velocity.dot(&d) / d.norm() < self.slow
+                    && to_way([o.position.x, o.position.y], way) < self.off(o)
+            })
+            .collect();
+        found.sort_by(|a, b| {
+            (a.position - me)
+                .norm()
+                .total_cmp(&(b.position - me).norm())
+                .then(a.id.cmp(&b.id))
+        });
+        found
+    }
+
+    /// Gives way to `other` if a refuge is near: the nearest place with
+    /// room for the disc, at least [`Routed::off`] from the way `other`
+    /// presumably wants (the line from it through this robot and on back
+    /// along this robot's route), reached around the bodies sensed near.
+    /// Whether it does.
+    fn give_way(&mut self, obs: &Observation, p: P, other: &Sensed, way: Vec<P>) -> bool {
+        let mut theirs = self.follower.path().up_to(self.follower.progress());
+        theirs.push(p);
+        theirs.push([other.position.x, other.position.y]);
+        let within = 2.0 * self.reach;
+        let blocked: Vec<(P, f64)> = obs
+            .others
+            .iter()
+            .filter(|o| (o.position - obs.me.position).norm() <= within + self.radius + o.radius)
+            .map(|o| ([o.position.x, o.position.y], o.radius))
+            .collect();
+        let path = self.grid.refuge(&Refuge {
+            from: p,
+            radius: self.radius,
+            room: self.radius + self.margin / 4.0,
+            way: &theirs,
+            off: self.off(other),
+            blocked: &blocked,
+            within,
+        });
+        let Some(path) = path else {
+            return false;
+        };
+        self.follower.replace(path, obs.time);
+        self.yielding = Some(Yielding {
+            to: other.id,
+            way,
+            since: obs.time,
+        });
+        self.yields += 1;
+        true
+    }
+
+    /// The yielding rule (module documentation), each tick before the
+    /// waypoint: starts or ends a yield.
+    fn yield_rule(&mut self, obs: &Observation, p: P) {
+        if self.inner.needs_scan() {
+            return;
+        }
+        if let Some(y) = &self.yielding {
+            let still = obs.others.iter().any(|o| {
+                o.id == y.to && to_way([o.position.x, o.position.y], &y.way) < self.off(o)
+            });
+            if !still || obs.time - y.since > YIELD_WAIT {
+                self.yielding = None;
+                self.stand = (p, obs.time);
+                self.replan(obs, p);
+            }
+            return;
+        }
+        let stood = obs.time - self.stand.1;
+        if stood < YIELD_AFTER || obs.time < self.next_look || self.follower.at_end() {
+            return;
+        }
+        let way = self.way_ahead(p);
+        let blockers = self.blockers(obs, &way);
+        let me = obs.me.id;
+        let to = blockers
+            .iter()
+            .find(|o| o.id > me)
+            .or_else(|| {
+                blockers
+                    .first()
+                    .filter(|o| stood >= YIELD_ESCALATE && o.velocity.norm() < self.slow)
+            })
+            .copied()
+            .copied();
+        if let Some(other) = to
+            && !self.give_way(obs, p, &other, way)
+        {
+            self.next_look = obs.time + 1.0;
         }
     }
 
@@ -224,9 +408,15 @@ impl Routed {
 impl Planner for Routed {
     fn plan(&mut self, obs: &Observation) -> Command {
         let p = [obs.me.position.x, obs.me.position.y];
-        if self.follower.stuck(obs.time) {
+        if self.stand.0[0].is_nan()
+            || (p[0] - self.stand.0[0]).hypot(p[1] - self.stand.0[1]) > self.ahead / 4.0
+        {
+            self.stand = (p, obs.time);
+        }
+        if self.yielding.is_none() && self.follower.stuck(obs.time) {
             self.replan(obs, p);
         }
+        self.yield_rule(obs, p);
         let far = self.follower.waypoint(p, obs.time);
         // Round a corner: the furthest point up to the waypoint, and at
         // least a quarter of the way there, that the disc (grown by half
@@ -258,6 +448,14 @@ impl Planner for Routed {
         d.push(Diagnostic {
             name: "route_replans".into(),
             value: f64::from(self.replans),
+        });
+        d.push(Diagnostic {
+            name: "route_yield".into(),
+            value: if self.yielding.is_some() { 1.0 } else { 0.0 },
+        });
+        d.push(Diagnostic {
+            name: "route_yields".into(),
+            value: f64::from(self.yields),
         });
         d
     }

@@ -7,7 +7,8 @@
 //! is written and drawn; unreachable goals, a look-ahead at the goal
 //! tolerance, a scan planner without a scanner and a lane without a route
 //! are refused with the file, the line and why (exit 2); routes with a lane
-//! keep to opposite sides of a corridor.
+//! keep to opposite sides of a corridor; two robots swapping through a
+//! one-robot door give way and arrive.
 
 use crate::common::*;
 use std::collections::BTreeSet;
@@ -459,5 +460,68 @@ fn routes_with_a_lane_keep_opposite_sides_of_a_corridor_and_without_one_share_it
     // Without: both down the middle.
     for pts in inner("none").values() {
         assert!(pts.iter().all(|p| p[1].abs() < 1e-9), "{pts:?}");
+    }
+}
+
+#[test]
+fn two_differential_drives_swapping_through_a_one_robot_door_give_way_and_arrive() {
+    // A corridor (1.85 m wide) with a room below it behind a 1 m door:
+    // Pioneer-like robots, one leaving the room for the corridor's far
+    // end and one coming the other way into the room, meet at the door,
+    // which orca's robots (each seen as radius + lookahead, 0.35 m) pass
+    // only one at a time. Without a rule both stop facing each other in
+    // it; the one of the lower id gives way (`route_yields`), into the
+    // room off the other's way, and both arrive untouched. dwa on true
+    // states goes through the same route layer and arrives too.
+    let walls = [
+        [[-5.0, 0.0], [-0.5, 0.0]],
+        [[0.5, 0.0], [5.0, 0.0]],
+        [[-5.0, 1.85], [5.0, 1.85]],
+        [[-5.0, 0.0], [-5.0, 1.85]],
+        [[5.0, 0.0], [5.0, 1.85]],
+        [[-2.0, 0.0], [-2.0, -4.0]],
+        [[2.0, 0.0], [2.0, -4.0]],
+        [[-2.0, -4.0], [2.0, -4.0]],
+    ];
+    let walls: String = walls
+        .iter()
+        .map(|[a, b]| {
+            format!(
+                "[[wall]]\nsegment = [[{}, {}], [{}, {}]]\n",
+                a[0], a[1], b[0], b[1]
+            )
+        })
+        .collect();
+    for (planner, params) in [
+        ("orca", ""),
+        ("dwa", "params = { obstacles = \"truth\" }\n"),
+    ] {
+        let src = format!(
+            "[world]\nduration = 120.0\n\
+             [defaults]\nplanner = \"{planner}\"\n{params}route = \"shortest\"\n\
+             kinematics = \"unicycle\"\nradius = 0.25\nmax_speed = 0.6\nmax_accel = 1.0\n\
+             max_angular_speed = 1.8\nmax_angular_accel = 3.0\ngoal_tolerance = 0.2\n\
+             sensor = {{ kind = \"lidar\", beams = 180, range = 8.0 }}\n{walls}\
+             [[robot]]\nname = \"a\"\nstart = [0.0, -2.5]\ngoal = [4.0, 0.9]\n\
+             [[robot]]\nname = \"b\"\nstart = [4.0, 0.9]\ngoal = [0.0, -2.5]\n"
+        );
+        let tag = format!("door-{planner}");
+        let file = scenario_file(&tag, &src);
+        let out = run_lockstep(&file, &tag, &[]);
+        let m = metrics(&out);
+        for r in ["a", "b"] {
+            assert_eq!(m["robots"][r]["reached_goal"], true, "{tag}: {r}: {m:#}");
+            assert_eq!(m["robots"][r]["collisions"], 0, "{tag}: {r}: {m:#}");
+        }
+        if planner == "orca" {
+            // diagnostics.csv: tick, time, robot, name, value.
+            let text =
+                std::fs::read_to_string(out.join("diagnostics.csv")).expect("diagnostics.csv");
+            let gave_way = text.lines().skip(1).any(|l| {
+                let f: Vec<&str> = l.split(',').collect();
+                f[2] == "a" && f[3] == "route_yield" && f[4] == "1"
+            });
+            assert!(gave_way, "{tag}: a never gave way");
+        }
     }
 }

@@ -54,6 +54,20 @@ impl Path {
         [a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t]
     }
 
+    /// The path from its start up to arc length `s`, as a polyline.
+    pub fn up_to(&self, s: f64) -> Vec<P> {
+        let s = s.clamp(0.0, self.length());
+        let mut out: Vec<P> = self
+            .pts
+            .iter()
+            .zip(&self.cum)
+            .take_while(|&(_, &c)| c < s)
+            .map(|(p, _)| *p)
+            .collect();
+        out.push(self.at(s));
+        out
+    }
+
     /// The arc length of the point of the path nearest `p` among those
     /// with arc length in `[lo, hi]`, and its distance from `p`.
     pub fn project(&self, p: P, lo: f64, hi: f64) -> (f64, f64) {
@@ -145,6 +159,21 @@ impl Follower {
         self.progress + self.ahead < self.path.length() && time - self.mark.1 > self.patience
     }
 
+    /// Seconds since the robot last advanced (by a quarter of `ahead`)
+    /// along the path, at `time`; 0 before it has been placed.
+    pub fn stalled(&self, time: f64) -> f64 {
+        if self.mark.1.is_nan() {
+            0.0
+        } else {
+            time - self.mark.1
+        }
+    }
+
+    /// Is the waypoint the path's end (the goal)?
+    pub fn at_end(&self) -> bool {
+        self.progress + self.ahead >= self.path.length()
+    }
+
     /// Follows `path` from now on (a replan), progress from its start.
     pub fn replace(&mut self, path: Path, time: f64) {
         self.path = path;
@@ -174,6 +203,11 @@ mod tests {
         assert!(w[0] == 4.0 && (w[1] - 2.6).abs() < 1e-12, "{w:?}");
         assert_eq!(f.waypoint([4.0, 2.5], 0.3), [4.0, 3.0]);
         assert!((f.path().length() - 7.0).abs() < 1e-12);
+        assert_eq!(
+            f.path().up_to(5.0),
+            vec![[0.0, 0.0], [4.0, 0.0], [4.0, 1.0]]
+        );
+        assert_eq!(f.path().up_to(0.0), vec![[0.0, 0.0]]);
     }
 
     #[test]
@@ -185,6 +219,7 @@ mod tests {
         assert!(!f.stuck(4.0));
         f.waypoint([2.1, 0.0], 5.5);
         assert!(f.stuck(5.5));
+        assert_eq!(f.stalled(5.5), 5.5);
         f.waypoint([2.5, 0.0], 6.0);
         assert!(!f.stuck(6.0));
         f.replace(Path::new(vec![[2.5, 0.0], [4.0, 3.0]]), 7.0);

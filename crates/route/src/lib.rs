@@ -63,11 +63,13 @@
 mod follow;
 mod grid;
 mod lanes;
+mod refuge;
 mod search;
 
 pub use follow::{Follower, Path};
 pub use grid::{Clearance, Scene};
 pub use lanes::Side;
+pub use refuge::{Refuge, to_way};
 
 /// A point, in the scenario's units.
 pub type P = [f64; 2];

@@ -30,7 +30,7 @@ impl PartialOrd for Entry {
     }
 }
 
-const NEIGHBOURS: [(i64, i64, f64); 8] = [
+pub(crate) const NEIGHBOURS: [(i64, i64, f64); 8] = [
     (1, 0, 1.0),
     (-1, 0, 1.0),
     (0, 1, 1.0),
