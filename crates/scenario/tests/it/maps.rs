@@ -627,3 +627,43 @@ fn free_cells_touching_only_at_a_corner_are_not_joined() {
     assert_eq!(r[3], 0);
     assert!(r[1] != 0 && r[2] != 0 && r[1] != r[2], "{r:?}");
 }
+
+#[test]
+fn a_16_bit_png_keeps_its_precision_at_the_thresholds() {
+    // 0xCDFF / 0xFFFF: shade 0.8047, occupancy 0.1953 < 0.196: free. Cut to
+    // its high byte (0xCD = 205: occupancy 0.196) it would be unknown.
+    let mut out = Vec::new();
+    let mut enc = png::Encoder::new(&mut out, 2, 1);
+    enc.set_color(png::ColorType::Grayscale);
+    enc.set_depth(png::BitDepth::Sixteen);
+    let mut w = enc.write_header().expect("png header");
+    w.write_image_data(&[0xCD, 0xFF, 0x00, 0x00])
+        .expect("png data");
+    w.finish().expect("png end");
+    let yaml = YAML.replace("room.pgm", "deep.png");
+    let m = map::load(&write_map("png16", &yaml, "deep.png", &out)).unwrap();
+    assert_eq!([m.value(0, 0), m.value(1, 0)], [0, 100]);
+    // A palette image reads as the colours its palette gives.
+    let mut out = Vec::new();
+    let mut enc = png::Encoder::new(&mut out, 2, 1);
+    enc.set_color(png::ColorType::Indexed);
+    enc.set_depth(png::BitDepth::Eight);
+    enc.set_palette(vec![0, 0, 0, 254, 254, 254]);
+    let mut w = enc.write_header().expect("png header");
+    w.write_image_data(&[1, 0]).expect("png data");
+    w.finish().expect("png end");
+    let yaml = YAML.replace("room.pgm", "pal.png");
+    let m = map::load(&write_map("palette", &yaml, "pal.png", &out)).unwrap();
+    assert_eq!([m.value(0, 0), m.value(1, 0)], [0, 100]);
+    // One bit a pixel: 1 is white.
+    let mut out = Vec::new();
+    let mut enc = png::Encoder::new(&mut out, 2, 1);
+    enc.set_color(png::ColorType::Grayscale);
+    enc.set_depth(png::BitDepth::One);
+    let mut w = enc.write_header().expect("png header");
+    w.write_image_data(&[0b1000_0000]).expect("png data");
+    w.finish().expect("png end");
+    let yaml = YAML.replace("room.pgm", "bits.png");
+    let m = map::load(&write_map("one-bit", &yaml, "bits.png", &out)).unwrap();
+    assert_eq!([m.value(0, 0), m.value(1, 0)], [0, 100]);
+}
