@@ -1,6 +1,8 @@
 //! Decoding a map's image: PGM (`P5` binary, `P2` plain) and PNG (any
-//! colour type and depth, reduced to 8 bits a sample), told apart by their
-//! first bytes as map_server's image library does, not by the file's name.
+//! colour type and depth: palettes and depths below 8 bits expanded to 8
+//! bits a sample, 16 bits kept, as map_server's image library keeps them),
+//! told apart by their first bytes as map_server's image library does, not
+//! by the file's name.
 
 /// A decoded image: samples row by row from the top row, `channels` a pixel
 /// (1 gray, 2 gray + alpha, 3 RGB, 4 RGBA), each in `0..=max`.
@@ -44,7 +46,7 @@ pub(crate) fn decode(bytes: &[u8]) -> Result<Pixels, String> {
 
 fn png(bytes: &[u8]) -> Result<Pixels, String> {
     let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
-    decoder.set_transformations(png::Transformations::normalize_to_color8());
+    decoder.set_transformations(png::Transformations::EXPAND);
     let mut reader = decoder.read_info().map_err(|e| format!("bad PNG: {e}"))?;
     let size = reader
         .output_buffer_size()
@@ -60,21 +62,33 @@ fn png(bytes: &[u8]) -> Result<Pixels, String> {
         png::ColorType::Rgba => 4,
         png::ColorType::Indexed => return Err("bad PNG: palette not expanded".into()),
     };
+    let wide = match frame.bit_depth {
+        png::BitDepth::Eight => false,
+        png::BitDepth::Sixteen => true,
+        other => return Err(format!("bad PNG: {other:?} bits a sample not expanded")),
+    };
     let (width, height) = (frame.width as usize, frame.height as usize);
-    let row = width * channels;
-    let mut samples = Vec::with_capacity(row * height);
+    let row = width * channels * if wide { 2 } else { 1 };
+    let mut samples = Vec::with_capacity(width * channels * height);
     for y in 0..height {
         let start = y * frame.line_size;
         let line = buf
             .get(start..start + row)
             .ok_or("bad PNG: short image data")?;
-        samples.extend(line.iter().map(|&b| u16::from(b)));
+        if wide {
+            samples.extend(
+                line.chunks_exact(2)
+                    .map(|c| u16::from_be_bytes([c[0], c[1]])),
+            );
+        } else {
+            samples.extend(line.iter().map(|&b| u16::from(b)));
+        }
     }
     Ok(Pixels {
         width,
         height,
         channels,
-        max: 255,
+        max: if wide { u16::MAX } else { 255 },
         samples,
     })
 }

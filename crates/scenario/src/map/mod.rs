@@ -5,7 +5,11 @@
 //! unless absolute), `resolution` (metres a pixel), `origin` (`[x, y, yaw]`,
 //! the pose of the image's lower-left pixel), `negate`, `occupied_thresh`,
 //! `free_thresh`, and optionally `mode` (`trinary`, the default, `scale` or
-//! `raw`); other keys are ignored, as map_server ignores them. Each pixel
+//! `raw`, in any case); other keys are ignored, as map_server ignores them.
+//! Values are read as map_server's YAML library reads them: a number may be
+//! quoted (`resolution: "0.05"`), `negate` is an integer or a boolean in
+//! any of YAML 1.1's spellings (`true`, `no`, `On`, ...), and a leading
+//! byte-order mark is skipped. Each pixel
 //! becomes the value map_server would publish (nav2's `map_io`): the
 //! channels' mean `shade` in [0, 1] (gray counts as three equal channels; in
 //! trinary mode an alpha channel's opacity is averaged in), the occupancy
@@ -25,6 +29,7 @@ mod trace;
 
 use crate::types::UnknownCells;
 use serde::Deserialize;
+use serde_norway::Value;
 use std::path::{Path, PathBuf};
 
 /// Why a map was refused; each names the file it is about.
@@ -106,24 +111,75 @@ pub struct OccupancyMap {
 }
 
 /// The YAML as written; every key optional so that a missing one gets its
-/// own message.
+/// own message, and every value as YAML gave it: map_server (yaml-cpp's
+/// `as<T>()`) converts a scalar whatever its quoting or style, so each is
+/// converted here the same way (see [`number`] and [`negate`]).
 #[derive(Deserialize)]
 struct RawYaml {
-    image: Option<String>,
-    resolution: Option<f64>,
-    origin: Option<Vec<f64>>,
-    negate: Option<Negate>,
-    occupied_thresh: Option<f64>,
-    free_thresh: Option<f64>,
-    mode: Option<String>,
+    image: Option<Value>,
+    resolution: Option<Value>,
+    origin: Option<Vec<Value>>,
+    negate: Option<Value>,
+    occupied_thresh: Option<Value>,
+    free_thresh: Option<Value>,
+    mode: Option<Value>,
 }
 
-/// map_server reads `negate` as an integer, or failing that a boolean.
-#[derive(Deserialize)]
-#[serde(untagged)]
-enum Negate {
-    Int(i64),
-    Bool(bool),
+/// A scalar's text as yaml-cpp would see it: a string as written, a number
+/// or boolean as YAML printed it; None for anything else.
+fn scalar(v: &Value) -> Option<String> {
+    match v {
+        Value::String(s) => Some(s.clone()),
+        Value::Number(n) => Some(n.to_string()),
+        Value::Bool(b) => Some(b.to_string()),
+        _ => None,
+    }
+}
+
+/// A number as map_server reads one: a YAML number, or a string that reads
+/// as one (`resolution: "0.05"`, which yaml-cpp's `as<double>()` takes).
+fn number(v: &Value) -> Option<f64> {
+    match v {
+        Value::Number(n) => n.as_f64(),
+        Value::String(s) => s.trim().parse().ok(),
+        _ => None,
+    }
+}
+
+/// `negate` as map_server reads it: an integer (non-zero is true), or
+/// failing that one of YAML's booleans as yaml-cpp knows them (`true`,
+/// `false`, `yes`, `no`, `on`, `off`, `y`, `n`, in lower, upper or title
+/// case); None if it is neither.
+fn negate(v: &Value) -> Option<bool> {
+    if let Value::Bool(b) = v {
+        return Some(*b);
+    }
+    if let Value::Number(n) = v {
+        return n.as_i64().map(|n| n != 0);
+    }
+    let text = scalar(v)?;
+    let text = text.trim();
+    if let Ok(n) = text.parse::<i64>() {
+        return Some(n != 0);
+    }
+    let lower = text.to_ascii_lowercase();
+    let cased = [
+        lower.clone(),
+        lower.to_ascii_uppercase(),
+        lower
+            .chars()
+            .enumerate()
+            .map(|(k, c)| if k == 0 { c.to_ascii_uppercase() } else { c })
+            .collect(),
+    ];
+    if !cased.iter().any(|c| c == text) {
+        return None;
+    }
+    match lower.as_str() {
+        "true" | "yes" | "on" | "y" => Some(true),
+        "false" | "no" | "off" | "n" => Some(false),
+        _ => None,
+    }
 }
 
 /// Reads and checks a map's YAML (not its image).
@@ -142,6 +198,8 @@ pub fn parse_meta(text: &str, yaml: &Path) -> Result<MapMeta, MapError> {
         path: yaml.to_path_buf(),
         reason,
     };
+    // yaml-cpp skips a byte-order mark (an editor's, on Windows) at the start.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let raw: RawYaml = serde_norway::from_str(text)
         .map_err(|e| bad(format!("not a map_server map description: {e}")))?;
     let need = |key: &str| {
@@ -149,17 +207,42 @@ pub fn parse_meta(text: &str, yaml: &Path) -> Result<MapMeta, MapError> {
             "missing `{key}` (map_server needs image, resolution, origin, negate, occupied_thresh and free_thresh)"
         ))
     };
+    let shown = |v: &Value| {
+        serde_norway::to_string(v)
+            .map(|s| s.trim().to_string())
+            .unwrap_or_else(|_| format!("{v:?}"))
+    };
+    let num = |key: &str, v: Option<Value>| -> Result<f64, MapError> {
+        let v = v.ok_or_else(|| need(key))?;
+        number(&v).ok_or_else(|| bad(format!("`{key}` must be a number, got {}", shown(&v))))
+    };
     let image = raw.image.ok_or_else(|| need("image"))?;
+    let image = match &image {
+        Value::String(s) => s.clone(),
+        other => scalar(other)
+            .ok_or_else(|| bad(format!("`image` must be a file name, got {}", shown(other))))?,
+    };
     if image.trim().is_empty() {
         return Err(bad("`image` is empty".into()));
     }
-    let resolution = raw.resolution.ok_or_else(|| need("resolution"))?;
+    let resolution = num("resolution", raw.resolution)?;
     if !(resolution.is_finite() && resolution > 0.0) {
         return Err(bad(format!(
             "resolution must be a finite number > 0 (metres a pixel), got {resolution}"
         )));
     }
     let origin = raw.origin.ok_or_else(|| need("origin"))?;
+    let origin: Vec<f64> = origin
+        .iter()
+        .map(|v| {
+            number(v).ok_or_else(|| {
+                bad(format!(
+                    "origin must be 3 numbers [x, y, yaw], got {} in it",
+                    shown(v)
+                ))
+            })
+        })
+        .collect::<Result<_, _>>()?;
     let origin: [f64; 3] = origin.as_slice().try_into().map_err(|_| {
         bad(format!(
             "origin must have 3 elements [x, y, yaw], not {}",
@@ -172,12 +255,16 @@ pub fn parse_meta(text: &str, yaml: &Path) -> Result<MapMeta, MapError> {
             origin[0], origin[1], origin[2]
         )));
     }
-    let negate = match raw.negate.ok_or_else(|| need("negate"))? {
-        Negate::Int(n) => n != 0,
-        Negate::Bool(b) => b,
-    };
-    let occupied_thresh = raw.occupied_thresh.ok_or_else(|| need("occupied_thresh"))?;
-    let free_thresh = raw.free_thresh.ok_or_else(|| need("free_thresh"))?;
+    let negate_value = raw.negate.ok_or_else(|| need("negate"))?;
+    let negate = negate(&negate_value).ok_or_else(|| {
+        bad(format!(
+            "`negate` must be an integer (0: dark is occupied, else dark is free) or a \
+             boolean, got {}",
+            shown(&negate_value)
+        ))
+    })?;
+    let occupied_thresh = num("occupied_thresh", raw.occupied_thresh)?;
+    let free_thresh = num("free_thresh", raw.free_thresh)?;
     if !((0.0..=1.0).contains(&free_thresh)
         && (0.0..=1.0).contains(&occupied_thresh)
         && free_thresh <= occupied_thresh)
@@ -187,13 +274,24 @@ pub fn parse_meta(text: &str, yaml: &Path) -> Result<MapMeta, MapError> {
              free_thresh {free_thresh}, occupied_thresh {occupied_thresh}"
         )));
     }
-    let mode = match raw.mode.as_deref() {
+    // map_server reads the mode in any case (`Trinary`, `SCALE`).
+    let mode_text = match &raw.mode {
+        None => None,
+        Some(v) => Some(scalar(v).ok_or_else(|| {
+            bad(format!(
+                "`mode` must be trinary, scale or raw, got {}",
+                shown(v)
+            ))
+        })?),
+    };
+    let mode = match mode_text.as_deref().map(str::to_ascii_lowercase).as_deref() {
         None | Some("trinary") => MapMode::Trinary,
         Some("scale") => MapMode::Scale,
         Some("raw") => MapMode::Raw,
-        Some(other) => {
+        Some(_) => {
             return Err(bad(format!(
-                "unknown mode `{other}`; expected trinary, scale or raw"
+                "unknown mode `{}`; expected trinary, scale or raw (in any case)",
+                mode_text.unwrap_or_default()
             )));
         }
     };
@@ -316,6 +414,43 @@ impl OccupancyMap {
             .into_iter()
             .map(|[a, b]| [self.to_world(a), self.to_world(b)])
             .collect()
+    }
+
+    /// The free regions: for each cell (row by row from the bottom), 0 if
+    /// it is a wall (with unknown cells taken as `unknown` says), else the
+    /// number of its region, the free cells joined to it through free
+    /// cells sharing a side. Two free cells that touch only at a corner
+    /// are not joined: their walls' outlines meet there, and nothing of
+    /// any size passes between them.
+    pub fn regions(&self, unknown: UnknownCells) -> Vec<u32> {
+        let (w, h) = (self.width, self.height);
+        let mut label = vec![0u32; w * h];
+        let mut next = 0u32;
+        let mut stack = Vec::new();
+        for k in 0..w * h {
+            if label[k] != 0 || self.is_wall(k % w, k / w, unknown) {
+                continue;
+            }
+            next += 1;
+            label[k] = next;
+            stack.push(k);
+            while let Some(c) = stack.pop() {
+                let (i, j) = (c % w, c / w);
+                let sides = [
+                    (i > 0).then(|| c - 1),
+                    (i + 1 < w).then(|| c + 1),
+                    (j > 0).then(|| c - w),
+                    (j + 1 < h).then(|| c + w),
+                ];
+                for n in sides.into_iter().flatten() {
+                    if label[n] == 0 && !self.is_wall(n % w, n / w, unknown) {
+                        label[n] = next;
+                        stack.push(n);
+                    }
+                }
+            }
+        }
+        label
     }
 
     /// A grid corner `[i, j]` in metres.

@@ -1,6 +1,8 @@
 //! A scenario's `[map]`: load the map, refuse robots and obstacles that
-//! start (or robots whose goal is) in or too near its walls, and add its
-//! traced walls to the scenario's.
+//! start (or robots whose goal is) in or too near its walls, and robots
+//! whose goal the map's walls shut off from their start (no way through
+//! free cells joins the two: no planner and no route could get there), and
+//! add its traced walls to the scenario's.
 
 use super::robots::RobotSpans;
 use super::scene::dist_to_segment;
@@ -63,6 +65,15 @@ pub(crate) fn attach(
         check
             .place(r.goal, r.radius, "goal")
             .map_err(|reason| Fail::new(sp.goal.clone(), &what, reason))?;
+    }
+    // Computed once, and only for a scenario with robots.
+    let regions = (!scenario.robots.is_empty()).then(|| map.regions(unknown));
+    for (r, sp) in scenario.robots.iter().zip(robot_spans) {
+        if let Some(regions) = &regions {
+            check.joined(regions, r.start, r.goal).map_err(|reason| {
+                Fail::new(sp.goal.clone(), format!("robot `{}`", r.name), reason)
+            })?;
+        }
     }
     for (o, sp) in scenario.obstacles.iter().zip(obstacle_spans) {
         check.place(o.start, 0.0, "start").map_err(|reason| {
@@ -130,5 +141,35 @@ impl Check<'_> {
             ));
         }
         Ok(())
+    }
+
+    /// Does a way through the map's free cells join `start` to `goal`
+    /// (both already checked to lie in free cells)? The error says why
+    /// not.
+    fn joined(&self, regions: &[u32], start: [f64; 2], goal: [f64; 2]) -> Result<(), String> {
+        let region = |p: [f64; 2]| {
+            self.map
+                .cell_of([p[0] / self.scale, p[1] / self.scale])
+                .map(|(i, j)| (regions[j * self.map.width + i], (i, j)))
+        };
+        let (Some((a, _)), Some((b, (i, j)))) = (region(start), region(goal)) else {
+            return Ok(());
+        };
+        if a == b {
+            return Ok(());
+        }
+        let cells = regions.iter().filter(|&&r| r == b).count();
+        let area = cells as f64 * self.map.meta.resolution.powi(2);
+        let hint = if self.unknown == crate::types::UnknownCells::Occupied {
+            " (unknown cells count as walls; `unknown = \"free\"` in [map] makes them free)"
+        } else {
+            ""
+        };
+        Err(format!(
+            "goal [{}, {}] is shut off from the start [{}, {}] by the walls of map {}: no way \
+             through free cells joins them; the goal's cell (column {i}, row {j} from the lower \
+             left) lies in a closed region of {cells} cells ({area:.2} m²){hint}",
+            goal[0], goal[1], start[0], start[1], self.name
+        ))
     }
 }

@@ -491,3 +491,179 @@ fn unknown_and_file_keys_of_map_are_checked_and_unknown_keys_refused() {
             .expect_err("refused");
     assert!(e.to_string().contains("gone.yaml"), "{e}");
 }
+
+#[test]
+fn yaml_values_read_as_map_servers_yaml_library_reads_them() {
+    let plain = map::load(&write_map("plain", YAML, "room.pgm", &room())).unwrap();
+    // Quoted numbers, a mode in capitals, an origin of integers in block
+    // style, a byte-order mark and Windows line ends: all read by map_server.
+    let odd = "\u{feff}image: \"room.pgm\"\r\nresolution: \"0.5\"\r\norigin:\r\n  - -1\r\n  - 2\r\n  - 0\r\n\
+               negate: \"0\"\r\noccupied_thresh: '0.65'\r\nfree_thresh: 0.196\r\nmode: TRINARY\r\n";
+    let m = map::load(&write_map("odd", odd, "room.pgm", &room())).unwrap();
+    assert_eq!(
+        m.meta,
+        map::MapMeta {
+            image: m.meta.image.clone(),
+            ..plain.meta.clone()
+        }
+    );
+    assert_eq!(m.values, plain.values);
+    // `negate` as yaml-cpp's booleans: dark becomes free.
+    for (spelling, want) in [
+        ("yes", true),
+        ("On", true),
+        ("Y", true),
+        ("1", true),
+        ("no", false),
+        ("OFF", false),
+        ("false", false),
+        ("2", true),
+    ] {
+        let yaml = YAML.replace("negate: 0", &format!("negate: {spelling}"));
+        let m = map::load(&write_map("neg", &yaml, "room.pgm", &room())).unwrap();
+        assert_eq!(m.meta.negate, want, "negate: {spelling}");
+    }
+    let yaml = format!("{YAML}mode: Scale\n");
+    let m = map::load(&write_map("scale-case", &yaml, "room.pgm", &room())).unwrap();
+    assert_eq!(m.meta.mode, map::MapMode::Scale);
+}
+
+#[test]
+fn yaml_values_map_server_cannot_read_are_refused_naming_the_key() {
+    for (tag, from, to, reason) in [
+        (
+            "neg-word",
+            "negate: 0",
+            "negate: maybe",
+            "`negate` must be an integer",
+        ),
+        (
+            "neg-mixed",
+            "negate: 0",
+            "negate: yEs",
+            "`negate` must be an integer",
+        ),
+        (
+            "neg-float",
+            "negate: 0",
+            "negate: 0.5",
+            "`negate` must be an integer",
+        ),
+        (
+            "res-word",
+            "resolution: 0.5",
+            "resolution: fine",
+            "`resolution` must be a number",
+        ),
+        (
+            "origin-word",
+            "[-1.0, 2.0, 0.0]",
+            "[-1.0, north, 0.0]",
+            "origin must be 3 numbers",
+        ),
+        (
+            "thresh",
+            "free_thresh: 0.196",
+            "free_thresh: [0.1]",
+            "`free_thresh` must be a number",
+        ),
+    ] {
+        let e = refused(tag, &YAML.replace(from, to), "room.pgm", &room());
+        assert!(e.contains("map.yaml") && e.contains(reason), "{tag}: {e}");
+    }
+}
+
+/// A 7 x 4 map of 0.5 m from (-1, 2): two rooms of 2 x 2 free cells, x
+/// -0.5..0.5 and 1.0..2.0, y 2.5..3.5, parted by a wall of `parting` cells.
+fn two_rooms(parting: u8) -> Vec<u8> {
+    pgm(&[
+        &[O, O, O, O, O, O, O],
+        &[O, F, F, parting, F, F, O],
+        &[O, F, F, parting, F, F, O],
+        &[O, O, O, O, O, O, O],
+    ])
+}
+
+#[test]
+fn a_goal_the_walls_shut_off_from_the_start_is_refused_at_its_line() {
+    let scene = |tag: &str, parting: u8, map_extra: &str| {
+        let path = write_map(tag, YAML, "room.pgm", &two_rooms(parting));
+        let toml = format!(
+            "[map]\nfile = \"map.yaml\"\n{map_extra}\n[[robot]]\nname = \"r0\"\nradius = 0.2\n\
+             start = [0.0, 3.0]\ngoal = [1.5, 3.0]\n"
+        );
+        let file = path.with_file_name("s.toml");
+        std::fs::write(&file, &toml).unwrap();
+        (mrsim_scenario::load(&file), toml)
+    };
+    let (got, toml) = scene("shut", O, "");
+    let e = got.expect_err("refused");
+    let line = toml.lines().position(|l| l.starts_with("goal")).unwrap() + 1;
+    assert_eq!(e.line(), Some(line), "{e}");
+    let shown = e.to_string();
+    for want in [
+        "robot `r0`",
+        "goal [1.5, 3] is shut off from the start [0, 3]",
+        "map.yaml",
+        "4 cells (1.00 m²)",
+    ] {
+        assert!(shown.contains(want), "no `{want}` in: {shown}");
+    }
+    // Unknown cells part the rooms too, unless the scenario says they are free.
+    let (got, _) = scene("shut-unknown", U, "");
+    let e = got.expect_err("refused");
+    assert!(e.to_string().contains("unknown = \"free\""), "{e}");
+    let (got, _) = scene("open-unknown", U, "unknown = \"free\"");
+    assert!(got.is_ok(), "{:?}", got.err());
+}
+
+#[test]
+fn free_cells_touching_only_at_a_corner_are_not_joined() {
+    let img = pgm(&[&[F, O], &[O, F]]);
+    let m = map::load(&write_map("corner", YAML, "room.pgm", &img)).unwrap();
+    let r = m.regions(UnknownCells::Occupied);
+    // Row by row from the bottom: (0,0) wall, (1,0) free, (0,1) free, (1,1) wall.
+    assert_eq!(r[0], 0);
+    assert_eq!(r[3], 0);
+    assert!(r[1] != 0 && r[2] != 0 && r[1] != r[2], "{r:?}");
+}
+
+#[test]
+fn a_16_bit_png_keeps_its_precision_at_the_thresholds() {
+    // 0xCDFF / 0xFFFF: shade 0.8047, occupancy 0.1953 < 0.196: free. Cut to
+    // its high byte (0xCD = 205: occupancy 0.196) it would be unknown.
+    let mut out = Vec::new();
+    let mut enc = png::Encoder::new(&mut out, 2, 1);
+    enc.set_color(png::ColorType::Grayscale);
+    enc.set_depth(png::BitDepth::Sixteen);
+    let mut w = enc.write_header().expect("png header");
+    w.write_image_data(&[0xCD, 0xFF, 0x00, 0x00])
+        .expect("png data");
+    w.finish().expect("png end");
+    let yaml = YAML.replace("room.pgm", "deep.png");
+    let m = map::load(&write_map("png16", &yaml, "deep.png", &out)).unwrap();
+    assert_eq!([m.value(0, 0), m.value(1, 0)], [0, 100]);
+    // A palette image reads as the colours its palette gives.
+    let mut out = Vec::new();
+    let mut enc = png::Encoder::new(&mut out, 2, 1);
+    enc.set_color(png::ColorType::Indexed);
+    enc.set_depth(png::BitDepth::Eight);
+    enc.set_palette(vec![0, 0, 0, 254, 254, 254]);
+    let mut w = enc.write_header().expect("png header");
+    w.write_image_data(&[1, 0]).expect("png data");
+    w.finish().expect("png end");
+    let yaml = YAML.replace("room.pgm", "pal.png");
+    let m = map::load(&write_map("palette", &yaml, "pal.png", &out)).unwrap();
+    assert_eq!([m.value(0, 0), m.value(1, 0)], [0, 100]);
+    // One bit a pixel: 1 is white.
+    let mut out = Vec::new();
+    let mut enc = png::Encoder::new(&mut out, 2, 1);
+    enc.set_color(png::ColorType::Grayscale);
+    enc.set_depth(png::BitDepth::One);
+    let mut w = enc.write_header().expect("png header");
+    w.write_image_data(&[0b1000_0000]).expect("png data");
+    w.finish().expect("png end");
+    let yaml = YAML.replace("room.pgm", "bits.png");
+    let m = map::load(&write_map("one-bit", &yaml, "bits.png", &out)).unwrap();
+    assert_eq!([m.value(0, 0), m.value(1, 0)], [0, 100]);
+}
