@@ -20,8 +20,10 @@ and the deepest any robot came inside a map wall (its centre's distance to
 the nearest wall segment less its radius, over every tick of
 trajectory.csv; 0 when none did).
 
+`--lane right` (or `left`) adds that `lane` to every scene's `[defaults]`.
+
 Run from the repository root after `cargo build --release`:
-    python3 scripts/real_maps_table.py SCENE.toml [SCENE.toml ...]
+    python3 scripts/real_maps_table.py [--lane right] SCENE.toml [SCENE.toml ...]
 """
 
 import json
@@ -121,12 +123,12 @@ def absolute_map(src, scene):
     return re.sub(r'(?m)^(file\s*=\s*)"([^"]+)"', fix, src)
 
 
-def run(scene, label, planner, params, tmp):
+def run(scene, label, planner, params, tmp, lane=None):
     src = open(scene).read()
     tag = "%s-%s" % (os.path.splitext(os.path.basename(scene))[0], re.sub(r"\W+", "-", label))
     path = os.path.join(tmp, tag + ".toml")
     with open(path, "w") as f:
-        f.write(variant(absolute_map(src, scene), planner, params))
+        f.write(variant(absolute_map(src, scene), planner, params + ('\nlane = "%s"' % lane if lane else "")))
     out = os.path.join(tmp, tag)
     p = subprocess.run(
         [MRSIM, "run", path, "--out", out, "--mode", "lockstep", "--transport", "inproc", "--quiet",
@@ -157,6 +159,11 @@ def run(scene, label, planner, params, tmp):
 
 def main():
     scenes = sys.argv[1:]
+    lane = None
+    if scenes[:1] == ["--lane"]:
+        if len(scenes) < 2 or scenes[1] not in ("right", "left", "none"):
+            raise SystemExit("--lane takes right, left or none")
+        lane, scenes = scenes[1], scenes[2:]
     if not scenes:
         raise SystemExit(__doc__)
     print("| map | source | robots | planner | goals reached | robot-robot contacts | deepest into a wall |")
@@ -164,7 +171,7 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         for scene in scenes:
             for label, planner, params in VARIANTS:
-                print(run(scene, label, planner, params, tmp), flush=True)
+                print(run(scene, label, planner, params, tmp, lane), flush=True)
 
 
 if __name__ == "__main__":
