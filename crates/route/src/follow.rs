@@ -78,14 +78,7 @@ impl Path {
             if s1 < lo || s0 > hi {
                 continue;
             }
-            let (a, b) = (self.pts[k - 1], self.pts[k]);
-            let ab = [b[0] - a[0], b[1] - a[1]];
-            let len2 = ab[0] * ab[0] + ab[1] * ab[1];
-            let t = if len2 <= 0.0 {
-                0.0
-            } else {
-                (((p[0] - a[0]) * ab[0] + (p[1] - a[1]) * ab[1]) / len2).clamp(0.0, 1.0)
-            };
+            let t = crate::along(p, self.pts[k - 1], self.pts[k]);
             let s = (s0 + t * (s1 - s0)).clamp(lo, hi);
             let d = dist(self.at(s), p);
             if d < best.1 {

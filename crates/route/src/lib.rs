@@ -109,3 +109,40 @@ pub enum RouteError {
 pub(crate) fn dist(a: P, b: P) -> f64 {
     (a[0] - b[0]).hypot(a[1] - b[1])
 }
+
+/// Where the point of the segment `a`-`b` nearest to `p` lies along it, as a
+/// fraction of its length (0 for a segment of no length).
+pub(crate) fn along(p: P, a: P, b: P) -> f64 {
+    let ab = [b[0] - a[0], b[1] - a[1]];
+    let len2 = ab[0] * ab[0] + ab[1] * ab[1];
+    if len2 <= 0.0 {
+        0.0
+    } else {
+        (((p[0] - a[0]) * ab[0] + (p[1] - a[1]) * ab[1]) / len2).clamp(0.0, 1.0)
+    }
+}
+
+/// An entry of the searches' open sets (a max-heap made a min-heap): the
+/// smallest `key` first, ties by cell, so that searches are deterministic.
+#[derive(PartialEq)]
+pub(crate) struct Entry {
+    pub(crate) key: f64,
+    pub(crate) cell: usize,
+}
+
+impl Eq for Entry {}
+
+impl Ord for Entry {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        other
+            .key
+            .total_cmp(&self.key)
+            .then(other.cell.cmp(&self.cell))
+    }
+}
+
+impl PartialOrd for Entry {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}

@@ -2,44 +2,13 @@
 //! a narrow passage goes to wait (crate documentation, "Yielding").
 
 use crate::grid::Clearance;
-use crate::{P, Path, dist};
-use std::cmp::Ordering;
+use crate::{Entry, P, Path, along, dist};
 use std::collections::BinaryHeap;
-
-/// A heap entry: smallest `cost` first.
-#[derive(PartialEq)]
-struct Entry {
-    cost: f64,
-    cell: usize,
-}
-
-impl Eq for Entry {}
-
-impl Ord for Entry {
-    fn cmp(&self, other: &Self) -> Ordering {
-        other
-            .cost
-            .total_cmp(&self.cost)
-            .then(other.cell.cmp(&self.cell))
-    }
-}
-
-impl PartialOrd for Entry {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
-}
 
 /// Distance from `p` to the segment `a`-`b`.
 fn to_segment(p: P, a: P, b: P) -> f64 {
-    let ab = [b[0] - a[0], b[1] - a[1]];
-    let len2 = ab[0] * ab[0] + ab[1] * ab[1];
-    let t = if len2 <= 0.0 {
-        0.0
-    } else {
-        (((p[0] - a[0]) * ab[0] + (p[1] - a[1]) * ab[1]) / len2).clamp(0.0, 1.0)
-    };
-    dist(p, [a[0] + ab[0] * t, a[1] + ab[1] * t])
+    let t = along(p, a, b);
+    dist(p, [a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t])
 }
 
 /// Distance from `p` to the polyline `way` (to its point if it has one, +inf if
@@ -97,11 +66,8 @@ impl Clearance {
         let mut open = BinaryHeap::new();
         let sk = s1 * w + s0;
         cost[sk] = 0.0;
-        open.push(Entry {
-            cost: 0.0,
-            cell: sk,
-        });
-        while let Some(Entry { cost: c0, cell }) = open.pop() {
+        open.push(Entry { key: 0.0, cell: sk });
+        while let Some(Entry { key: c0, cell }) = open.pop() {
             if c0 > cost[cell] {
                 continue;
             }
@@ -145,10 +111,7 @@ impl Clearance {
                 }
                 cost[n] = next;
                 from[n] = cell;
-                open.push(Entry {
-                    cost: next,
-                    cell: n,
-                });
+                open.push(Entry { key: next, cell: n });
             }
         }
         None

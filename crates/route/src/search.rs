@@ -2,33 +2,8 @@
 //! string pulling that straightens the grid path (crate documentation).
 
 use crate::grid::Clearance;
-use crate::{NARROW_COST, P, Path, RouteError};
-use std::cmp::Ordering;
+use crate::{Entry, NARROW_COST, P, Path, RouteError};
 use std::collections::BinaryHeap;
-
-/// A heap entry: smallest `key` first (max-heap reversed).
-#[derive(PartialEq)]
-struct Entry {
-    key: f64,
-    cell: usize,
-}
-
-impl Eq for Entry {}
-
-impl Ord for Entry {
-    fn cmp(&self, other: &Self) -> Ordering {
-        other
-            .key
-            .total_cmp(&self.key)
-            .then(other.cell.cmp(&self.cell))
-    }
-}
-
-impl PartialOrd for Entry {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
-}
 
 pub(crate) const NEIGHBOURS: [(i64, i64, f64); 8] = [
     (1, 0, 1.0),
