@@ -287,10 +287,11 @@ impl Routed {
             .iter()
             .filter(|o| {
                 let d = o.position - me;
+                let n = d.norm();
                 o.kind == BodyKind::Robot
-                    && d.norm() <= self.reach + o.radius
-                    && d.norm() > 0.0
-                    && o.velocity.dot(&d) / d.norm() < self.slow
+                    && n <= self.reach + o.radius
+                    && n > 0.0
+                    && o.velocity.dot(&d) / n < self.slow
                     && to_way([o.position.x, o.position.y], way) < self.off(o)
             })
             .collect();

@@ -152,16 +152,6 @@ impl Follower {
         self.progress + self.ahead < self.path.length() && time - self.mark.1 > self.patience
     }
 
-    /// Seconds since the robot last advanced (by a quarter of `ahead`)
-    /// along the path, at `time`; 0 before it has been placed.
-    pub fn stalled(&self, time: f64) -> f64 {
-        if self.mark.1.is_nan() {
-            0.0
-        } else {
-            time - self.mark.1
-        }
-    }
-
     /// Is the waypoint the path's end (the goal)?
     pub fn at_end(&self) -> bool {
         self.progress + self.ahead >= self.path.length()
@@ -212,7 +202,6 @@ mod tests {
         assert!(!f.stuck(4.0));
         f.waypoint([2.1, 0.0], 5.5);
         assert!(f.stuck(5.5));
-        assert_eq!(f.stalled(5.5), 5.5);
         f.waypoint([2.5, 0.0], 6.0);
         assert!(!f.stuck(6.0));
         f.replace(Path::new(vec![[2.5, 0.0], [4.0, 3.0]]), 7.0);

@@ -19,6 +19,7 @@
 //! forbid every arc, driving away included.
 
 use super::contact::time_to_disc;
+use super::unicycle::arc;
 use crate::{BodyKind, Sensed, Vec2};
 use std::collections::HashMap;
 
@@ -26,14 +27,11 @@ use std::collections::HashMap;
 /// chords exactly).
 const STEPS_PER_TICK: f64 = 4.0;
 
-/// Pose after travelling `s` along the curve of curvature `k` from `p`,
-/// heading `th`.
+/// Position after travelling `s` along the curve of curvature `k` from
+/// `p`, heading `th`: the unicycle's arc at speed `s` and turn rate `k s`
+/// for a second.
 fn along(p: Vec2, th: f64, k: f64, s: f64) -> Vec2 {
-    let t = th + k * s;
-    if (k * s).abs() < 1e-9 {
-        return p + Vec2::new(th.cos(), th.sin()) * s;
-    }
-    p + Vec2::new((t.sin() - th.sin()) / k, -(t.cos() - th.cos()) / k)
+    arc(p, th, s, k * s, 1.0).0
 }
 
 /// Distance travelled by time `t` at speed `u` held for `delay`, then

@@ -12,7 +12,7 @@ use std::f64::consts::PI;
 
 /// Pose after driving `v`, `omega` for `t` from `p`, `theta` (the exact
 /// arc; a straight line when omega is ~0).
-fn arc(p: Vec2, theta: f64, v: f64, omega: f64, t: f64) -> (Vec2, f64) {
+pub(super) fn arc(p: Vec2, theta: f64, v: f64, omega: f64, t: f64) -> (Vec2, f64) {
     let th = theta + omega * t;
     if omega.abs() < 1e-9 {
         return (p + Vec2::new(theta.cos(), theta.sin()) * (v * t), th);
