@@ -8,7 +8,8 @@
 //! tolerance, a scan planner without a scanner and a lane without a route
 //! are refused with the file, the line and why (exit 2); routes with a lane
 //! keep to opposite sides of a corridor; two robots swapping through a
-//! one-robot door give way and arrive.
+//! one-robot door give way and arrive; an orca unicycle alone passes a
+//! door as wide as the disc orca sees it as.
 
 use crate::common::*;
 use std::collections::BTreeSet;
@@ -467,7 +468,8 @@ fn routes_with_a_lane_keep_opposite_sides_of_a_corridor_and_without_one_share_it
 fn two_differential_drives_swapping_through_a_one_robot_door_give_way_and_arrive() {
     // A corridor (1.85 m wide) with a room below it behind a 1 m door:
     // Pioneer-like robots, one leaving the room for the corridor's far
-    // end and one coming the other way into the room, meet at the door,
+    // end and one coming the other way into the room (from 2 m along the
+    // corridor, so that both reach the door together), meet at the door,
     // which orca's robots (each seen as radius + lookahead, 0.35 m) pass
     // only one at a time. Without a rule both stop facing each other in
     // it; the one of the lower id gives way (`route_yields`), into the
@@ -503,7 +505,7 @@ fn two_differential_drives_swapping_through_a_one_robot_door_give_way_and_arrive
              max_angular_speed = 1.8\nmax_angular_accel = 3.0\ngoal_tolerance = 0.2\n\
              sensor = {{ kind = \"lidar\", beams = 180, range = 8.0 }}\n{walls}\
              [[robot]]\nname = \"a\"\nstart = [0.0, -2.5]\ngoal = [4.0, 0.9]\n\
-             [[robot]]\nname = \"b\"\nstart = [4.0, 0.9]\ngoal = [0.0, -2.5]\n"
+             [[robot]]\nname = \"b\"\nstart = [2.0, 0.9]\ngoal = [0.0, -2.5]\n"
         );
         let tag = format!("door-{planner}");
         let file = scenario_file(&tag, &src);
@@ -524,4 +526,29 @@ fn two_differential_drives_swapping_through_a_one_robot_door_give_way_and_arrive
             assert!(gave_way, "{tag}: a never gave way");
         }
     }
+}
+
+#[test]
+fn an_orca_pioneer_alone_passes_a_door_exactly_as_wide_as_its_enlarged_disc() {
+    // A wall across the arena with a 0.70 m door, as the Willow Garage
+    // map's doorways are: exactly twice the 0.35 m disc orca sees a
+    // Pioneer driven through its look-ahead point as (radius 0.25 +
+    // lookahead 0.1). Against walls orca keeps the real disc off them
+    // (half the look-ahead more while driving along one), so the robot
+    // goes through the door, untouched, instead of creeping to a stop in
+    // it.
+    let src = "[world]\nduration = 60.0\narena = { min = [-4.0, -3.0], max = [4.0, 3.0] }\n\
+               [defaults]\nplanner = \"orca\"\nroute = \"shortest\"\n\
+               kinematics = \"unicycle\"\nradius = 0.25\nmax_speed = 0.6\nmax_accel = 1.0\n\
+               max_angular_speed = 1.8\nmax_angular_accel = 3.0\ngoal_tolerance = 0.2\n\
+               [[wall]]\nsegment = [[-4.0, 0.0], [-0.35, 0.0]]\n\
+               [[wall]]\nsegment = [[0.35, 0.0], [4.0, 0.0]]\n\
+               [[robot]]\nname = \"a\"\nstart = [-2.0, -2.0]\ngoal = [2.0, 2.0]\n";
+    let file = scenario_file("door-alone", src);
+    let out = run_lockstep(&file, "door-alone", &[]);
+    let m = metrics(&out);
+    assert_eq!(m["robots"]["a"]["reached_goal"], true, "{m:#}");
+    assert_eq!(m["robots"]["a"]["collisions"], 0, "{m:#}");
+    let o = outcome(&file, &out);
+    assert!(o.deepest >= 0.0, "{} m into a wall", -o.deepest);
 }

@@ -284,4 +284,14 @@ pub trait Planner: Send {
     fn needs_scan(&self) -> bool {
         false
     }
+
+    /// Told, before the first `plan`, that the planner drives a unicycle
+    /// robot through its look-ahead point ([`unicycle::LookAhead`]): each
+    /// observation of a unicycle robot is then of the point `lookahead`
+    /// ahead of its centre along `me.heading`, and `me.radius` is enlarged
+    /// by `lookahead` so that the disc covers the real one at any heading.
+    /// A planner that can use the real disc where it is the nearer bound
+    /// overrides this ([`orca`] keeps walls off the real disc); the
+    /// default ignores it.
+    fn drives_look_ahead(&mut self, _lookahead: f64) {}
 }

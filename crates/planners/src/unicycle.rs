@@ -45,7 +45,12 @@
 //! J. Snape, J. van den Berg, S. J. Guy & D. Manocha, "Smooth and
 //! collision-free navigation for multiple robots under differential-drive
 //! constraints", IROS 2010) and keeping its disc clear keeps the real one
-//! clear.
+//! clear. The enlarged disc is twice l wider than the robot: a door the
+//! robot passes with room to spare can be as narrow as the enlarged disc.
+//! The planner is told l ([`Planner::drives_look_ahead`]), so that one
+//! that knows where the real disc is can keep it, not the enlarged one,
+//! off the walls: [`crate::orca`] does, keeping p nearer a wall when the
+//! robot heads towards it, as the centre is then further off than p.
 //!
 //! **3. The limits.** T^-1 is exact only while (v, omega) is within the
 //! robot's limits; the world clamps v to ±`max_speed`, omega to
@@ -85,7 +90,8 @@ pub struct LookAhead {
 impl LookAhead {
     /// Wraps `inner`; `lookahead` (> 0) is the distance l of the controlled
     /// point ahead of the centre.
-    pub fn new(inner: Box<dyn Planner>, lookahead: f64) -> Self {
+    pub fn new(mut inner: Box<dyn Planner>, lookahead: f64) -> Self {
+        inner.drives_look_ahead(lookahead);
         Self { inner, lookahead }
     }
 

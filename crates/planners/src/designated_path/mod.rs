@@ -2,7 +2,7 @@
 //! avoidance: Yamada, Sa & Ohya, "Moving Obstacle Avoidance for Mobile Robot
 //! Moving on Designated Path",
 //! section 2 (global path following), section 3 (local path planning after
-//! Tsubouchi et al. [9]) and eq (1).
+//! Tsubouchi et al. \[9\]) and eq (1).
 //!
 //! # Global path (section 2)
 //! The subgoals are the designated path's vertices, plus, when

@@ -22,7 +22,13 @@
 //!    v_max` of p, nearest first, each add one half-plane of admissible
 //!    velocities: the velocity obstacle of the edge truncated at
 //!    `time_horizon_obst`, with the full responsibility (obstacles do not
-//!    move).
+//!    move). A unicycle driven through its look-ahead point (observed as
+//!    the point, with the radius enlarged by the look-ahead so as to cover
+//!    its real disc at any heading) keeps the real disc, not the enlarged
+//!    one, off the walls, with half the look-ahead to spare while it
+//!    drives along one (`WallRadius`, after the paper's footprint
+//!    argument; it lets the robot through doors the enlarged disc just
+//!    fills). Other bodies see the enlarged disc.
 //! 2. **Other bodies** (section 4, eqs (5)-(6) of the paper). The
 //!    `max_neighbors` nearest bodies whose centres are closer than
 //!    `neighbor_dist` each give the half-plane ORCA_A|B = {v' : (v' - (v +
@@ -92,11 +98,11 @@ mod obstacles;
 mod tests;
 
 use crate::{
-    BodyKind, Command, Diagnostic, Observation, ParamError, ParamReader, Params, Planner, Segment,
-    Sensed, Vec2,
+    BodyKind, Command, Diagnostic, Kinematics, Observation, ParamError, ParamReader, Params,
+    Planner, Segment, Sensed, Vec2,
 };
 use linear_program::{Line, det, linear_program2, linear_program3, normalize_or};
-use obstacles::{ObstacleSet, WallChain};
+use obstacles::{ObstacleSet, WallChain, WallRadius};
 
 /// ORCA, as in RVO2.
 #[derive(Debug, Clone)]
@@ -129,6 +135,9 @@ pub struct Orca {
     proj_lines: Vec<Line>,
     neighbors: Vec<(f64, usize)>,
     obstacle_neighbors: Vec<(f64, usize)>,
+    /// The look-ahead l when driving a unicycle through its look-ahead
+    /// point ([`Planner::drives_look_ahead`]); 0 otherwise.
+    look_ahead: f64,
     last_lines: usize,
     last_infeasible: bool,
 }
@@ -156,7 +165,21 @@ impl Planner for Orca {
             .push_chains(&self.chains, me.position, &mut self.chain_points);
         let radius = me.radius + self.radius_margin;
         self.select_obstacle_neighbors(me.position, radius, me.max_speed);
-        self.push_obstacle_lines(me.position, me.velocity, radius);
+        // Driven through the look-ahead point, the robot is seen as p with
+        // the disc r + l that covers its real disc at any heading; against
+        // a wall the real disc, centred l behind p, is the nearer bound
+        // unless the robot heads away from the wall ([`WallRadius`]).
+        let behind = match me.kinematics {
+            Kinematics::Unicycle { .. } => self.look_ahead.clamp(0.0, me.radius),
+            Kinematics::Holonomic => 0.0,
+        };
+        let (sin, cos) = me.heading.sin_cos();
+        let walls = WallRadius {
+            radius,
+            behind,
+            heading: Vec2::new(cos, sin),
+        };
+        self.push_obstacle_lines(me.position, me.velocity, walls);
         let num_obst_lines = self.lines.len();
 
         // 2. Other bodies, nearest first (section 4, eqs (5)-(6); RVO2's
@@ -205,6 +228,10 @@ impl Planner for Orca {
         Command::Velocity(v)
     }
 
+    fn drives_look_ahead(&mut self, lookahead: f64) {
+        self.look_ahead = lookahead;
+    }
+
     fn diagnostics(&self) -> Vec<Diagnostic> {
         let mut d = Vec::with_capacity(2);
         self.diagnostics_into(&mut d);
@@ -251,6 +278,7 @@ impl Orca {
             proj_lines: Vec::new(),
             neighbors: Vec::new(),
             obstacle_neighbors: Vec::new(),
+            look_ahead: 0.0,
             last_lines: 0,
             last_infeasible: false,
         }
@@ -353,13 +381,13 @@ impl Orca {
 
     /// Appends the half-planes of the static obstacles (RVO2's obstacle
     /// ORCA lines) to `self.lines`.
-    fn push_obstacle_lines(&mut self, position: Vec2, velocity: Vec2, radius: f64) {
+    fn push_obstacle_lines(&mut self, position: Vec2, velocity: Vec2, walls: WallRadius) {
         self.obstacles.push_lines(
             &self.obstacle_neighbors,
             self.time_horizon_obst,
             position,
             velocity,
-            radius,
+            walls,
             &mut self.lines,
         );
     }

@@ -14,9 +14,62 @@
 use super::linear_program::{Line, RVO_EPSILON, det, normalize_or};
 use crate::{Segment, Vec2};
 
+/// The unit normal from the edge `a -> b` towards `p`, at the edge's point
+/// nearest `p` (the edge's right-hand normal when `p` is on it).
+fn edge_normal(a: Vec2, b: Vec2, p: Vec2) -> Vec2 {
+    let e = b - a;
+    let s = ((p - a).dot(&e) / e.norm_squared()).clamp(0.0, 1.0);
+    let right = Vec2::new(e.y, -e.x);
+    normalize_or(p - (a + e * s), normalize_or(right, Vec2::x()))
+}
+
 /// Positive when `c` lies to the left of the directed line `a -> b`.
 pub(super) fn left_of(a: Vec2, b: Vec2, c: Vec2) -> f64 {
     det(a - c, b - a)
+}
+
+/// The radius a robot keeps from a wall edge.
+///
+/// A robot seen as its own disc keeps `radius` from every wall. A unicycle
+/// driven through its look-ahead point p ([`crate::unicycle`]) is seen as
+/// p with `radius` = r + l, the disc that covers its real disc (radius r,
+/// centred c = p - l h for the unit heading h) at any heading. Against a
+/// wall whose outward unit normal at the point nearest p is n (k = h . n),
+/// c's distance to the wall is p's less l k, and to a corner at least
+/// that, so p kept at any distance from r + l max(0, k) up keeps c at
+/// least r off it. p is kept at r + l (1 + k) / 2: the bare radius when
+/// the robot heads straight at the wall (c is then l further off than p),
+/// r + l / 2 when it drives along the wall, r + l when it heads straight
+/// away (as with the enlarged disc). c then keeps r + l (1 - k) / 2: half
+/// the look-ahead to spare while driving along a wall, where the enlarged
+/// disc kept all of it. A door as narrow as twice the enlarged disc, which
+/// the enlarged disc could pass only by touching both jambs, is passed
+/// with l to spare. The spare is kept because the controller moves p
+/// sideways only as fast as the turn rate's limits let it (module
+/// documentation of [`crate::unicycle`], 3): with none (p at r + l max(0,
+/// k), the least that keeps c off), robots driving along walls graze them
+/// wherever they turn. Other robots are still kept off the enlarged disc,
+/// as their own planners see them as their centres.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct WallRadius {
+    /// The radius the robot is seen with, padding included.
+    pub(super) radius: f64,
+    /// How far behind the seen position the real disc's centre lies along
+    /// `heading`, l (0 for a robot seen at its centre).
+    pub(super) behind: f64,
+    /// Unit heading h.
+    pub(super) heading: Vec2,
+}
+
+impl WallRadius {
+    /// The radius kept from the edge `a -> b` by a robot seen at `p`.
+    pub(super) fn for_edge(&self, a: Vec2, b: Vec2, p: Vec2) -> f64 {
+        if self.behind <= 0.0 {
+            return self.radius;
+        }
+        let normal = edge_normal(a, b, p);
+        self.radius - self.behind * (1.0 - self.heading.dot(&normal)) / 2.0
+    }
 }
 
 /// One vertex of a static obstacle, RVO2-style: the edge from it to `next`.
@@ -141,14 +194,15 @@ impl ObstacleSet {
 
     /// Appends the half-planes of the edges `neighbors` (from
     /// [`Self::select_neighbors`]) for a robot at `position` with
-    /// `velocity` and `radius` to `lines` (RVO2's obstacle ORCA lines).
+    /// `velocity`, keeping the radius `walls` gives each edge, to `lines`
+    /// (RVO2's obstacle ORCA lines).
     pub(super) fn push_lines(
         &self,
         neighbors: &[(f64, usize)],
         time_horizon_obst: f64,
         position: Vec2,
         velocity: Vec2,
-        radius: f64,
+        walls: WallRadius,
         lines: &mut Vec<Line>,
     ) {
         let inv_tau = 1.0 / time_horizon_obst;
@@ -158,6 +212,7 @@ impl ObstacleSet {
             let mut i2 = verts[i1].next;
             let rel1 = verts[i1].point - position;
             let rel2 = verts[i2].point - position;
+            let radius = walls.for_edge(verts[i1].point, verts[i2].point, position);
 
             // Already covered: both ends' cut-off discs lie beyond a line
             // built for a nearer edge.

@@ -2,11 +2,12 @@
 //! RVO2's polygons, the reciprocity of the body lines, and RVO2's Circle
 //! and Blocks examples in the testkit.
 
-use super::obstacles::left_of;
+use super::obstacles::{WallRadius, left_of};
 use super::*;
 use crate::testkit::rvo2::{self, blocks_orca, circle};
 use crate::testkit::{RobotModel, Sim, observation, sensed};
 use crate::{ParamValue, SelfState};
+use std::f64::consts::{FRAC_PI_2, PI};
 
 /// RVO2's agents: speed 2, acceleration unbounded; the radius is each
 /// test's.
@@ -295,8 +296,86 @@ fn obstacle_lines(set: ObstacleSet, p: Vec2, v: Vec2) -> Vec<Line> {
     };
     orca.obstacles = set;
     orca.select_obstacle_neighbors(p, 2.0, 2.0);
-    orca.push_obstacle_lines(p, v, 2.0);
+    orca.push_obstacle_lines(
+        p,
+        v,
+        WallRadius {
+            radius: 2.0,
+            behind: 0.0,
+            heading: Vec2::x(),
+        },
+    );
     orca.lines
+}
+
+/// A Pioneer driven through its look-ahead point: radius 0.25, look-ahead
+/// 0.1, seen as radius 0.35 at p.
+fn pioneer_walls(heading: f64) -> WallRadius {
+    WallRadius {
+        radius: 0.35,
+        behind: 0.1,
+        heading: Vec2::new(heading.cos(), heading.sin()),
+    }
+}
+
+#[test]
+fn a_look_ahead_robot_keeps_its_real_disc_off_a_wall_and_half_the_look_ahead_more_along_it() {
+    // Wall y = 0 from x = -5 to 5, p at (0, 1) above it: the outward
+    // normal is +y.
+    let (a, b, p) = (
+        Vec2::new(-5.0, 0.0),
+        Vec2::new(5.0, 0.0),
+        Vec2::new(0.0, 1.0),
+    );
+    let kept = |heading: f64| pioneer_walls(heading).for_edge(a, b, p);
+    // Heading straight at the wall: the centre is l behind p, so p may
+    // come to the bare radius.
+    assert!((kept(-FRAC_PI_2) - 0.25).abs() < 1e-12);
+    // Along the wall: the bare radius and half the look-ahead.
+    assert!((kept(0.0) - 0.30).abs() < 1e-12);
+    assert!((kept(PI) - 0.30).abs() < 1e-12);
+    // Heading straight away: the centre is l nearer the wall than p, the
+    // whole enlarged disc.
+    assert!((kept(FRAC_PI_2) - 0.35).abs() < 1e-12);
+    // A robot seen at its centre keeps its radius whatever its heading.
+    for heading in [-FRAC_PI_2, 0.0, 1.0, FRAC_PI_2] {
+        let w = WallRadius {
+            behind: 0.0,
+            ..pioneer_walls(heading)
+        };
+        assert_eq!(w.for_edge(a, b, p), 0.35);
+    }
+}
+
+#[test]
+fn p_kept_off_a_wall_or_corner_keeps_the_real_disc_off_it_at_every_heading() {
+    // For p at exactly the kept distance from a wall or from a corner (a
+    // segment's end, seen off its end), at any heading, the real centre
+    // c = p - l h is at least the bare radius from it.
+    let (a, b) = (Vec2::new(-5.0, 0.0), Vec2::new(5.0, 0.0));
+    let wall = Segment { a, b };
+    for k in 0..72 {
+        let heading = k as f64 * PI / 36.0;
+        let h = Vec2::new(heading.cos(), heading.sin());
+        for j in 0..36 {
+            // Directions from the nearest point of the wall to p: straight
+            // above the wall, or round its right end.
+            let t = j as f64 * PI / 36.0;
+            let (foot, dir) = if j < 18 {
+                (Vec2::new(-4.0 + 0.4 * j as f64, 0.0), Vec2::y())
+            } else {
+                (b, Vec2::new(t.sin(), -t.cos()))
+            };
+            let walls = pioneer_walls(heading);
+            // The kept distance depends on p only through the normal.
+            let probe = foot + dir * 0.3;
+            let kept = walls.for_edge(a, b, probe);
+            let p = foot + dir * kept;
+            let c = p - h * 0.1;
+            let gap = (c - wall.closest_point(c)).norm();
+            assert!(gap >= 0.25 - 1e-12, "heading {heading}, p {p:?}: {gap}");
+        }
+    }
 }
 
 #[test]
