@@ -1,5 +1,6 @@
 //! The nearest place off another robot's way: where a robot that yields at
-//! a narrow passage goes to wait (crate documentation, "Yielding").
+//! a narrow passage goes to wait (the rule is the route layer's, in the
+//! agents crate).
 
 use crate::grid::Clearance;
 use crate::{Entry, P, Path, along, dist};
