@@ -211,6 +211,20 @@ impl Clearance {
 }
 
 #[cfg(test)]
+impl Clearance {
+    /// The tests' grid: `walls` alone, cells of 0.05, padded by 0.5.
+    pub(crate) fn of_walls(walls: &[[P; 2]]) -> Self {
+        Self::build(&Scene {
+            walls,
+            discs: &[],
+            points: &[],
+            resolution: 0.05,
+            pad: 0.5,
+        })
+    }
+}
+
+#[cfg(test)]
 mod tests {
     use super::*;
 

@@ -124,7 +124,7 @@ fn simplify(pts: &[P], tol: f64) -> Vec<P> {
 
 #[cfg(test)]
 mod tests {
-    use crate::{Clearance, Path, Scene, Side};
+    use crate::{Clearance, Path, Side};
 
     /// A corridor 2 wide along x from 0 to 20, closed at both ends.
     fn corridor() -> Clearance {
@@ -134,13 +134,7 @@ mod tests {
             [[20.0, 2.0], [0.0, 2.0]],
             [[0.0, 2.0], [0.0, 0.0]],
         ];
-        Clearance::build(&Scene {
-            walls: &walls,
-            discs: &[],
-            points: &[],
-            resolution: 0.05,
-            pad: 0.5,
-        })
+        Clearance::of_walls(&walls)
     }
 
     #[test]

@@ -122,7 +122,6 @@ impl Clearance {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Scene;
 
     /// A corridor 1 m wide along y = 0 from x = 0 to 10, with a bay 1.2 m
     /// deep on its upper side between x = 6 and x = 7.
@@ -137,13 +136,7 @@ mod tests {
             [[0.0, -0.5], [0.0, 0.5]],
             [[10.0, -0.5], [10.0, 0.5]],
         ];
-        Clearance::build(&Scene {
-            walls: &walls,
-            discs: &[],
-            points: &[],
-            resolution: 0.05,
-            pad: 0.5,
-        })
+        Clearance::of_walls(&walls)
     }
 
     #[test]

@@ -217,7 +217,7 @@ impl Clearance {
 
 #[cfg(test)]
 mod tests {
-    use crate::{Clearance, RouteError, Scene};
+    use crate::{Clearance, RouteError};
 
     /// A 10 x 6 room split by a wall at x = 5 with a gap of `gap` at y = 3.
     fn room(gap: f64) -> Clearance {
@@ -229,13 +229,7 @@ mod tests {
             [[5.0, 0.0], [5.0, 3.0 - gap / 2.0]],
             [[5.0, 3.0 + gap / 2.0], [5.0, 6.0]],
         ];
-        Clearance::build(&Scene {
-            walls: &walls,
-            discs: &[],
-            points: &[],
-            resolution: 0.05,
-            pad: 0.5,
-        })
+        Clearance::of_walls(&walls)
     }
 
     #[test]

@@ -17,10 +17,11 @@ use crate::{Segment, Vec2};
 /// The unit normal from the edge `a -> b` towards `p`, at the edge's point
 /// nearest `p` (the edge's right-hand normal when `p` is on it).
 fn edge_normal(a: Vec2, b: Vec2, p: Vec2) -> Vec2 {
-    let e = b - a;
-    let s = ((p - a).dot(&e) / e.norm_squared()).clamp(0.0, 1.0);
-    let right = Vec2::new(e.y, -e.x);
-    normalize_or(p - (a + e * s), normalize_or(right, Vec2::x()))
+    let right = Vec2::new(b.y - a.y, a.x - b.x);
+    normalize_or(
+        p - Segment { a, b }.closest_point(p),
+        normalize_or(right, Vec2::x()),
+    )
 }
 
 /// Positive when `c` lies to the left of the directed line `a -> b`.
