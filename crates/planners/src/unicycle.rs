@@ -66,7 +66,10 @@
 //! also against what the acceleration limits reach in one tick) made
 //! robots slower and no planner's goals more reachable, and gave more
 //! contacts (docs/maps.md, "Unicycle robots: every planner"), so the controller leaves
-//! the limits to the world.
+//! the limits to the world. A planner that knows it drives a look-ahead
+//! point can keep within them itself: [`crate::orca`] picks only velocities
+//! the point reaches within the tick, so that what it plans is what the
+//! robot does.
 //!
 //! **4. Planners that know the model.** A planner that plans (v, omega)
 //! itself ([`Planner::native_unicycle`], [`crate::dwa`]) needs none of

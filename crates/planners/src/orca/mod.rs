@@ -28,7 +28,12 @@
 //!    one, off the walls, with half the look-ahead to spare while it
 //!    drives along one (`WallRadius`, after the paper's footprint
 //!    argument; it lets the robot through doors the enlarged disc just
-//!    fills). Other bodies see the enlarged disc.
+//!    fills). Other bodies see the enlarged disc. At a non-convex vertex
+//!    RVO2 extends the edge's line past the vertex, as the neighbouring
+//!    edge carries on from there; a map's outline has open chains (a
+//!    polygon of no thickness, there and back), where the robot can see an
+//!    edge but not its neighbour, and the vertex is then taken as the
+//!    convex end it is from the robot's side (`ObstacleSet::push_lines`).
 //! 2. **Other bodies** (section 4, eqs (5)-(6) of the paper). The
 //!    `max_neighbors` nearest bodies whose centres are closer than
 //!    `neighbor_dist` each give the half-plane ORCA_A|B = {v' : (v' - (v +
@@ -51,6 +56,12 @@
 //!    half-planes have no common point, the 3-D program (`linear_program3`)
 //!    keeps the obstacle lines hard and finds the velocity that minimises the
 //!    largest violation of the body lines ("the safest possible velocity").
+//!    A unicycle driven through its look-ahead point may only pick a
+//!    velocity the point can reach within the tick (a box in the robot's
+//!    frame, kept hard like the walls: `reach.rs`, after Alonso-Mora et
+//!    al.'s NH-ORCA), so that the room ORCA keeps from others is kept by
+//!    the motion the robot can make; when the walls leave nothing within
+//!    reach, the box is dropped.
 //!
 //! The preferred velocity points at the goal with length `pref_speed`, and is
 //! the goal vector itself once the goal is nearer than `pref_speed` (RVO2's
@@ -94,6 +105,7 @@
 
 mod linear_program;
 mod obstacles;
+mod reach;
 #[cfg(test)]
 mod tests;
 
@@ -180,7 +192,13 @@ impl Planner for Orca {
             heading: Vec2::new(cos, sin),
         };
         self.push_obstacle_lines(me.position, me.velocity, walls);
-        let num_obst_lines = self.lines.len();
+        let num_wall_lines = self.lines.len();
+        // Driven through the look-ahead point, only the velocities the
+        // point can reach within the tick, hard like the walls (`reach`).
+        if let Some(reach) = reach::reachable(me, self.look_ahead, obs.dt) {
+            self.lines.extend(reach);
+        }
+        let mut num_obst_lines = self.lines.len();
 
         // 2. Other bodies, nearest first (section 4, eqs (5)-(6); RVO2's
         //    "create agent ORCA lines"), each taking its share of the
@@ -209,10 +227,18 @@ impl Planner for Orca {
 
         // 3. The velocity closest to the preferred one in every half-plane
         //    (section 5.1; RVO2's linearProgram2), else the one that least
-        //    violates the body lines, obstacle lines kept hard (the 3-D
-        //    program, RVO2's linearProgram3).
+        //    violates the body lines, obstacle lines (and the reach) kept
+        //    hard (the 3-D program, RVO2's linearProgram3).
         let mut v = Vec2::zeros();
-        let fail = linear_program2(&self.lines, me.max_speed, pref, false, &mut v);
+        let mut fail = linear_program2(&self.lines, me.max_speed, pref, false, &mut v);
+        if fail < num_obst_lines && num_obst_lines > num_wall_lines {
+            // The walls leave nothing within reach (the robot is carried
+            // towards one faster than it can brake): plan as RVO2 does,
+            // over the whole speed disc, and let the world clamp.
+            self.lines.drain(num_wall_lines..num_obst_lines);
+            num_obst_lines = num_wall_lines;
+            fail = linear_program2(&self.lines, me.max_speed, pref, false, &mut v);
+        }
         self.last_infeasible = fail < self.lines.len();
         if self.last_infeasible {
             linear_program3(

@@ -225,6 +225,22 @@ impl ObstacleSet {
                 continue;
             }
 
+            // RVO2 treats a non-convex vertex as the joint with the
+            // neighbouring edge, which then takes over beyond it: the leg
+            // there extends the edge's own line, and a collision with the
+            // vertex is left to the neighbour. That holds only while the
+            // robot sees the neighbour (is on its right). A wall chain
+            // that ends, or meets another where three or more walls join,
+            // is a polygon of no thickness (there and back), and a robot
+            // can see an edge but not its neighbour at the turn: the
+            // extended line would then run through free space and forbid
+            // velocities that hit nothing. Such a vertex is taken as the
+            // convex end it is from the robot's side.
+            let sees =
+                |k: usize| left_of(verts[k].point, verts[verts[k].next].point, position) < 0.0;
+            let convex1 = verts[i1].convex || !sees(verts[i1].prev);
+            let convex2 = verts[i2].convex || !sees(i2);
+
             let dist_sq1 = rel1.norm_squared();
             let dist_sq2 = rel2.norm_squared();
             let radius_sq = radius * radius;
@@ -234,7 +250,7 @@ impl ObstacleSet {
 
             if s < 0.0 && dist_sq1 <= radius_sq {
                 // Collision with left vertex (ignored if non-convex).
-                if verts[i1].convex {
+                if convex1 {
                     lines.push(Line {
                         point: Vec2::zeros(),
                         direction: normalize_or(Vec2::new(-rel1.y, rel1.x), -verts[i1].unit_dir),
@@ -244,7 +260,7 @@ impl ObstacleSet {
             } else if s > 1.0 && dist_sq2 <= radius_sq {
                 // Collision with right vertex (ignored if non-convex, or if
                 // the next edge will take care of it).
-                if verts[i2].convex && det(rel2, verts[i2].unit_dir) >= 0.0 {
+                if convex2 && det(rel2, verts[i2].unit_dir) >= 0.0 {
                     lines.push(Line {
                         point: Vec2::zeros(),
                         direction: normalize_or(Vec2::new(-rel2.y, rel2.x), -verts[i1].unit_dir),
@@ -277,7 +293,7 @@ impl ObstacleSet {
             if s < 0.0 && dist_sq_line <= radius_sq {
                 // Obstacle viewed obliquely: the left vertex defines the
                 // velocity obstacle.
-                if !verts[i1].convex {
+                if !convex1 {
                     continue;
                 }
                 i2 = i1;
@@ -286,7 +302,7 @@ impl ObstacleSet {
             } else if s > 1.0 && dist_sq_line <= radius_sq {
                 // Obstacle viewed obliquely: the right vertex defines the
                 // velocity obstacle.
-                if !verts[i2].convex {
+                if !convex2 {
                     continue;
                 }
                 i1 = i2;
@@ -294,14 +310,14 @@ impl ObstacleSet {
                 right_leg = right_tangent(rel2, dist_sq2);
             } else {
                 // Usual situation.
-                left_leg = if verts[i1].convex {
+                left_leg = if convex1 {
                     left_tangent(rel1, dist_sq1)
                 } else {
                     // Left vertex non-convex: the left leg extends the
                     // cut-off line.
                     -verts[i1].unit_dir
                 };
-                right_leg = if verts[i2].convex {
+                right_leg = if convex2 {
                     right_tangent(rel2, dist_sq2)
                 } else {
                     // Right vertex non-convex: the right leg extends the

@@ -506,6 +506,102 @@ fn robot_inside_an_arena_stays_inside_and_rounds_an_l_shaped_wall() {
 }
 
 #[test]
+fn a_robot_below_the_turn_of_two_walls_is_not_held_by_the_line_of_one() {
+    // Two walls of a map's outline turning at the origin, an arm up to
+    // (0, 0.1) and one east to (0.5, 0) (a corner of the Willow Garage
+    // map); the robot is a Pioneer seen at its look-ahead point, 1.1 m
+    // below the turn, at rest, facing east, bound west. Going back round
+    // the chain the turn is concave, and the robot sees the up arm's east
+    // face but not the east arm's top. RVO2's joint rule extended the up
+    // arm's line down through the free space below the turn and held the
+    // robot there for good.
+    let walls = [seg((0.0, 0.1), (0.0, 0.0)), seg((0.0, 0.0), (0.5, 0.0))];
+    let heading = -0.219_f64;
+    let pioneer = RobotModel {
+        max_speed: 0.6,
+        max_accel: 1.0,
+        ..RobotModel::unit(0.35)
+    };
+    let me = pioneer.unicycle(
+        Vec2::new(0.328, -1.114),
+        Vec2::zeros(),
+        heading,
+        0.0,
+        1.8,
+        3.0,
+    );
+    let o = Observation {
+        dt: 0.1,
+        walls: &walls,
+        ..observation(me, Vec2::new(-1.0, -1.114), &[])
+    };
+    let mut orca = Orca::default();
+    orca.drives_look_ahead(0.1);
+    let Command::Velocity(v) = orca.plan(&o) else {
+        panic!("orca commands a velocity");
+    };
+    // West as fast as one tick's braking (0.1 m/s back along the
+    // heading) and turning (0.03 m/s sideways) allow.
+    assert!(v.x < -0.09, "held: {v:?}");
+    // Nearer the turn the walls still hold it: p 0.3 below the turn,
+    // heading west, may not rise towards it faster than the horizon
+    // allows.
+    let me = pioneer.unicycle(Vec2::new(0.2, -0.3), Vec2::zeros(), PI, 0.0, 1.8, 3.0);
+    let o = Observation {
+        dt: 0.1,
+        walls: &walls,
+        ..observation(me, Vec2::new(0.0, 2.0), &[])
+    };
+    let Command::Velocity(v) = orca.plan(&o) else {
+        panic!("orca commands a velocity");
+    };
+    assert!(v.y <= 0.0 + 1e-9, "towards the turn: {v:?}");
+}
+
+#[test]
+fn a_look_ahead_robot_is_asked_only_what_it_can_do_within_the_tick() {
+    // A Pioneer at rest facing east, seen at its look-ahead point, bound
+    // for a goal behind it, with another robot behind and to its right.
+    // Plain ORCA asks the point to move west at full speed, which the
+    // robot can only begin by backing out along its heading, towards the
+    // other. The velocity asked is one it reaches within the tick: at most
+    // 0.1 m/s along the heading and 0.03 m/s sideways.
+    let pioneer = RobotModel {
+        max_speed: 0.6,
+        max_accel: 1.0,
+        ..RobotModel::unit(0.35)
+    };
+    let me = pioneer.unicycle(Vec2::zeros(), Vec2::zeros(), 0.0, 0.0, 1.8, 3.0);
+    let others = [sensed(
+        1,
+        BodyKind::Robot,
+        Vec2::new(-0.5, -0.5),
+        Vec2::zeros(),
+        0.25,
+    )];
+    let o = Observation {
+        dt: 0.1,
+        ..observation(me, Vec2::new(-5.0, 0.0), &others)
+    };
+    let mut orca = Orca::default();
+    orca.drives_look_ahead(0.1);
+    let Command::Velocity(u) = orca.plan(&o) else {
+        panic!("orca commands a velocity");
+    };
+    assert!(u.x.abs() <= 0.1 + 1e-9 && u.y.abs() <= 0.03 + 1e-9, "{u:?}");
+    // Backing straight out is forbidden by the other robot, so the robot
+    // turns as it backs.
+    assert!(u.x < 0.0 && u.y > 0.0, "{u:?}");
+    // A holonomic robot, or one not driven through its look-ahead point,
+    // is asked for its full speed as RVO2 does.
+    let mut plain = Orca::default();
+    let Command::Velocity(u) = plain.plan(&o) else {
+        panic!("orca commands a velocity");
+    };
+    assert!(u.norm() > 0.5, "{u:?}");
+}
+
+#[test]
 fn perturbation_is_bounded_seeded_and_off_by_default() {
     let o = obs(
         me(Vec2::zeros(), Vec2::zeros(), 0.5),
