@@ -1,6 +1,7 @@
 //! ORCA's unit tests: the linear programs, the obstacle lines against
-//! RVO2's polygons, the reciprocity of the body lines, and RVO2's Circle
-//! and Blocks examples in the testkit.
+//! RVO2's polygons, the reciprocity of the body lines, a unicycle driven
+//! through its look-ahead point (its walls and its reach), and RVO2's
+//! Circle and Blocks examples in the testkit.
 
 use super::obstacles::{WallRadius, left_of};
 use super::*;
@@ -308,6 +309,22 @@ fn obstacle_lines(set: ObstacleSet, p: Vec2, v: Vec2) -> Vec<Line> {
     orca.lines
 }
 
+/// A Pioneer (radius 0.25, 0.6 m/s, 1 m/s², 1.8 rad/s, 3 rad/s²) driven
+/// through its look-ahead point 0.1 ahead: seen at the point, radius 0.35.
+const PIONEER: RobotModel = RobotModel {
+    max_speed: 0.6,
+    max_accel: 1.0,
+    ..RobotModel::unit(0.35)
+};
+
+/// The Pioneer seen at its look-ahead point `p`, heading `heading`,
+/// driving at `v` and turning at `w`.
+fn pioneer_at(p: Vec2, heading: f64, v: f64, w: f64) -> SelfState {
+    let (s, c) = heading.sin_cos();
+    let p_dot = Vec2::new(c, s) * v + Vec2::new(-s, c) * (0.1 * w);
+    PIONEER.unicycle(p, p_dot, heading, w, 1.8, 3.0)
+}
+
 /// A Pioneer driven through its look-ahead point: radius 0.25, look-ahead
 /// 0.1, seen as radius 0.35 at p.
 fn pioneer_walls(heading: f64) -> WallRadius {
@@ -516,20 +533,7 @@ fn a_robot_below_the_turn_of_two_walls_is_not_held_by_the_line_of_one() {
     // arm's line down through the free space below the turn and held the
     // robot there for good.
     let walls = [seg((0.0, 0.1), (0.0, 0.0)), seg((0.0, 0.0), (0.5, 0.0))];
-    let heading = -0.219_f64;
-    let pioneer = RobotModel {
-        max_speed: 0.6,
-        max_accel: 1.0,
-        ..RobotModel::unit(0.35)
-    };
-    let me = pioneer.unicycle(
-        Vec2::new(0.328, -1.114),
-        Vec2::zeros(),
-        heading,
-        0.0,
-        1.8,
-        3.0,
-    );
+    let me = pioneer_at(Vec2::new(0.328, -1.114), -0.219, 0.0, 0.0);
     let o = Observation {
         dt: 0.1,
         walls: &walls,
@@ -537,25 +541,64 @@ fn a_robot_below_the_turn_of_two_walls_is_not_held_by_the_line_of_one() {
     };
     let mut orca = Orca::default();
     orca.drives_look_ahead(0.1);
-    let Command::Velocity(v) = orca.plan(&o) else {
-        panic!("orca commands a velocity");
-    };
+    let v = orca.plan(&o).vector();
     // West as fast as one tick's braking (0.1 m/s back along the
     // heading) and turning (0.03 m/s sideways) allow.
     assert!(v.x < -0.09, "held: {v:?}");
     // Nearer the turn the walls still hold it: p 0.3 below the turn,
     // heading west, may not rise towards it faster than the horizon
     // allows.
-    let me = pioneer.unicycle(Vec2::new(0.2, -0.3), Vec2::zeros(), PI, 0.0, 1.8, 3.0);
+    let me = pioneer_at(Vec2::new(0.2, -0.3), PI, 0.0, 0.0);
     let o = Observation {
         dt: 0.1,
         walls: &walls,
         ..observation(me, Vec2::new(0.0, 2.0), &[])
     };
-    let Command::Velocity(v) = orca.plan(&o) else {
-        panic!("orca commands a velocity");
-    };
+    let v = orca.plan(&o).vector();
     assert!(v.y <= 0.0 + 1e-9, "towards the turn: {v:?}");
+}
+
+/// Whether `x` is inside every one of the reach `lines`.
+fn inside_reach(lines: &[Line; 4], x: Vec2) -> bool {
+    lines.iter().all(|l| l.violation(x) <= 1e-12)
+}
+
+#[test]
+fn a_robot_at_rest_reaches_a_tick_of_acceleration_along_its_heading_and_a_tick_of_turn_sideways() {
+    let heading = 0.6_f64;
+    let lines = reach::reachable(&pioneer_at(Vec2::zeros(), heading, 0.0, 0.0), 0.1, 0.1)
+        .expect("a unicycle");
+    let h = Vec2::new(heading.cos(), heading.sin());
+    let n = Vec2::new(-heading.sin(), heading.cos());
+    // Corners: v = ±0.1 m/s, l omega = ±0.1 * 0.3 = ±0.03 m/s.
+    for &(a, b) in &[(0.1, 0.03), (-0.1, 0.03), (0.1, -0.03), (-0.1, -0.03)] {
+        assert!(inside_reach(&lines, h * a + n * b));
+        assert!(!inside_reach(&lines, h * (a * 1.01) + n * b));
+        assert!(!inside_reach(&lines, h * a + n * (b * 1.01)));
+    }
+    // Backing out at full speed is out of reach.
+    assert!(!inside_reach(&lines, h * -0.6));
+}
+
+#[test]
+fn the_box_is_centred_on_the_current_motion_and_kept_within_the_limits() {
+    let lines =
+        reach::reachable(&pioneer_at(Vec2::zeros(), 0.0, 0.55, 1.7), 0.1, 0.1).expect("a unicycle");
+    // v in [0.45, 0.6], omega in [1.4, 1.8].
+    assert!(inside_reach(&lines, Vec2::new(0.6, 0.18)));
+    assert!(inside_reach(&lines, Vec2::new(0.45, 0.14)));
+    assert!(!inside_reach(&lines, Vec2::new(0.61, 0.16)));
+    assert!(!inside_reach(&lines, Vec2::new(0.5, 0.181)));
+    assert!(!inside_reach(&lines, Vec2::new(0.44, 0.16)));
+    assert!(!inside_reach(&lines, Vec2::new(0.5, 0.139)));
+}
+
+#[test]
+fn a_holonomic_robot_or_one_without_a_look_ahead_has_no_box() {
+    let mut me = pioneer_at(Vec2::zeros(), 0.0, 0.0, 0.0);
+    assert!(reach::reachable(&me, 0.0, 0.1).is_none());
+    me.kinematics = Kinematics::Holonomic;
+    assert!(reach::reachable(&me, 0.1, 0.1).is_none());
 }
 
 #[test]
@@ -566,12 +609,7 @@ fn a_look_ahead_robot_is_asked_only_what_it_can_do_within_the_tick() {
     // robot can only begin by backing out along its heading, towards the
     // other. The velocity asked is one it reaches within the tick: at most
     // 0.1 m/s along the heading and 0.03 m/s sideways.
-    let pioneer = RobotModel {
-        max_speed: 0.6,
-        max_accel: 1.0,
-        ..RobotModel::unit(0.35)
-    };
-    let me = pioneer.unicycle(Vec2::zeros(), Vec2::zeros(), 0.0, 0.0, 1.8, 3.0);
+    let me = pioneer_at(Vec2::zeros(), 0.0, 0.0, 0.0);
     let others = [sensed(
         1,
         BodyKind::Robot,
@@ -585,19 +623,14 @@ fn a_look_ahead_robot_is_asked_only_what_it_can_do_within_the_tick() {
     };
     let mut orca = Orca::default();
     orca.drives_look_ahead(0.1);
-    let Command::Velocity(u) = orca.plan(&o) else {
-        panic!("orca commands a velocity");
-    };
+    let u = orca.plan(&o).vector();
     assert!(u.x.abs() <= 0.1 + 1e-9 && u.y.abs() <= 0.03 + 1e-9, "{u:?}");
     // Backing straight out is forbidden by the other robot, so the robot
     // turns as it backs.
     assert!(u.x < 0.0 && u.y > 0.0, "{u:?}");
     // A holonomic robot, or one not driven through its look-ahead point,
     // is asked for its full speed as RVO2 does.
-    let mut plain = Orca::default();
-    let Command::Velocity(u) = plain.plan(&o) else {
-        panic!("orca commands a velocity");
-    };
+    let u = Orca::default().plan(&o).vector();
     assert!(u.norm() > 0.5, "{u:?}");
 }
 
