@@ -1,4 +1,5 @@
-//! Scheduling: CPU affinity, SCHED_FIFO, and background threads.
+//! Scheduling: CPU affinity (of this thread, of a process to start),
+//! SCHED_FIFO, and background threads.
 //!
 //! Children inherit the affinity mask and the scheduling policy across fork
 //! and exec, and threads inherit them from the thread that spawns them, so
@@ -76,6 +77,42 @@ pub fn set_affinity(cpus: &[usize]) -> std::io::Result<()> {
         if libc::sched_setaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &set) != 0 {
             return Err(std::io::Error::last_os_error());
         }
+    }
+    Ok(())
+}
+
+/// Makes the process `command` starts run on `cpus` only (each below
+/// [`max_cpus`]): its affinity is set in the child between fork and exec,
+/// so neither the caller nor the other processes it starts change.
+pub fn pin_command(command: &mut std::process::Command, cpus: &[usize]) -> std::io::Result<()> {
+    use std::os::unix::process::CommandExt;
+    if let Some(&c) = cpus.iter().find(|&&c| c >= max_cpus()) {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!("CPU {c} is beyond the affinity mask"),
+        ));
+    }
+    // Built before the fork: the child only makes the system call.
+    // SAFETY: cpu_set_t is plain data; CPU_ZERO/CPU_SET only write into it
+    // (indices were checked against CPU_SETSIZE).
+    let set = unsafe {
+        let mut set: libc::cpu_set_t = std::mem::zeroed();
+        libc::CPU_ZERO(&mut set);
+        for &c in cpus {
+            libc::CPU_SET(c, &mut set);
+        }
+        set
+    };
+    // SAFETY: the closure runs in the forked child before exec and only
+    // makes one async-signal-safe system call on memory it owns (no
+    // allocation, no locks).
+    unsafe {
+        command.pre_exec(move || {
+            if libc::sched_setaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &set) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
     }
     Ok(())
 }
@@ -245,6 +282,18 @@ mod tests {
         assert_eq!(during, Some(9));
         assert_eq!(after, Some(10));
         assert_eq!(fifo_priority(), None);
+    }
+
+    #[test]
+    fn a_pinned_command_runs_on_its_cpus_and_the_caller_keeps_its_own() {
+        let before = affinity().expect("affinity");
+        let mut cmd = std::process::Command::new("sh");
+        cmd.args(["-c", "grep Cpus_allowed_list /proc/self/status"]);
+        pin_command(&mut cmd, &[0]).expect("pin");
+        let out = cmd.output().expect("run sh");
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(text.trim().ends_with("\t0"), "{text}");
+        assert_eq!(affinity().expect("affinity"), before);
     }
 
     #[test]
