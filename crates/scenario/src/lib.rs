@@ -127,6 +127,10 @@ pub fn parse_with_overrides(
                            or a list of points [[x, y], ...]"
                         .into();
             }
+            if fail.reason.contains("untagged enum RawPriority") {
+                fail.reason =
+                    "timing.priority must be a whole number 1..99 or \"rate-monotonic\"".into();
+            }
             spans.error(fail)
         })?;
     let resolved = resolve::resolve(raw, &patches, &spans).map_err(|f| spans.error(f))?;
