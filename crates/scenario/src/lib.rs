@@ -25,6 +25,7 @@
 #![warn(missing_docs)]
 
 mod checks;
+pub mod cores;
 mod error;
 mod generate;
 pub mod map;
