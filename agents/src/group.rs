@@ -69,6 +69,7 @@ pub fn run_group(
     let Some(seats) = join_seats(link, opts)? else {
         return Ok(AgentExit::Interrupted);
     };
+    take_policy(&seats)?;
     let mut planners = seats
         .iter()
         .zip(opts)
@@ -81,4 +82,33 @@ pub fn run_group(
     let mut each: Vec<&mut dyn Planner> = planners.iter_mut().map(|p| &mut **p as _).collect();
     let exit = drive_each(link, &mut live, &mut each)?;
     live.finish(exit)
+}
+
+/// Realtime under `[world.cpus]`: the calling thread, which plans, takes
+/// its robot's scheduling policy ([`crate::cores`]), SIGXCPU counted first
+/// under SCHED_DEADLINE. One robot per process: a thread has one policy.
+fn take_policy(seats: &[crate::seat::Seat]) -> Result<(), AgentError> {
+    let Some(first) = seats.iter().find(|s| s.policy.is_some()) else {
+        return Ok(());
+    };
+    let robot = first.spec.name.clone();
+    let scheduling = |why: String| AgentError::Scheduling {
+        robot: robot.clone(),
+        why,
+    };
+    if seats.len() > 1 {
+        return Err(scheduling(format!(
+            "realtime under [world.cpus] each robot's agent takes its own scheduling \
+             policy, and this process drives {} robots: start one agent per robot",
+            seats.len()
+        )));
+    }
+    let Some(policy) = first.policy else {
+        return Ok(());
+    };
+    if matches!(policy, mrsim_sys::policy::Policy::Deadline { .. }) {
+        mrsim_sys::policy::count_overruns()
+            .map_err(|e| scheduling(format!("cannot count overruns (SIGXCPU): {e}")))?;
+    }
+    mrsim_sys::policy::set_policy(policy).map_err(|e| scheduling(e.to_string()))
 }

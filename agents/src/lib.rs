@@ -20,6 +20,7 @@
 //! per snapshot. Every plan call goes through [`guard::plan_checked`].
 #![warn(missing_docs)]
 
+pub mod cores;
 pub mod diagnostics;
 pub mod fault;
 pub mod group;
@@ -104,6 +105,16 @@ pub enum AgentError {
     /// The process was asked to stop before the robot had joined.
     #[error("interrupted before joining")]
     Interrupted,
+    /// Realtime under `[world.cpus]`: the robot's agent could not take its
+    /// scheduling policy (the kernel refused it, or the process drives
+    /// several robots).
+    #[error("robot `{robot}`: {why}")]
+    Scheduling {
+        /// The robot.
+        robot: String,
+        /// Why, with the kernel's reason.
+        why: String,
+    },
 }
 
 /// How an agent ended without error.

@@ -42,6 +42,12 @@ pub(crate) struct Seat {
     failed: Option<PlanFailure>,
     /// The robot's timing model or recorded calls, if any.
     timed: Option<Timed>,
+    /// Realtime under `[world.cpus]`: the scheduling policy its agent
+    /// takes ([`crate::cores`]).
+    pub(crate) policy: Option<mrsim_sys::policy::Policy>,
+    /// Realtime: the calling thread's CPU clock when the current planner
+    /// call began (taken by the command that answers it).
+    call_cpu_ns: Option<u64>,
 }
 
 /// How timing drives one robot's planner (`mrsim_scenario::timing`).
@@ -167,8 +173,11 @@ pub(crate) fn seat_of(
         observe::Observer::for_robot(&scenario.world, Some(&spec), me, capacity, walls.clone());
     let diag = start_diagnostics(view.out_dir.as_deref(), me, &spec.name);
     let timed = Timed::of(&spec, me, &scenario.world);
+    let policy = policy_of(scenario, me)?;
     Ok(Seat {
         timed,
+        policy,
+        call_cpu_ns: None,
         me,
         claim: opts.impersonate.unwrap_or(me as u32),
         token: reply.token,
@@ -186,6 +195,53 @@ pub(crate) fn seat_of(
         halt: opts.halt.clone(),
         failed: None,
     })
+}
+
+/// Realtime under `[world.cpus]`: the policy of robot `me`'s agent
+/// ([`crate::cores::policies`]); every robot's name and timing are read
+/// only under `fifo`, where rate-monotonic ranks them all.
+fn policy_of(
+    scenario: &ScenarioView<'_>,
+    me: usize,
+) -> Result<Option<mrsim_sys::policy::Policy>, AgentError> {
+    let Some(cpus) = scenario
+        .world
+        .cpus
+        .filter(|_| crate::cores::real(&scenario.world))
+    else {
+        return Ok(None);
+    };
+    #[derive(serde::Deserialize)]
+    struct Entry {
+        name: String,
+        #[serde(default)]
+        timing: Option<Timing>,
+    }
+    let parse = |raw: &serde_json::value::RawValue| {
+        serde_json::from_str::<Entry>(raw.get()).map_err(|e| AgentError::BadSetup(e.to_string()))
+    };
+    let entries: Vec<Entry> = match cpus.scheduler {
+        mrsim_scenario::Scheduler::Fifo => scenario
+            .robots
+            .iter()
+            .map(|r| parse(r))
+            .collect::<Result<_, _>>()?,
+        _ => {
+            let raw = scenario
+                .robots
+                .get(me)
+                .ok_or_else(|| AgentError::BadSetup(format!("no robot with id {me}")))?;
+            vec![parse(raw)?]
+        }
+    };
+    let mine = if entries.len() == 1 { 0 } else { me };
+    let robots: Vec<(&str, Option<&Timing>)> = entries
+        .iter()
+        .map(|e| (e.name.as_str(), e.timing.as_ref()))
+        .collect();
+    Ok(crate::cores::policies(cpus.scheduler, &robots)
+        .get(mine)
+        .copied())
 }
 
 /// The planner's diagnostics go to a part file in the run's folder, when
@@ -334,6 +390,17 @@ impl Seat {
             Command::Velocity(v) => (command_kind::VELOCITY, v),
             Command::Unicycle { v, omega } => (command_kind::UNICYCLE, Vec2::new(v, omega)),
         };
+        // Realtime: the CPU the planner call took on this thread, and
+        // under SCHED_DEADLINE the overruns so far.
+        let cpu_ns = self.call_cpu_ns.take().map_or(0, |start| {
+            mrsim_sys::cpu::thread_cpu_ns().saturating_sub(start)
+        });
+        let overruns = match self.policy {
+            Some(mrsim_sys::policy::Policy::Deadline { .. }) => {
+                u32::try_from(mrsim_sys::policy::overruns()).unwrap_or(u32::MAX)
+            }
+            _ => 0,
+        };
         let msg = CommandMsg {
             robot_id: self.claim,
             kind,
@@ -343,6 +410,8 @@ impl Seat {
             compute_ns,
             woke_ns,
             sent_ns,
+            cpu_ns,
+            overruns,
             ..CommandMsg::default()
         };
         match &self.injector {
@@ -376,6 +445,9 @@ impl Seat {
             return Ok(start.unwrap_or(woke));
         }
         let t0 = start.unwrap_or_else(now_ns);
+        if !self.lockstep {
+            self.call_cpu_ns = Some(mrsim_sys::cpu::thread_cpu_ns());
+        }
         let step = self.step(header, bodies);
         if matches!(step, Step::Skip) {
             self.answered = Some(header.tick);
@@ -461,6 +533,9 @@ impl Seat {
         sensed: usize,
     ) -> (u64, bool) {
         let me = self.me as u64;
+        let call_cpu_ns = self
+            .call_cpu_ns
+            .unwrap_or_else(mrsim_sys::cpu::thread_cpu_ns);
         match (step, self.timed.as_mut().map(|t| &mut t.how)) {
             (Step::Modelled { start_ns }, Some(TimedBy::Modelled(clerk))) => {
                 let s = clerk.planned(header.tick, *start_ns, sensed);
@@ -476,9 +551,17 @@ impl Seat {
                 (header.published_ns + sent, c.status == CallStatus::Lost)
             }
             (Step::Spent, Some(TimedBy::Spent { timing, seed })) => {
-                let due = t0 + timing.compute_ns(*seed, me, header.tick, sensed);
-                if due > t1 {
-                    std::thread::sleep(std::time::Duration::from_nanos(due - t1));
+                let drawn = timing.compute_ns(*seed, me, header.tick, sensed);
+                if timing.cpu {
+                    // CPU work: done when the thread has used the drawn
+                    // time since the call began, the planner's own CPU
+                    // included; preemption stretches it.
+                    mrsim_sys::cpu::burn_until(call_cpu_ns, drawn);
+                } else {
+                    let due = t0 + drawn;
+                    if due > t1 {
+                        std::thread::sleep(std::time::Duration::from_nanos(due - t1));
+                    }
                 }
                 (now_ns(), timing.command_lost(*seed, me, header.tick))
             }

@@ -31,6 +31,7 @@
 
 pub mod agent;
 pub mod bench;
+pub mod cores;
 pub mod error;
 pub mod finish;
 pub mod inproc;

@@ -9,6 +9,10 @@
 /// kernel's own real-time threads (which run at 50 and 99).
 pub const RT_PRIORITY: i32 = 10;
 
+/// SCHED_FIFO priority of the world in a realtime run under
+/// `[world.cpus]`: above every agent's level (theirs are 98 and below).
+pub const WORLD_PRIORITY: u8 = 99;
+
 /// Number of CPUs online.
 pub fn online_cpus() -> usize {
     // SAFETY: sysconf has no preconditions.
@@ -217,6 +221,11 @@ impl BelowAgents {
             .filter(|&p| p > 1)
             .filter(|&p| set_fifo(p - 1).is_ok());
         Self { restore }
+    }
+
+    /// A guard that moved nothing (the world ticks where it is).
+    pub fn inactive() -> Self {
+        Self { restore: None }
     }
 
     /// True if the thread was moved (it runs under SCHED_FIFO below its

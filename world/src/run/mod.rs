@@ -37,7 +37,7 @@ use mrsim_runfolder::timing::{Status, TIMING_FILE, TIMING_PARQUET_FILE, TimingSi
 use mrsim_runfolder::{FileError, METRICS_FILE, ROUTES_FILE, SCENARIO_FILE, TRAJECTORY_FILE};
 use mrsim_scenario::timing::{Timing, s_to_ns};
 use mrsim_scenario::{MissPolicy, Mode};
-use mrsim_sys::sched::BelowAgents;
+use mrsim_sys::sched::{BelowAgents, WORLD_PRIORITY};
 use mrsim_sys::usage::{CpusTime, process_usage, thread_usage};
 use mrsim_transport::{TransportError, WorldTransport};
 use recording::{Recording, Stamp, Summary};
@@ -93,6 +93,22 @@ struct Timed {
     lockstep: bool,
     /// The run writes timing.csv: realtime, or some robot has a model.
     recorded: bool,
+}
+
+/// Realtime under `[world.cpus]`: puts the calling thread (the tick loop)
+/// at SCHED_FIFO [`WORLD_PRIORITY`], above every agent's policy but
+/// SCHED_DEADLINE's (which runs before any SCHED_FIFO task). `None` for
+/// every other run; the kernel's refusal when it refuses (the launcher
+/// probed it before the run, so only a world started by hand meets it).
+fn above_agents(
+    scenario: &mrsim_scenario::Scenario,
+) -> Option<Result<(), mrsim_sys::policy::PolicyError>> {
+    let real = scenario.world.mode == Mode::Realtime && scenario.world.cpus.is_some();
+    real.then(|| {
+        mrsim_sys::policy::set_policy(mrsim_sys::policy::Policy::Fifo {
+            priority: WORLD_PRIORITY,
+        })
+    })
 }
 
 /// True if a run of `scenario` writes timing.csv: realtime, or some robot
@@ -797,8 +813,19 @@ fn run_with_clock(
     interrupted = lp.prepare_ticks(interrupted)?;
     let wall_start = clock.now() + lp.schedule.settle();
     lp.clock_start = Some(wall_start);
-    // Under SCHED_FIFO (`--rt`) the world ticks one level below its agents.
-    let below = BelowAgents::enter();
+    // Realtime under `[world.cpus]`: the world ticks above every agent
+    // (SCHED_FIFO 99; each agent takes its own policy). Otherwise, under
+    // SCHED_FIFO (`--rt`), one level below its agents.
+    let above = above_agents(&scenario);
+    if let Some(Err(e)) = &above {
+        lp.log(&format!(
+            "the world cannot tick above its agents ({e}); it ticks at the policy it has"
+        ));
+    }
+    let below = match above {
+        Some(_) => BelowAgents::inactive(),
+        None => BelowAgents::enter(),
+    };
     let fifo = below.active();
     lp.publish_stats(run_phase::RUNNING, true);
     let (cpu_start, _) = process_usage();

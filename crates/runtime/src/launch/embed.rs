@@ -106,6 +106,14 @@ pub(crate) fn run_validated_in_process(
     };
     check_transport(&validated, request.transport)?;
     check_memory(&validated, request.transport)?;
+    // Realtime under `[world.cpus]` is refused in process (no agent
+    // process of its own per robot to take a policy).
+    let cores = crate::cores::claim(
+        validated.scenario(),
+        validated.origin(),
+        request.transport,
+        &[],
+    )?;
     let dir = crate::out::prepare(request.out.as_deref(), &validated.scenario().name)?;
     write_source(&dir, validated.source())?;
     let ns = Namespace::new(&Namespace::fresh_run_id()).map_err(|e| Invalid(e.to_string()))?;
@@ -115,6 +123,7 @@ pub(crate) fn run_validated_in_process(
         dir,
         ns,
         applied: Applied::default(),
+        cores,
     };
     let outcome = prepared.run_inproc(&mut |_| {})?;
     let metrics = outcome.metrics.ok_or_else(|| {

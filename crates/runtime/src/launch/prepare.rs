@@ -20,6 +20,8 @@ pub struct Prepared {
     pub(super) dir: PathBuf,
     pub(super) ns: Namespace,
     pub(super) applied: Applied,
+    /// Realtime under `[world.cpus]`: the agents' CPUs and policies.
+    pub(super) cores: Option<crate::cores::Cores>,
 }
 
 /// Claims what the run needs: the output folder (created, writable), the
@@ -39,6 +41,12 @@ pub fn prepare(validated: Validated, request: RunRequest) -> Result<Prepared, Ru
     let ns = Namespace::new(&run_id).map_err(|e| Invalid(e.to_string()))?;
     claim_namespace(&ns)?;
     let applied = crate::sched::apply(&request.sched)?;
+    let cores = crate::cores::claim(
+        validated.scenario(),
+        validated.origin(),
+        request.transport,
+        &applied.cpus,
+    )?;
     mrsim_sys::signal::catch_termination();
     let mut request = request;
     if request.transport == Transport::Zenoh && request.zenoh.endpoint.is_none() {
@@ -52,6 +60,7 @@ pub fn prepare(validated: Validated, request: RunRequest) -> Result<Prepared, Ru
         dir,
         ns,
         applied,
+        cores,
     })
 }
 

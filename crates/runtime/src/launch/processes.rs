@@ -45,8 +45,15 @@ impl Prepared {
             .robots
             .iter()
             .any(|r| r.planner == mrsim_planners::EXTERNAL);
+        // Realtime under `[world.cpus]` the agents run on the cores' CPUs
+        // (the world on all the run's, above them).
+        let agent_cpus = self.cores.as_ref().map(|c| c.agent_cpus.clone());
         let start = |spec: ProcessSpec| -> std::io::Result<Child> {
-            starter.command(&spec)?.stdin(Stdio::null()).spawn()
+            let mut cmd = starter.command(&spec)?;
+            if let (ProcessSpec::Agent(_), Some(cpus)) = (&spec, &agent_cpus) {
+                mrsim_sys::sched::pin_command(&mut cmd, cpus)?;
+            }
+            cmd.stdin(Stdio::null()).spawn()
         };
         let mut world = start(ProcessSpec::World {
             scenario: source,
