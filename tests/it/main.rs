@@ -12,6 +12,7 @@
 mod common;
 
 mod bench;
+mod cores;
 mod cores_real;
 mod designated_path;
 mod faults;
