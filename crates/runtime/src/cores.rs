@@ -100,16 +100,14 @@ pub fn claim(
         .collect();
     let policies = mrsim_agents::cores::policies(cpus.scheduler, &robots);
     let bandwidths: Vec<f64> = policies.iter().map(Policy::bandwidth).collect();
-    if bandwidths.iter().any(|&b| b > 0.0) {
-        if let Some(share) = admission_share() {
-            let cores = mrsim_sys::sched::online_cpus();
-            admit(&bandwidths, share, cores).map_err(|e| {
-                refuse(format!(
-                    "the kernel would refuse the reservations (EBUSY): {e}; give them \
-                     less runtime or longer periods"
-                ))
-            })?;
-        }
+    if let Some(share) = admission_share().filter(|_| bandwidths.iter().any(|&b| b > 0.0)) {
+        let cores = mrsim_sys::sched::online_cpus();
+        admit(&bandwidths, share, cores).map_err(|e| {
+            refuse(format!(
+                "the kernel would refuse the reservations (EBUSY): {e}; give them \
+                 less runtime or longer periods"
+            ))
+        })?;
     }
     // The world's own policy is asked for too: it ticks above the agents.
     let mut asked = policies.clone();
