@@ -271,6 +271,7 @@ impl Seat {
             compute_ns: 0,
             woke_ns: now,
             sent_ns: now,
+            ..CommandMsg::default()
         }
     }
 
@@ -342,6 +343,7 @@ impl Seat {
             compute_ns,
             woke_ns,
             sent_ns,
+            ..CommandMsg::default()
         };
         match &self.injector {
             Some(inj) => {
@@ -495,6 +497,7 @@ impl Seat {
             compute_ns: 0,
             woke_ns: header.published_ns,
             sent_ns: header.published_ns,
+            ..CommandMsg::default()
         }
     }
 

@@ -163,6 +163,7 @@ impl InstantAgents {
             compute_ns: 1_000,
             woke_ns: at_ns,
             sent_ns: at_ns,
+            ..CommandMsg::default()
         })
     }
 }

@@ -27,7 +27,12 @@ use iceoryx2::prelude::ZeroCopySend;
 /// carries the key the world signs its snapshots with, and every snapshot
 /// its tag (`mrsim_transport::zenoh::seal`). Version 10: a join request
 /// says how many robots its process joins as ([`JoinRequest::group`]).
-pub const PROTOCOL_VERSION: u32 = 10;
+/// Version 11: a command carries the CPU time its call took
+/// ([`CommandMsg::cpu_ns`]) and the agent's count of reservation overruns
+/// ([`CommandMsg::overruns`]); in lockstep under `[world.cpus]` the world
+/// marks the robots whose planner reads a snapshot with [`flags::PLANS`],
+/// and such a robot plans only then.
+pub const PROTOCOL_VERSION: u32 = 11;
 
 /// Longest robot name, in bytes, that fits a [`JoinRequest`].
 pub const MAX_NAME_LEN: usize = 64;
@@ -49,6 +54,11 @@ pub mod flags {
     pub const LOST: u32 = 1;
     /// The robot has reached its goal and held it for `goal_hold_ticks`.
     pub const AT_GOAL: u32 = 2;
+    /// Lockstep under `[world.cpus]`, a robot whose compute is CPU work
+    /// (`cpu = true`): the cores' model has its planner read this
+    /// snapshot. Unmarked, it answers [`super::command_kind::NONE`] (since
+    /// protocol 11). Never set otherwise.
+    pub const PLANS: u32 = 4;
 }
 
 /// The state of one body at the end of a tick, as published by the world.
@@ -146,6 +156,15 @@ pub struct CommandMsg {
     pub woke_ns: u64,
     /// When the agent sent this command (CLOCK_MONOTONIC, ns).
     pub sent_ns: u64,
+    /// The CPU time the call took, ns: in lockstep the modelled CPU work
+    /// (`compute = { ..., cpu = true }`, 0 for a wait), in realtime the
+    /// agent's thread's CPU clock over the call (since protocol 11).
+    pub cpu_ns: u64,
+    /// A realtime agent under SCHED_DEADLINE: how many times its
+    /// reservation overran so far; 0 otherwise (since protocol 11).
+    pub overruns: u32,
+    /// Explicit padding, always zero.
+    pub _pad: u32,
 }
 
 /// A fixed-size, NUL-padded UTF-8 string.

@@ -25,6 +25,7 @@
 #![warn(missing_docs)]
 
 mod checks;
+pub mod cores;
 mod error;
 mod generate;
 pub mod map;
@@ -127,6 +128,10 @@ pub fn parse_with_overrides(
                     "a parameter must be a number, a string, a boolean, a list of numbers \
                            or a list of points [[x, y], ...]"
                         .into();
+            }
+            if fail.reason.contains("untagged enum RawPriority") {
+                fail.reason =
+                    "timing.priority must be a whole number 1..99 or \"rate-monotonic\"".into();
             }
             spans.error(fail)
         })?;

@@ -82,6 +82,16 @@ pub(crate) struct RawWorld {
     pub robots_per_agent: Option<S<u32>>,
     pub stuck_after: Option<S<f64>>,
     pub end_when_stuck: Option<S<bool>>,
+    pub cpus: Option<S<RawCpus>>,
+}
+
+/// `[world.cpus]`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub(crate) struct RawCpus {
+    pub count: Option<S<i64>>,
+    pub scheduler: Option<S<String>>,
+    pub world_ms: Option<S<f64>>,
 }
 
 /// `arena = { min, max }`.
@@ -135,6 +145,24 @@ pub(crate) struct RawTiming {
     pub period_ticks: Option<S<i64>>,
     pub snapshot_loss: Option<S<f64>>,
     pub command_loss: Option<S<f64>>,
+    pub priority: Option<S<RawPriority>>,
+    pub reservation: Option<S<RawReservation>>,
+}
+
+/// `priority = 1..99 | "rate-monotonic"` as written.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(untagged)]
+pub(crate) enum RawPriority {
+    Level(i64),
+    Name(String),
+}
+
+/// `reservation = { runtime_ms, period_ms }`.
+#[derive(Debug, Default, Clone, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub(crate) struct RawReservation {
+    pub runtime_ms: Option<S<f64>>,
+    pub period_ms: Option<S<f64>>,
 }
 
 /// `compute = { model, ... }`: the union of every model's keys.
@@ -149,6 +177,7 @@ pub(crate) struct RawCompute {
     pub sigma: Option<S<f64>>,
     pub base_ms: Option<S<f64>>,
     pub per_body_ms: Option<S<f64>>,
+    pub cpu: Option<S<bool>>,
 }
 
 /// `sensor = { kind = "lidar", beams, fov_deg, range, noise, record }`.

@@ -42,6 +42,20 @@ pub struct Timing {
     pub snapshot_loss: f64,
     /// Probability that a command is lost on its way, in [0, 1].
     pub command_loss: f64,
+    /// The compute time is CPU work that contends for the cores
+    /// (`compute = { ..., cpu = true }`); false (the default): a wait that
+    /// takes no core (I/O, a GPU, a remote service). Left out of the
+    /// resolved scenario when false.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub cpu: bool,
+    /// The planner's priority under `[world.cpus] scheduler = "fifo"`
+    /// (`priority = 1..99 | "rate-monotonic"`); `None`: rate-monotonic.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub priority: Option<Priority>,
+    /// The planner's CPU reservation under `[world.cpus] scheduler =
+    /// "deadline"` (`reservation = { runtime_ms, period_ms }`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reservation: Option<Reservation>,
 }
 
 impl Default for Timing {
@@ -53,7 +67,75 @@ impl Default for Timing {
             period_ticks: 1,
             snapshot_loss: 0.0,
             command_loss: 0.0,
+            cpu: false,
+            priority: None,
+            reservation: None,
         }
+    }
+}
+
+/// A planner's fixed priority (`timing.priority`), as SCHED_FIFO's: the
+/// higher level runs first.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Priority {
+    /// A level in 1..=99 (`priority = 50`).
+    Level(u8),
+    /// From the robot's rate (`priority = "rate-monotonic"`): the shorter
+    /// `period_ticks`, the higher; equal periods by robot name.
+    RateMonotonic,
+}
+
+impl Serialize for Priority {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            Priority::Level(l) => s.serialize_u8(*l),
+            Priority::RateMonotonic => s.serialize_str("rate-monotonic"),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Priority {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Written {
+            Level(i64),
+            Name(String),
+        }
+        match Written::deserialize(d)? {
+            Written::Level(l) if (1..=99).contains(&l) => Ok(Priority::Level(l as u8)),
+            Written::Name(n) if n == "rate-monotonic" => Ok(Priority::RateMonotonic),
+            _ => Err(serde::de::Error::custom(
+                "a priority is 1..99 or \"rate-monotonic\"",
+            )),
+        }
+    }
+}
+
+/// A constant-bandwidth CPU reservation (`timing.reservation`), as
+/// SCHED_DEADLINE's: `runtime_ms` of CPU in every `period_ms`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Reservation {
+    /// CPU time granted per period, ms, in (0, `period_ms`].
+    pub runtime_ms: f64,
+    /// The reservation's period (and relative deadline), ms, > 0.
+    pub period_ms: f64,
+}
+
+impl Reservation {
+    /// The runtime, ns.
+    pub fn runtime_ns(&self) -> u64 {
+        ms_to_ns(self.runtime_ms)
+    }
+
+    /// The period, ns.
+    pub fn period_ns(&self) -> u64 {
+        ms_to_ns(self.period_ms)
+    }
+
+    /// The share of one core it grants, runtime / period.
+    pub fn bandwidth(&self) -> f64 {
+        self.runtime_ms / self.period_ms
     }
 }
 

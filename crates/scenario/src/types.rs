@@ -110,6 +110,51 @@ pub struct WorldConfig {
     /// false; left out of the resolved scenario when false).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub end_when_stuck: bool,
+    /// The cores the agents' CPU work shares (`[world.cpus]`), if the
+    /// scenario models them; `None`: CPU work has a core of its own per
+    /// agent. Left out of the resolved scenario when `None`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cpus: Option<Cpus>,
+}
+
+/// `[world.cpus]`: the cores the planners' CPU work (`compute = { ...,
+/// cpu = true }`) contends for, and how they are shared.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Cpus {
+    /// Cores the agents' CPU work shares, >= 1.
+    pub count: u32,
+    /// How the cores are shared among the runnable planners (default fair).
+    pub scheduler: Scheduler,
+    /// CPU the world itself takes on one of the cores at the start of
+    /// every tick, above every agent, ms, >= 0 (default 0).
+    pub world_ms: f64,
+}
+
+/// How the cores are shared (`[world.cpus] scheduler`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Scheduler {
+    /// Processor sharing among the runnable planners, the idealised share
+    /// of Linux's SCHED_OTHER (CFS/EEVDF).
+    #[default]
+    Fair,
+    /// Global fixed-priority preemptive (SCHED_FIFO): each robot's
+    /// `timing.priority`, rate-monotonic where it has none.
+    Fifo,
+    /// Global EDF over constant-bandwidth reservations (SCHED_DEADLINE):
+    /// each robot's `timing.reservation`.
+    Deadline,
+}
+
+impl Scheduler {
+    /// The name as written in a scenario file.
+    pub fn name(self) -> &'static str {
+        match self {
+            Scheduler::Fair => "fair",
+            Scheduler::Fifo => "fifo",
+            Scheduler::Deadline => "deadline",
+        }
+    }
 }
 
 /// `[world] stuck_after` when the file does not say, s.

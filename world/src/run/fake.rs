@@ -130,6 +130,7 @@ pub fn velocity(robot: u32, token: u64, tick: u64, sent_ns: u64) -> CommandMsg {
         compute_ns: 0,
         woke_ns: sent_ns,
         sent_ns,
+        ..CommandMsg::default()
     }
 }
 

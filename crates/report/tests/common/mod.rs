@@ -132,6 +132,7 @@ pub fn scenario(n: usize) -> Scenario {
             robots_per_agent: 1,
             stuck_after: mrsim_scenario::DEFAULT_STUCK_AFTER,
             end_when_stuck: false,
+            cpus: None,
         },
         robots: (0..n)
             .map(|i| {

@@ -25,6 +25,8 @@ pub(crate) struct RobotSpans {
     pub table: Option<Range<usize>>,
     pub start: Option<Range<usize>>,
     pub goal: Option<Range<usize>>,
+    /// The `timing.compute.cpu` that decided the robot's `cpu`, if any.
+    pub cpu: Option<Range<usize>>,
 }
 
 /// Picks a field from the first layer that has it, checking it in every
@@ -277,10 +279,16 @@ pub(super) fn resolve_robot(
              route keeps to, and a robot without a route drives straight at its goal",
         ));
     }
+    let cpu = layers
+        .iter()
+        .filter_map(|l| l.raw.timing.as_ref())
+        .filter_map(|t| t.get_ref().compute.as_ref())
+        .find_map(|c| c.get_ref().cpu.as_ref().map(|c| c.span()));
     let spans = RobotSpans {
         table,
         start: start_span,
         goal: goal_span,
+        cpu,
     };
     Ok((spec, spans, placed))
 }

@@ -57,6 +57,26 @@ pub(super) fn check_scene(
         }
     }
 
+    // Under SCHED_DEADLINE every planner whose work takes a core needs a
+    // reservation: there is no default bandwidth to give it.
+    if let Some(cpus) = &s.world.cpus
+        && cpus.scheduler == Scheduler::Deadline
+    {
+        for (r, sp) in s.robots.iter().zip(robot_spans) {
+            if r.timing
+                .as_ref()
+                .is_some_and(|t| t.cpu && t.reservation.is_none())
+            {
+                return Err(Fail::new(
+                    sp.cpu.clone().or(sp.table.clone()),
+                    format!("robot `{}`", r.name),
+                    "timing.compute.cpu = true under [world.cpus] scheduler = \"deadline\" \
+                     needs timing.reservation = { runtime_ms, period_ms }",
+                ));
+            }
+        }
+    }
+
     let starts = StartGrid::new(&s.robots);
     for (i, (r, sp)) in s.robots.iter().zip(robot_spans).enumerate() {
         let what = format!("robot `{}`", r.name);

@@ -6,8 +6,8 @@
 use super::robots::Layer;
 use crate::checks::{Rule, check};
 use crate::error::Fail;
-use crate::raw::{RawCompute, RawTiming, S};
-use crate::timing::{Compute, Timing};
+use crate::raw::{RawCompute, RawPriority, RawTiming, S};
+use crate::timing::{Compute, Priority, Reservation, Timing};
 
 /// The known compute models and the numbers each takes.
 const MODELS: &[(&str, &[&str])] = &[
@@ -99,7 +99,90 @@ pub(super) fn resolve_timing(layers: &[Layer]) -> Result<Option<Timing>, Fail> {
     }
     t.period_ticks = period.unwrap_or(1);
     t.compute = compute(&tables)?;
+    t.cpu = tables
+        .iter()
+        .filter_map(|(raw, _)| raw.get_ref().compute.as_ref())
+        .find_map(|c| c.get_ref().cpu.as_ref())
+        .is_some_and(|c| *c.get_ref());
+    t.priority = priority(&tables)?;
+    t.reservation = reservation(&tables)?;
     Ok(Some(t))
+}
+
+/// `priority`: from the highest layer that has it, each checked.
+fn priority(tables: &[(&S<RawTiming>, &str)]) -> Result<Option<Priority>, Fail> {
+    let mut chosen = None;
+    for (raw, what) in tables {
+        let Some(p) = &raw.get_ref().priority else {
+            continue;
+        };
+        let bad = |got: String| {
+            Err(Fail::new(
+                Some(p.span()),
+                *what,
+                format!(
+                    "timing.priority must be a whole number 1..99 or \"rate-monotonic\", got {got}"
+                ),
+            ))
+        };
+        let value = match p.get_ref() {
+            RawPriority::Level(l) if (1..=99).contains(l) => Priority::Level(*l as u8),
+            RawPriority::Level(l) => return bad(l.to_string()),
+            RawPriority::Name(n) if n == "rate-monotonic" => Priority::RateMonotonic,
+            RawPriority::Name(n) => return bad(format!("\"{n}\"")),
+        };
+        chosen.get_or_insert(value);
+    }
+    Ok(chosen)
+}
+
+/// `reservation`: each of its numbers from the highest layer that has it
+/// (so `--set robot.r0.timing.reservation.runtime_ms=30` changes only the
+/// runtime), both needed, runtime at most the period.
+fn reservation(tables: &[(&S<RawTiming>, &str)]) -> Result<Option<Reservation>, Fail> {
+    let tables: Vec<_> = tables
+        .iter()
+        .filter_map(|(raw, what)| raw.get_ref().reservation.as_ref().map(|r| (r, *what)))
+        .collect();
+    let Some((top, top_what)) = tables.first().copied() else {
+        return Ok(None);
+    };
+    let get = |key: &str| {
+        let mut chosen = None;
+        for (r, what) in &tables {
+            let v = match key {
+                "runtime_ms" => &r.get_ref().runtime_ms,
+                _ => &r.get_ref().period_ms,
+            };
+            if let Some(v) = v {
+                let x = check(v, &format!("timing.reservation.{key}"), Rule::Pos, what)?;
+                chosen.get_or_insert(x);
+            }
+        }
+        chosen.ok_or_else(|| {
+            Fail::new(
+                Some(top.span()),
+                top_what,
+                format!(
+                    "timing.reservation needs `{key}` (reservation = {{ runtime_ms, period_ms }})"
+                ),
+            )
+        })
+    };
+    let (runtime_ms, period_ms) = (get("runtime_ms")?, get("period_ms")?);
+    if runtime_ms > period_ms {
+        return Err(Fail::new(
+            Some(top.span()),
+            top_what,
+            format!(
+                "timing.reservation runtime_ms ({runtime_ms}) must be <= period_ms ({period_ms})"
+            ),
+        ));
+    }
+    Ok(Some(Reservation {
+        runtime_ms,
+        period_ms,
+    }))
 }
 
 /// The model no layer names, from the numbers given: each number belongs

@@ -3,7 +3,7 @@
 
 use crate::checks::{Rule, opt, point};
 use crate::error::Fail;
-use crate::raw::{Pt, RawWall, RawWorld, S};
+use crate::raw::{Pt, RawCpus, RawWall, RawWorld, S};
 use crate::types::*;
 
 pub(super) fn resolve_world(w: Option<&S<RawWorld>>) -> Result<WorldConfig, Fail> {
@@ -69,6 +69,51 @@ pub(super) fn resolve_world(w: Option<&S<RawWorld>>) -> Result<WorldConfig, Fail
             DEFAULT_STUCK_AFTER,
         )?,
         end_when_stuck: raw.end_when_stuck.as_ref().is_some_and(|b| *b.get_ref()),
+        cpus: raw.cpus.as_ref().map(resolve_cpus).transpose()?,
+    })
+}
+
+/// `[world.cpus]`: `count` required, `scheduler` fair by default,
+/// `world_ms` 0 by default.
+fn resolve_cpus(c: &S<RawCpus>) -> Result<Cpus, Fail> {
+    let what = "world.cpus";
+    let raw = c.get_ref();
+    let count = match &raw.count {
+        Some(k) if (1..=i64::from(u32::MAX)).contains(k.get_ref()) => *k.get_ref() as u32,
+        Some(k) => {
+            return Err(Fail::new(
+                Some(k.span()),
+                what,
+                format!("count must be a whole number >= 1, got {}", k.get_ref()),
+            ));
+        }
+        None => {
+            return Err(Fail::new(
+                Some(c.span()),
+                what,
+                "missing `count` (the cores the agents' CPU work shares, >= 1)",
+            ));
+        }
+    };
+    let scheduler = match &raw.scheduler {
+        None => Scheduler::Fair,
+        Some(s) => match s.get_ref().as_str() {
+            "fair" => Scheduler::Fair,
+            "fifo" => Scheduler::Fifo,
+            "deadline" => Scheduler::Deadline,
+            other => {
+                return Err(Fail::new(
+                    Some(s.span()),
+                    what,
+                    format!("unknown scheduler `{other}` (known: fair, fifo, deadline)"),
+                ));
+            }
+        },
+    };
+    Ok(Cpus {
+        count,
+        scheduler,
+        world_ms: opt(&raw.world_ms, "world_ms", Rule::NonNeg, what, 0.0)?,
     })
 }
 

@@ -3,6 +3,7 @@
 
 mod common;
 
+mod cores;
 mod files;
 mod fuzz;
 mod generate;

@@ -85,6 +85,7 @@ fn every_timing_key_is_reachable_with_an_override() {
             period_ticks: 3,
             snapshot_loss: 0.25,
             command_loss: 0.0,
+            ..Timing::default()
         }
     );
     let r1 = l.scenario.robots[1].timing.clone().unwrap();

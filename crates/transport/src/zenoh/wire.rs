@@ -163,7 +163,7 @@ impl Wire for SnapshotHeader {
 }
 
 impl Wire for CommandMsg {
-    const LEN: usize = 2 * 4 + 2 * 8 + 2 * 8 + 3 * 8;
+    const LEN: usize = 2 * 4 + 2 * 8 + 2 * 8 + 3 * 8 + 8 + 4;
     fn put(&self, o: &mut Vec<u8>) {
         put_u32(self.robot_id, o);
         put_u32(self.kind, o);
@@ -174,6 +174,8 @@ impl Wire for CommandMsg {
         put_u64(self.compute_ns, o);
         put_u64(self.woke_ns, o);
         put_u64(self.sent_ns, o);
+        put_u64(self.cpu_ns, o);
+        put_u32(self.overruns, o);
     }
     fn get(r: &mut Reader<'_>) -> Self {
         Self {
@@ -185,6 +187,9 @@ impl Wire for CommandMsg {
             compute_ns: r.u64(),
             woke_ns: r.u64(),
             sent_ns: r.u64(),
+            cpu_ns: r.u64(),
+            overruns: r.u32(),
+            _pad: 0,
         }
     }
 }
@@ -317,6 +322,9 @@ mod tests {
             compute_ns: 9,
             woke_ns: 10,
             sent_ns: 11,
+            cpu_ns: 12,
+            overruns: 13,
+            _pad: 0,
         });
         round_trip(JoinRequest {
             protocol_version: 6,

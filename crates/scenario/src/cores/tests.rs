@@ -1,0 +1,340 @@
+//! The model's textbook cases: periodic tasks released at every multiple
+//! of their period while free, each job's response time against its
+//! implicit deadline (the next release).
+
+use super::*;
+
+const MS: u64 = 1_000_000;
+
+/// A periodic task: CPU per job and period, ms.
+#[derive(Clone, Copy)]
+struct Periodic {
+    c_ms: u64,
+    t_ms: u64,
+}
+
+fn cpus(count: u32, scheduler: Scheduler) -> Cpus {
+    Cpus {
+        count,
+        scheduler,
+        world_ms: 0.0,
+    }
+}
+
+fn task(name: &str, period_ticks: u32) -> Task {
+    Task {
+        name: name.into(),
+        period_ticks,
+        priority: None,
+        reservation: None,
+    }
+}
+
+/// What a run of periodic tasks gave: per task, the response time of each
+/// job that ended (ms), and its misses: jobs that ended after their
+/// deadline, and releases skipped because the task was still busy.
+#[derive(Debug, Default, Clone)]
+struct Outcome {
+    responses: Vec<Vec<f64>>,
+    misses: Vec<u32>,
+}
+
+impl Outcome {
+    fn total_misses(&self) -> u32 {
+        self.misses.iter().sum()
+    }
+}
+
+/// Runs `set` on `model` until `horizon_ms`: task i releases a job of
+/// `c_ms` at every multiple of `t_ms` at which it is free.
+fn run(mut model: Cores, set: &[Periodic], horizon_ms: u64) -> Outcome {
+    let n = set.len();
+    let mut out = Outcome {
+        responses: vec![Vec::new(); n],
+        misses: vec![0; n],
+    };
+    let mut next: Vec<u64> = vec![0; n];
+    let mut released_at: Vec<u64> = vec![0; n];
+    loop {
+        let t = (*next.iter().min().unwrap()).min(horizon_ms * MS);
+        let mut done = Vec::new();
+        model.run_until(t, |d| {
+            done.push(d);
+            None
+        });
+        for d in done {
+            let r = d.at_ns - released_at[d.task];
+            out.responses[d.task].push(r as f64 / MS as f64);
+            if r > set[d.task].t_ms * MS {
+                out.misses[d.task] += 1;
+            }
+        }
+        if t >= horizon_ms * MS {
+            break;
+        }
+        for i in 0..n {
+            if next[i] == t {
+                if model.busy(i) {
+                    out.misses[i] += 1;
+                } else {
+                    model.release(i, set[i].c_ms * MS, t / (set[i].t_ms * MS));
+                    released_at[i] = t;
+                }
+                next[i] += set[i].t_ms * MS;
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn two_tasks_on_one_core_under_fifo_respond_as_the_response_time_analysis_says() {
+    // tau1 = (C 20, T 50) above tau2 = (C 40, T 100). By hand (Joseph &
+    // Pandya): R1 = 20; R2 = 40 + ceil(R2 / 50) 20: 40 -> 60 -> 80 -> 80.
+    // tau2's first job: 20-50 and 70-80 of its 40 ms, done at 80.
+    let mut hi = task("hi", 5);
+    hi.priority = Some(Priority::Level(20));
+    let mut lo = task("lo", 10);
+    lo.priority = Some(Priority::Level(10));
+    let model = Cores::new(&cpus(1, Scheduler::Fifo), &[lo, hi]).unwrap();
+    let set = [
+        Periodic {
+            c_ms: 40,
+            t_ms: 100,
+        },
+        Periodic { c_ms: 20, t_ms: 50 },
+    ];
+    let out = run(model, &set, 1000);
+    assert!(out.responses[1].iter().all(|&r| r == 20.0), "{out:?}");
+    assert_eq!(out.responses[0].iter().cloned().fold(0.0, f64::max), 80.0);
+    assert_eq!(out.responses[0][0], 80.0);
+    assert_eq!(out.total_misses(), 0);
+}
+
+#[test]
+fn a_rate_monotonic_set_under_the_liu_and_layland_bound_never_misses() {
+    // U = 10/40 + 15/60 + 20/100 = 0.7 < 3 (2^(1/3) - 1) = 0.7798, one core,
+    // priorities from the periods alone (dt 10 ms: 4, 6 and 10 ticks).
+    let set = [
+        Periodic {
+            c_ms: 20,
+            t_ms: 100,
+        },
+        Periodic { c_ms: 10, t_ms: 40 },
+        Periodic { c_ms: 15, t_ms: 60 },
+    ];
+    let u: f64 = set.iter().map(|p| p.c_ms as f64 / p.t_ms as f64).sum();
+    assert!(u < 3.0 * (2f64.powf(1.0 / 3.0) - 1.0));
+    let tasks = [task("a", 10), task("b", 4), task("c", 6)];
+    assert_eq!(fifo_levels(&tasks), vec![97, 99, 98]);
+    let model = Cores::new(&cpus(1, Scheduler::Fifo), &tasks).unwrap();
+    // Two hyperperiods (600 ms each).
+    let out = run(model, &set, 1200);
+    assert_eq!(out.total_misses(), 0, "{out:?}");
+    assert_eq!(out.responses[1].len(), 30);
+    // The lowest's worst response, by hand (the critical instant at 0):
+    // R = 20 + ceil(R/40) 10 + ceil(R/60) 15: 20 -> 45 -> 55 -> 55.
+    let worst = out.responses[0].iter().cloned().fold(0.0, f64::max);
+    assert_eq!(worst, 55.0);
+}
+
+#[test]
+fn a_set_above_the_cores_capacity_misses_under_every_scheduler() {
+    // Three tasks of 80 ms every 100 ms on two cores: U = 2.4 > 2.
+    let set = [Periodic {
+        c_ms: 80,
+        t_ms: 100,
+    }; 3];
+    for scheduler in [Scheduler::Fair, Scheduler::Fifo, Scheduler::Deadline] {
+        let tasks: Vec<Task> = ["a", "b", "c"]
+            .iter()
+            .map(|n| Task {
+                reservation: Some(Reservation {
+                    runtime_ms: 80.0,
+                    period_ms: 100.0,
+                }),
+                ..task(n, 1)
+            })
+            .collect();
+        let model = Cores::new(&cpus(2, scheduler), &tasks).unwrap();
+        let out = run(model, &set, 1000);
+        assert!(out.total_misses() > 0, "{scheduler:?}: {out:?}");
+    }
+}
+
+#[test]
+fn global_edf_misses_at_a_utilisation_close_to_one_on_two_cores_dhalls_effect() {
+    // Two light tasks (2 ms every 100 ms) and one heavy (100 ms every 101
+    // ms): U = 0.02 + 0.02 + 0.990 = 1.03, half of the two cores. EDF runs
+    // the light ones first (deadline 100 < 101) on both cores, and the
+    // heavy one, starting at 2 ms, ends at 102 > 101.
+    let res = |c: f64, t: f64| {
+        Some(Reservation {
+            runtime_ms: c,
+            period_ms: t,
+        })
+    };
+    let tasks = [
+        Task {
+            reservation: res(2.0, 100.0),
+            ..task("l1", 1)
+        },
+        Task {
+            reservation: res(2.0, 100.0),
+            ..task("l2", 1)
+        },
+        Task {
+            reservation: res(100.0, 101.0),
+            ..task("h", 1)
+        },
+    ];
+    let set = [
+        Periodic { c_ms: 2, t_ms: 100 },
+        Periodic { c_ms: 2, t_ms: 100 },
+        Periodic {
+            c_ms: 100,
+            t_ms: 101,
+        },
+    ];
+    let u: f64 = set.iter().map(|p| p.c_ms as f64 / p.t_ms as f64).sum();
+    assert!(u < 1.05, "{u}");
+    let model = Cores::new(&cpus(2, Scheduler::Deadline), &tasks).unwrap();
+    let out = run(model, &set, 150);
+    assert_eq!(out.responses[2].first(), Some(&102.0), "{out:?}");
+    assert!(out.misses[2] > 0);
+    assert_eq!(out.misses[0] + out.misses[1], 0);
+}
+
+/// Four robots of 42 ms every 100 ms and one whose every call wants 1 s,
+/// on two cores.
+fn hog_and_four() -> (Vec<Task>, Vec<Periodic>) {
+    let res = |c: f64| {
+        Some(Reservation {
+            runtime_ms: c,
+            period_ms: 100.0,
+        })
+    };
+    let mut tasks: Vec<Task> = ["r1", "r2", "r3", "r4"]
+        .iter()
+        .map(|n| Task {
+            reservation: res(45.0),
+            ..task(n, 1)
+        })
+        .collect();
+    tasks.insert(
+        0,
+        Task {
+            reservation: res(15.0),
+            ..task("hog", 1)
+        },
+    );
+    let mut set = vec![
+        Periodic {
+            c_ms: 42,
+            t_ms: 100
+        };
+        5
+    ];
+    set[0] = Periodic {
+        c_ms: 1000,
+        t_ms: 100,
+    };
+    (tasks, set)
+}
+
+#[test]
+fn a_reservation_throttles_an_overrunning_robot_and_the_others_keep_every_deadline() {
+    let (tasks, set) = hog_and_four();
+    let model = Cores::new(&cpus(2, Scheduler::Deadline), &tasks).unwrap();
+    let out = run(model.clone(), &set, 2000);
+    assert_eq!(out.misses[1..].iter().sum::<u32>(), 0, "{out:?}");
+    assert!(out.misses[0] > 0);
+    // The hog gets its runtime per period and no more: 15 ms in each of
+    // the 20 periods, so its 1 s job is not done within 2 s.
+    assert!(out.responses[0].is_empty(), "{out:?}");
+    let mut m = model;
+    m.release(0, 1000 * MS, 0);
+    let mut ended = None;
+    m.run_until(20_000 * MS, |d| {
+        ended = Some(d.at_ns);
+        None
+    });
+    // 1000 ms at 15 ms per 100 ms: 66 full periods and 10 ms into the 67th.
+    assert_eq!(ended, Some(6_600 * MS + 10 * MS));
+    // Under fair the same five share the cores: 42 ms at 2/5 of a core
+    // takes 105 ms, and every one of the four misses.
+    let fair = Cores::new(&cpus(2, Scheduler::Fair), &tasks).unwrap();
+    let out = run(fair, &set, 2000);
+    assert!(out.misses[1..].iter().all(|&k| k > 0), "{out:?}");
+}
+
+#[test]
+fn fair_sharing_gives_each_of_n_jobs_m_over_n_of_a_core() {
+    let tasks: Vec<Task> = ["a", "b", "c"].iter().map(|n| task(n, 1)).collect();
+    let mut m = Cores::new(&cpus(2, Scheduler::Fair), &tasks).unwrap();
+    for i in 0..3 {
+        m.release(i, 20 * MS, 0);
+    }
+    let mut ends = Vec::new();
+    m.run_until(1000 * MS, |d| {
+        ends.push(d.at_ns);
+        None
+    });
+    // Three jobs of 20 ms on two cores: each at 2/3, all end at 30 ms.
+    assert_eq!(ends, vec![30 * MS; 3]);
+    // Fewer jobs than cores: each has a core.
+    m.release(0, 20 * MS, 1);
+    let mut ends = Vec::new();
+    m.run_until(2000 * MS, |d| {
+        ends.push(d.at_ns);
+        None
+    });
+    assert_eq!(ends, vec![1020 * MS]);
+}
+
+#[test]
+fn the_worlds_own_cpu_takes_a_core_at_each_tick_start_above_every_agent() {
+    let c = Cpus {
+        count: 1,
+        scheduler: Scheduler::Fifo,
+        world_ms: 30.0,
+    };
+    let mut m = Cores::new(&c, &[task("a", 1)]).unwrap();
+    m.world_tick();
+    m.release(0, 50 * MS, 0);
+    let mut ends = Vec::new();
+    m.run_until(200 * MS, |d| {
+        ends.push(d.at_ns);
+        None
+    });
+    assert_eq!(ends, vec![80 * MS]);
+    // Two cores: the agent has the other one.
+    let mut m = Cores::new(&Cpus { count: 2, ..c }, &[task("a", 1)]).unwrap();
+    m.world_tick();
+    m.release(0, 50 * MS, 0);
+    let mut ends = Vec::new();
+    m.run_until(200 * MS, |d| {
+        ends.push(d.at_ns);
+        None
+    });
+    assert_eq!(ends, vec![50 * MS]);
+}
+
+#[test]
+fn a_job_released_at_a_completion_goes_on_without_a_wake_up() {
+    let tasks = [task("a", 1)];
+    let mut m = Cores::new(&cpus(1, Scheduler::Fifo), &tasks).unwrap();
+    m.release(0, 10 * MS, 0);
+    let mut ends = Vec::new();
+    m.run_until(100 * MS, |d| {
+        ends.push((d.tag, d.at_ns));
+        (d.tag == 0).then_some((5 * MS, 1))
+    });
+    assert_eq!(ends, vec![(0, 10 * MS), (1, 15 * MS)]);
+}
+
+#[test]
+fn deadline_without_a_reservation_is_refused() {
+    let e = Cores::new(&cpus(2, Scheduler::Deadline), &[task("r9", 1)]).unwrap_err();
+    assert_eq!(e, CoresError::NoReservation("r9".into()));
+}
