@@ -7,7 +7,8 @@
 //! log-normal model's 99th percentile, `median_ms` e^(2.326 `sigma`), since
 //! it has no maximum; a per-body model's time with every other body of the
 //! scene in view), T its period (`period_ticks` x `dt`), D its deadline
-//! (`deadline` x `dt`). The utilisation shown is the mean CPU per call over
+//! (`deadline` x `dt`); tasks in name order, fifo's levels as the cores'
+//! model gives them ([`crate::cores::fifo_levels`]). The utilisation shown is the mean CPU per call over
 //! T (the log-normal's mean `median_ms` e^(`sigma`²/2); the per-body
 //! bound as for C). The world's own CPU (`world_ms` each tick) is one more
 //! task of period and deadline `dt` at the highest priority. m is the
@@ -36,7 +37,10 @@
 //!   enters these tests as its server (C = runtime, T = D = period, its
 //!   bandwidth runtime / period) and keeps its deadlines only if, besides,
 //!   its CPU per call fits the runtime and the server's period its deadline:
-//!   a call that needs more is throttled until the next period.
+//!   a call that needs more is throttled until the next period. The world
+//!   runs above the servers, as in the model: with `world_ms` > 0 the GFB
+//!   bound does not apply, and the per-task test counts the world's whole
+//!   CPU in each window.
 //! - **fair** (processor sharing among the runnable agents, each at most
 //!   one core): overloaded if U > m; per robot, the response time when
 //!   every robot's call starts at once (at tick 0 every period begins
@@ -50,6 +54,8 @@
 //! Sufficient tests that fail are inconclusive (the set may still keep
 //! every deadline); a necessary test that fails means some robot must miss.
 
+use crate::timing::{Compute, Priority};
+use crate::types::Scenario;
 use std::fmt::Write;
 
 /// One robot's planner as a task.
@@ -82,12 +88,113 @@ pub struct Task {
 pub struct TaskSet {
     /// Cores the agents' CPU work shares, m >= 1.
     pub cores: u32,
+    /// True without `[world.cpus]`: a core of its own per robot.
+    pub own_cores: bool,
     /// The tick, ns.
     pub dt_ns: u64,
     /// The world's own CPU each tick, ns (0: none).
     pub world_ns: u64,
     /// The robots' tasks, in name order.
     pub tasks: Vec<Task>,
+}
+
+/// The task set of `sc`'s robots and the name of its scheduler, if the
+/// scenario has `[world.cpus]` or a robot with `cpu = true`; None for any
+/// other scenario. Without `[world.cpus]` every CPU robot has a core of its
+/// own (m = their number, `fair`).
+pub fn task_set(sc: &Scenario) -> Option<(TaskSet, &'static str)> {
+    let cpu = |t: &Option<crate::timing::Timing>| t.as_ref().is_some_and(|t| t.cpu);
+    let cpus = sc.world.cpus;
+    if cpus.is_none() && !sc.robots.iter().any(|r| cpu(&r.timing)) {
+        return None;
+    }
+    let dt_ns = crate::timing::s_to_ns(sc.world.dt).max(1);
+    let deadline_ns = crate::timing::s_to_ns(sc.world.dt * sc.world.deadline).max(1);
+    let others = (sc.robots.len() + sc.obstacles.len()).saturating_sub(1) as f64;
+    let mut robots: Vec<&crate::types::RobotSpec> = sc.robots.iter().collect();
+    robots.sort_by(|a, b| a.name.cmp(&b.name));
+    let model: Vec<crate::cores::Task> = robots
+        .iter()
+        .map(|r| {
+            let t = r.timing.clone().unwrap_or_default();
+            crate::cores::Task {
+                name: r.name.clone(),
+                period_ticks: t.period_ticks,
+                priority: t.priority,
+                reservation: t.reservation,
+            }
+        })
+        .collect();
+    let levels = crate::cores::fifo_levels(&model);
+    let tasks = robots
+        .iter()
+        .zip(&levels)
+        .map(|(r, &level)| {
+            let t = r.timing.clone().unwrap_or_default();
+            let (c_ms, mean_ms) = match t.compute {
+                Compute::None => (0.0, 0.0),
+                Compute::Fixed { ms } => (ms, ms),
+                Compute::Uniform { min_ms, max_ms } => (max_ms, (min_ms + max_ms) / 2.0),
+                Compute::Lognormal { median_ms, sigma } => (
+                    median_ms * (Z99 * sigma).exp(),
+                    median_ms * (sigma * sigma / 2.0).exp(),
+                ),
+                Compute::PerBody {
+                    base_ms,
+                    per_body_ms,
+                } => {
+                    let all = base_ms + per_body_ms * others;
+                    (all, all)
+                }
+            };
+            Task {
+                name: r.name.clone(),
+                cpu: t.cpu,
+                c_ns: crate::timing::ms_to_ns(c_ms),
+                mean_ns: crate::timing::ms_to_ns(mean_ms),
+                period_ns: dt_ns * u64::from(t.period_ticks.max(1)),
+                deadline_ns,
+                priority: u32::from(level),
+                priority_text: match t.priority {
+                    Some(Priority::Level(l)) => l.to_string(),
+                    _ => format!("{level} (rate-monotonic)"),
+                },
+                reservation: t.reservation.map(|v| (v.runtime_ns(), v.period_ns())),
+            }
+        })
+        .collect::<Vec<_>>();
+    let (cores, scheduler, world_ns) = match cpus {
+        Some(c) => (
+            c.count.max(1),
+            c.scheduler.name(),
+            crate::timing::ms_to_ns(c.world_ms),
+        ),
+        None => (
+            u32::try_from(tasks.iter().filter(|t| t.cpu).count())
+                .unwrap_or(u32::MAX)
+                .max(1),
+            "fair",
+            0,
+        ),
+    };
+    Some((
+        TaskSet {
+            cores,
+            own_cores: cpus.is_none(),
+            dt_ns,
+            world_ns,
+            tasks,
+        },
+        scheduler,
+    ))
+}
+
+/// The task set and verdict of `sc` ([`task_set`], [`verdict`]), None for
+/// a scenario without `[world.cpus]` and without CPU robots.
+pub fn of_scenario(sc: &Scenario) -> Option<(TaskSet, Verdict)> {
+    let (set, scheduler) = task_set(sc)?;
+    let v = verdict(&set, scheduler)?;
+    Some((set, v))
 }
 
 /// What a test concludes.
@@ -483,27 +590,32 @@ fn rta_global(me: Ctd, higher: &[(Ctd, Option<u64>)], m: u64) -> Option<u64> {
 pub fn deadline(set: &TaskSet) -> Verdict {
     let m = set.cores.max(1);
     let mf = f64::from(m);
-    // Every EDF task: the world, then each CPU robot's server or itself.
+    // Every EDF task: each CPU robot's server (or itself). The world runs
+    // above them all.
     let mut tasks: Vec<(Option<usize>, Ctd)> = Vec::new();
-    if let Some(w) = world_ctd(set) {
-        tasks.push((None, w));
-    }
+    let mut demand = set.world_utilisation();
     for (i, t) in set.tasks.iter().enumerate().filter(|(_, t)| t.cpu) {
+        let own = t.c_ns as f64 / t.period_ns.max(1) as f64;
         let ctd = match t.reservation {
-            Some((q, p)) => Ctd {
-                c: q,
-                t: p.max(1),
-                d: p.max(1),
-            },
-            None => Ctd {
-                c: t.c_ns,
-                t: t.period_ns.max(1),
-                d: t.deadline_ns.max(1),
-            },
+            Some((q, p)) => {
+                demand += own.min(q as f64 / p.max(1) as f64);
+                Ctd {
+                    c: q,
+                    t: p.max(1),
+                    d: p.max(1),
+                }
+            }
+            None => {
+                demand += own;
+                Ctd {
+                    c: t.c_ns,
+                    t: t.period_ns.max(1),
+                    d: t.deadline_ns.max(1),
+                }
+            }
         };
         tasks.push((Some(i), ctd));
     }
-    let u: f64 = tasks.iter().map(|(_, c)| c.c as f64 / c.t as f64).sum();
     let density = |c: &Ctd| c.c as f64 / c.d.min(c.t) as f64;
     let lambda: f64 = tasks.iter().map(|(_, c)| density(c)).sum();
     let l_max = tasks.iter().map(|(_, c)| density(c)).fold(0.0, f64::max);
@@ -511,8 +623,11 @@ pub fn deadline(set: &TaskSet) -> Verdict {
     let set_tests = vec![
         SetTest {
             name: "U <= m (necessary)".into(),
-            detail: format!("U = {u:.3} {} {m}", if u <= mf { "<=" } else { ">" }),
-            conclusion: if u <= mf + 1e-12 {
+            detail: format!(
+                "U = {demand:.3} {} {m}",
+                if demand <= mf { "<=" } else { ">" }
+            ),
+            conclusion: if demand <= mf + 1e-12 {
                 Conclusion::Holds
             } else {
                 Conclusion::Fails
@@ -520,8 +635,14 @@ pub fn deadline(set: &TaskSet) -> Verdict {
         },
         SetTest {
             name: "GFB bound (Goossens, Funk & Baruah 2003), U <= m - (m - 1) u_max".into(),
-            detail: format!("U = {lambda:.3}, bound {gfb:.3} (u_max = {l_max:.3})"),
-            conclusion: if lambda <= gfb + 1e-12 {
+            detail: if set.world_ns > 0 {
+                "the world's own CPU runs above the reservations".into()
+            } else {
+                format!("U = {lambda:.3}, bound {gfb:.3} (u_max = {l_max:.3})")
+            },
+            conclusion: if set.world_ns > 0 {
+                Conclusion::NotApplicable
+            } else if lambda <= gfb + 1e-12 {
                 Conclusion::Holds
             } else {
                 Conclusion::Inconclusive
@@ -538,7 +659,7 @@ pub fn deadline(set: &TaskSet) -> Verdict {
                 return wait_verdict(t);
             }
             let k = tasks.iter().position(|(j, _)| *j == Some(i)).unwrap_or(0);
-            let edf_ok = gfb_holds || bcl_edf(&tasks, k, m);
+            let edf_ok = gfb_holds || bcl_edf(&tasks, k, m, world_ctd(set));
             let (fits, bound) = match t.reservation {
                 Some((q, p)) => (t.c_ns <= q && p <= t.deadline_ns, p),
                 None => (true, t.deadline_ns),
@@ -584,8 +705,10 @@ pub fn deadline(set: &TaskSet) -> Verdict {
 /// deadlines if sum_{i != k} min(beta_i, 1 - lambda_k) < m (1 - lambda_k),
 /// or equals it with some 0 < beta_i <= 1 - lambda_k, where lambda_k =
 /// C_k / D_k, beta_i = (N C_i + min(C_i, max(0, D_k - N T_i))) / D_k and
-/// N = floor((D_k - D_i) / T_i) + 1.
-fn bcl_edf(tasks: &[(Option<usize>, Ctd)], k: usize, m: u32) -> bool {
+/// N = floor((D_k - D_i) / T_i) + 1. The world, above every server, enters
+/// with its whole workload in a window of D_k: floor(D_k / dt) world_ms +
+/// min(world_ms, D_k mod dt).
+fn bcl_edf(tasks: &[(Option<usize>, Ctd)], k: usize, m: u32, world: Option<Ctd>) -> bool {
     let me = tasks[k].1;
     if me.c > me.d {
         return false;
@@ -594,6 +717,13 @@ fn bcl_edf(tasks: &[(Option<usize>, Ctd)], k: usize, m: u32) -> bool {
     let slack = 1.0 - me.c as f64 / dk;
     let mut sum = 0.0;
     let mut some_small = false;
+    let mut add = |w: i128| {
+        let beta = w as f64 / dk;
+        if beta > 0.0 && beta <= slack {
+            some_small = true;
+        }
+        sum += beta.min(slack);
+    };
     for (j, (_, o)) in tasks.iter().enumerate() {
         if j == k {
             continue;
@@ -601,12 +731,11 @@ fn bcl_edf(tasks: &[(Option<usize>, Ctd)], k: usize, m: u32) -> bool {
         let diff = me.d as i128 - o.d as i128;
         let n = (diff.div_euclid(o.t as i128) + 1).max(0);
         let rest = (me.d as i128 - n * o.t as i128).max(0);
-        let w = n * o.c as i128 + rest.min(o.c as i128);
-        let beta = w as f64 / dk;
-        if beta > 0.0 && beta <= slack {
-            some_small = true;
-        }
-        sum += beta.min(slack);
+        add(n * o.c as i128 + rest.min(o.c as i128));
+    }
+    if let Some(w) = world {
+        let n = (me.d / w.t) as i128;
+        add(n * w.c as i128 + ((me.d % w.t) as i128).min(w.c as i128));
     }
     let limit = f64::from(m) * slack;
     sum < limit - 1e-12 || ((sum - limit).abs() <= 1e-12 && some_small)
@@ -723,15 +852,25 @@ pub fn verdict(set: &TaskSet, scheduler: &str) -> Option<Verdict> {
 /// the set, and the robots predicted to miss.
 pub fn render(set: &TaskSet, v: &Verdict) -> String {
     let mut out = String::new();
-    let _ = writeln!(
-        out,
-        "task set: {} robots on {} cores, scheduler {}, the world {} ms of CPU each {} ms tick",
-        set.tasks.len(),
-        set.cores,
-        v.scheduler,
-        ms(set.world_ns),
-        ms(set.dt_ns)
-    );
+    if set.own_cores {
+        let _ = writeln!(
+            out,
+            "task set: {} robots, no [world.cpus]: a core of its own per CPU robot ({}), each {} ms tick",
+            set.tasks.len(),
+            set.cores,
+            ms(set.dt_ns)
+        );
+    } else {
+        let _ = writeln!(
+            out,
+            "task set: {} robots on {} cores, scheduler {}, the world {} ms of CPU each {} ms tick",
+            set.tasks.len(),
+            set.cores,
+            v.scheduler,
+            ms(set.world_ns),
+            ms(set.dt_ns)
+        );
+    }
     let policy = match v.scheduler {
         "fifo" => "priority",
         "deadline" => "reservation",
@@ -902,6 +1041,7 @@ mod tests {
     fn set(cores: u32, tasks: Vec<Task>) -> TaskSet {
         TaskSet {
             cores,
+            own_cores: false,
             dt_ns: 100 * MS,
             world_ns: 0,
             tasks,
@@ -1102,5 +1242,84 @@ mod tests {
             .collect();
         let side = side_by_side(&v, &measured);
         assert!(side.contains("measured to miss 2"), "{side}");
+    }
+
+    const SCENE: &str = r#"
+[world]
+dt = 0.1
+deadline = 0.8
+[world.cpus]
+count = 2
+scheduler = "fifo"
+world_ms = 1.0
+[defaults.timing]
+compute = { ms = 20, cpu = true }
+[[robot]]
+name = "b"
+start = [0, 0]
+goal = [1, 0]
+[robot.timing]
+period_ticks = 2
+compute = { model = "uniform", min_ms = 10, max_ms = 30, cpu = true }
+[[robot]]
+name = "a"
+start = [0, 2]
+goal = [1, 2]
+[robot.timing]
+priority = 50
+[[robot]]
+name = "c"
+start = [0, 4]
+goal = [1, 4]
+[robot.timing]
+compute = { model = "lognormal", median_ms = 10, sigma = 0.5, cpu = false }
+"#;
+
+    #[test]
+    fn a_scenario_s_robots_become_tasks_in_name_order_with_their_model_s_c_t_and_d() {
+        let l = crate::parse(SCENE, "scene.toml").expect("a valid scene");
+        let (s, scheduler) = task_set(&l.scenario).expect("a task set");
+        assert_eq!(scheduler, "fifo");
+        assert_eq!((s.cores, s.world_ns, s.dt_ns), (2, MS, 100 * MS));
+        let names: Vec<&str> = s.tasks.iter().map(|t| t.name.as_str()).collect();
+        assert_eq!(names, ["a", "b", "c"]);
+        let (a, b, c) = (&s.tasks[0], &s.tasks[1], &s.tasks[2]);
+        assert_eq!(
+            (a.c_ns, a.period_ns, a.deadline_ns),
+            (20 * MS, 100 * MS, 80 * MS)
+        );
+        assert_eq!(a.priority, 50);
+        // Uniform: C its maximum, the mean its middle; two ticks a period.
+        assert_eq!(
+            (b.c_ns, b.mean_ns, b.period_ns),
+            (30 * MS, 20 * MS, 200 * MS)
+        );
+        // Rate-monotonic: the longer period ranks below the one-tick ones.
+        assert_eq!(b.priority, 98);
+        // A wait: no CPU; C its 99th percentile, 10 e^(2.326 x 0.5) ms.
+        assert!(!c.cpu);
+        assert_eq!(c.c_ns, crate::timing::ms_to_ns(10.0 * (Z99 * 0.5).exp()));
+        assert_eq!(c.priority, 99);
+    }
+
+    #[test]
+    fn a_scenario_without_cores_or_cpu_work_has_no_task_set() {
+        let plain = SCENE
+            .replace(
+                "[world.cpus]\ncount = 2\nscheduler = \"fifo\"\nworld_ms = 1.0\n",
+                "",
+            )
+            .replace(", cpu = true", "");
+        let l = crate::parse(&plain, "plain.toml").expect("a valid scene");
+        assert!(task_set(&l.scenario).is_none());
+        // CPU work without [world.cpus]: a core of its own per CPU robot.
+        let own = SCENE.replace(
+            "[world.cpus]\ncount = 2\nscheduler = \"fifo\"\nworld_ms = 1.0\n",
+            "",
+        );
+        let l = crate::parse(&own, "own.toml").expect("a valid scene");
+        let (s, scheduler) = task_set(&l.scenario).expect("a task set");
+        assert_eq!((s.cores, s.own_cores, scheduler), (2, true, "fair"));
+        assert!(fair(&s).predicted_misses().is_empty());
     }
 }
