@@ -297,18 +297,20 @@ impl TaskSet {
 
     /// The utilisation with the verdict's C (the tests' U).
     fn worst_utilisation(&self) -> f64 {
-        self.world_utilisation()
-            + self
-                .cpu_tasks()
-                .map(|t| t.c_ns as f64 / t.period_ns as f64)
-                .sum::<f64>()
+        self.world_utilisation() + self.cpu_tasks().map(Task::worst_utilisation).sum::<f64>()
     }
 }
 
 impl Task {
-    /// Mean CPU per call over the period.
+    /// Mean CPU per call over the period, at most 1: a planner is one
+    /// thread, which a call longer than its period keeps busy.
     pub fn utilisation(&self) -> f64 {
-        self.mean_ns as f64 / self.period_ns.max(1) as f64
+        (self.mean_ns as f64 / self.period_ns.max(1) as f64).min(1.0)
+    }
+
+    /// The verdict's CPU per call over the period, at most 1.
+    fn worst_utilisation(&self) -> f64 {
+        (self.c_ns as f64 / self.period_ns.max(1) as f64).min(1.0)
     }
 }
 
@@ -421,7 +423,7 @@ pub fn fifo(set: &TaskSet) -> Verdict {
     } else {
         let u_max = cpu
             .iter()
-            .map(|(_, t)| t.c_ns as f64 / t.period_ns as f64)
+            .map(|(_, t)| t.worst_utilisation())
             .chain([set.world_utilisation()])
             .fold(0.0, f64::max);
         let mf = f64::from(m);
@@ -595,7 +597,7 @@ pub fn deadline(set: &TaskSet) -> Verdict {
     let mut tasks: Vec<(Option<usize>, Ctd)> = Vec::new();
     let mut demand = set.world_utilisation();
     for (i, t) in set.tasks.iter().enumerate().filter(|(_, t)| t.cpu) {
-        let own = t.c_ns as f64 / t.period_ns.max(1) as f64;
+        let own = t.worst_utilisation();
         let ctd = match t.reservation {
             Some((q, p)) => {
                 demand += own.min(q as f64 / p.max(1) as f64);
@@ -624,7 +626,7 @@ pub fn deadline(set: &TaskSet) -> Verdict {
         SetTest {
             name: "U <= m (necessary)".into(),
             detail: format!(
-                "U = {demand:.3} {} {m}",
+                "U = {demand:.3} {} {m} (each robot at most its reservation)",
                 if demand <= mf { "<=" } else { ">" }
             ),
             conclusion: if demand <= mf + 1e-12 {
