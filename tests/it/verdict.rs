@@ -166,7 +166,7 @@ fn a_lockstep_sweep_of_robot_counts_for_each_scheduler_draws_a_line_per_schedule
             "--x",
             "generate.count",
             "--metrics",
-            "miss_rate,success_rate,collided",
+            "miss_rate,predicted_missing,success_rate,collided",
         ])
         .arg("--out")
         .arg(dir.join("o"))
@@ -197,6 +197,13 @@ fn a_lockstep_sweep_of_robot_counts_for_each_scheduler_draws_a_line_per_schedule
     for r in &rows[1..] {
         let rate: f64 = r[col("miss_rate")].parse().expect("a miss rate");
         assert!((0.0..=1.0).contains(&rate), "{csv}");
+        // The verdict: 4 x 20 ms fit on two cores under every scheduler;
+        // 12 x 20 ms (U = 2.4) do not.
+        let predicted: f64 = r[col("predicted_missing")].parse().expect("a prediction");
+        match r[col("generate.count")] {
+            "4" => assert_eq!(predicted, 0.0, "{csv}"),
+            _ => assert!(predicted > 0.0, "{csv}"),
+        }
     }
     let svg = std::fs::read_to_string(dir.join("o/sweep.svg")).expect("sweep.svg");
     for label in ["scheduler=fair", "scheduler=fifo", "scheduler=deadline"] {
