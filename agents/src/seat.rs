@@ -59,6 +59,11 @@ enum TimedBy {
     Modelled(Clerk),
     /// Realtime: the model is spent for real.
     Spent { timing: Timing, seed: u64 },
+    /// Lockstep under `[world.cpus]`, CPU work: the world's model of the
+    /// cores decides; the planner reads a snapshot that marks it
+    /// ([`mrsim_proto::flags::PLANS`]) and the world takes the send time
+    /// from the model.
+    Cored { timing: Timing, seed: u64 },
     /// A recorded run's planner calls (`mrsim rerun`), by tick; `deadline_ns`
     /// after publication is the tick's deadline.
     Replayed {
@@ -76,6 +81,10 @@ impl Timed {
             (Some(calls), _) => TimedBy::Replayed {
                 calls: calls.iter().map(|c| (c.tick, *c)).collect(),
                 deadline_ns: mrsim_scenario::timing::s_to_ns(world.dt * world.deadline),
+            },
+            (None, Some(t)) if lockstep && t.cpu && world.cpus.is_some() => TimedBy::Cored {
+                timing: t.clone(),
+                seed: world.seed,
             },
             (None, Some(t)) if lockstep => {
                 TimedBy::Modelled(Clerk::new(t.clone(), world.seed, me as u64, world.dt))
@@ -112,6 +121,8 @@ enum Step {
     Replayed(RecordedCall),
     /// Plan, then spend the model's compute time for real (realtime).
     Spent,
+    /// Plan; the world's model of the cores says when it is sent.
+    Cored,
 }
 
 /// The walls every robot of the run whose setup is `view` sees (its
@@ -438,6 +449,12 @@ impl Seat {
                 mrsim_scenario::timing::Turn::Plan { start_ns } => Step::Modelled { start_ns },
                 _ => Step::Skip,
             },
+            TimedBy::Cored { .. } => {
+                let marked = bodies
+                    .get(self.me)
+                    .is_some_and(|b| b.flags & mrsim_proto::flags::PLANS != 0);
+                if marked { Step::Cored } else { Step::Skip }
+            }
             TimedBy::Spent { timing, seed } => match timing.skips(*seed, me, tick) {
                 Some(_) => Step::Skip,
                 None => Step::Spent,
@@ -466,6 +483,10 @@ impl Seat {
                 let s = clerk.planned(header.tick, *start_ns, sensed);
                 (header.published_ns + s.sent_ns, s.lost)
             }
+            (Step::Cored, Some(TimedBy::Cored { timing, seed })) => (
+                header.published_ns,
+                timing.command_lost(*seed, me, header.tick),
+            ),
             (Step::Replayed(c), Some(TimedBy::Replayed { deadline_ns, .. })) => {
                 // A late answer stays late, however soon it was sent (the
                 // world may have closed the tick before it arrived).

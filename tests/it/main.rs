@@ -12,6 +12,7 @@
 mod common;
 
 mod bench;
+mod cores;
 mod designated_path;
 mod faults;
 mod golden;

@@ -43,6 +43,7 @@ pub mod physics;
 pub mod record;
 pub mod run;
 pub mod scan;
+pub mod sensed;
 pub mod timings;
 pub mod tracking;
 

@@ -9,7 +9,11 @@
 //! judges and applies them as it did), so a realtime run's trajectory comes
 //! out byte for byte. With overrides it is a counterfactual: the same
 //! timing, another planner or parameter; it can differ from the recorded
-//! run only from the first tick the change can act on. Planners that are
+//! run only from the first tick the change can act on; with another
+//! `[world.cpus]` (`--set world.cpus.scheduler=deadline`, another count)
+//! the robots whose compute is CPU work are timed by the model of the
+//! cores instead of the record, a modelled counterfactual
+//! ([`Rerunning::modelled`] names them). Planners that are
 //! not built in (a program's own, a Python planner) may hold their own
 //! random state: the rerun names them as the reason a replay may differ.
 
@@ -48,6 +52,11 @@ pub struct Rerunning {
     /// Robots whose planner is not built in (`robot`, `planner`): not known
     /// to be deterministic, the reason a replay may differ.
     pub not_deterministic: Vec<(String, String)>,
+    /// Robots whose timing the model of the cores re-decides instead of
+    /// the record (a counterfactual with another `[world.cpus]`: the robots
+    /// whose compute is CPU work); empty when every robot replays its
+    /// recorded times.
+    pub modelled: Vec<String>,
 }
 
 /// Why a rerun did not happen or failed.
@@ -125,10 +134,26 @@ pub fn rerun(req: &Rerun) -> Result<Rerunning, RerunError> {
             Some((name.to_string(), r.planner.clone()))
         })
         .collect();
-    let validated = validated.with_replay(calls)?;
+    // Another `[world.cpus]` (scheduler, count, the world's CPU): the
+    // recorded times were those of the old cores, so the model decides
+    // anew for the robots whose compute is CPU work.
+    let cores = &validated.scenario().world.cpus;
+    let modelled: Vec<String> = if cores.is_some() && *cores != recorded.world.cpus {
+        validated
+            .scenario()
+            .robots
+            .iter()
+            .filter(|r| r.timing.as_ref().is_some_and(|t| t.cpu))
+            .map(|r| r.name.clone())
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let validated = validated.with_replay_except(calls, &modelled)?;
     let result = run_validated_in_process(validated, req.out.clone(), req.render, None)?;
     Ok(Rerunning {
         result,
         not_deterministic,
+        modelled,
     })
 }

@@ -229,11 +229,24 @@ impl Validated {
     /// `calls` gives it (by robot name; a robot without any replays none:
     /// it never answered), the world rebuilt for it (`mrsim rerun`).
     pub fn with_replay(
+        self,
+        calls: std::collections::BTreeMap<String, Vec<mrsim_scenario::timing::RecordedCall>>,
+    ) -> Result<Self, Invalid> {
+        self.with_replay_except(calls, &[])
+    }
+
+    /// [`Validated::with_replay`], but the robots named in `modelled` keep
+    /// their timing model (their recorded calls are dropped).
+    pub fn with_replay_except(
         mut self,
         mut calls: std::collections::BTreeMap<String, Vec<mrsim_scenario::timing::RecordedCall>>,
+        modelled: &[String],
     ) -> Result<Self, Invalid> {
         for r in &mut self.loaded.scenario.robots {
-            r.replay = Some(calls.remove(&r.name).unwrap_or_default());
+            let recorded = calls.remove(&r.name).unwrap_or_default();
+            if !modelled.contains(&r.name) {
+                r.replay = Some(recorded);
+            }
         }
         if let Some(name) = calls.keys().next() {
             return Err(Invalid(format!(

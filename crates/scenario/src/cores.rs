@@ -34,12 +34,15 @@
 //!   start (see [`Cores::world_tick`]) above every agent: while it runs it
 //!   takes one of the cores (`c = m - 1`).
 //!
-//! Cost: each event (a release, a completion, a budget used up, a
-//! replenishment, the world's work done) costs O(n) in the jobs the model
-//! holds, with no allocation once its buffers have grown.
+//! Cost: under `fair` each event (a job's end, the world's work done)
+//! costs O(log n); under `fifo` and `deadline` each event (a release, a
+//! completion, a budget used up, a replenishment) costs O(n) in the tasks
+//! the model holds; no allocation once its buffers have grown.
 
 use crate::timing::{Priority, Reservation};
 use crate::types::{Cpus, Scheduler};
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
 
 /// One robot's part in the model.
 #[derive(Debug, Clone, PartialEq)]
@@ -117,6 +120,12 @@ pub struct Cores {
     /// Reused: the indices of the jobs that run, and candidates.
     running: Vec<usize>,
     candidates: Vec<usize>,
+    /// `fair`: the service every runnable job has had since time 0 (all
+    /// progress alike), and each job's end in that service, earliest
+    /// first (ties by task index).
+    service: u128,
+    ends: BinaryHeap<Reverse<(u128, usize)>>,
+    ended: Vec<usize>,
 }
 
 /// The SCHED_FIFO level of every task (1..=99): its own
@@ -187,6 +196,9 @@ impl Cores {
             slots,
             running: Vec::new(),
             candidates: Vec::new(),
+            service: 0,
+            ends: BinaryHeap::new(),
+            ended: Vec::new(),
         })
     }
 
@@ -214,6 +226,10 @@ impl Cores {
 
     fn arrive(&mut self, task: usize, demand_ns: u64, tag: u64, woke: bool) {
         let now = self.now;
+        if self.scheduler == Scheduler::Fair {
+            self.ends
+                .push(Reverse((self.service + u128::from(demand_ns), task)));
+        }
         let slot = &mut self.slots[task];
         slot.job = Some(Job {
             left: demand_ns,
@@ -279,6 +295,9 @@ impl Cores {
     /// same task (demand, tag), released then, without a wake-up (the
     /// planner goes straight on to its next snapshot).
     pub fn run_until(&mut self, until_ns: u64, mut done: impl FnMut(Done) -> Option<(u64, u64)>) {
+        if self.scheduler == Scheduler::Fair {
+            return self.run_fair(until_ns, done);
+        }
         loop {
             let n = self.choose();
             let c = self.agent_cores();
@@ -380,6 +399,258 @@ impl Cores {
                 return;
             }
         }
+    }
+}
+
+impl Cores {
+    /// [`Cores::run_until`] under `fair`: every runnable job has the same
+    /// service, so the next to end is the one whose end in service comes
+    /// first (O(log n) per event).
+    fn run_fair(&mut self, until_ns: u64, mut done: impl FnMut(Done) -> Option<(u64, u64)>) {
+        loop {
+            let n = self.ends.len() as u128;
+            let c = self.agent_cores() as u128;
+            let mut step = until_ns.saturating_sub(self.now);
+            if self.world_left > 0 {
+                step = step.min(self.world_left);
+            }
+            if let Some(&Reverse((end, _))) = self.ends.peek() {
+                let left = end.saturating_sub(self.service);
+                let to_end = if n <= c {
+                    left
+                } else if c == 0 {
+                    u128::MAX
+                } else {
+                    (left * n).div_ceil(c)
+                };
+                step = step.min(u64::try_from(to_end).unwrap_or(u64::MAX));
+            }
+            let served = if n <= c {
+                u128::from(step)
+            } else if c == 0 {
+                0
+            } else {
+                u128::from(step) * c / n
+            };
+            self.world_left -= step.min(self.world_left);
+            if n > 0 {
+                self.service += served;
+            }
+            self.now += step;
+            self.ended.clear();
+            while let Some(&Reverse((end, i))) = self.ends.peek()
+                && end <= self.service
+            {
+                self.ends.pop();
+                self.ended.push(i);
+            }
+            for k in 0..self.ended.len() {
+                let i = self.ended[k];
+                let Some(job) = self.slots[i].job.take() else {
+                    continue;
+                };
+                if let Some((demand, tag)) = done(Done {
+                    task: i,
+                    tag: job.tag,
+                    at_ns: self.now,
+                }) {
+                    self.arrive(i, demand, tag, false);
+                }
+            }
+            let due = self
+                .ends
+                .peek()
+                .is_some_and(|&Reverse((end, _))| end <= self.service);
+            if self.now >= until_ns && !due {
+                return;
+            }
+        }
+    }
+}
+
+/// One planner call's command as the cores' model sends it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CoreSend {
+    /// The robot (its index in the scenario).
+    pub robot: usize,
+    /// The tick of the snapshot it read, which the command answers.
+    pub tick: u64,
+    /// When it is sent, ns after that tick's publication.
+    pub sent_ns: u64,
+    /// The CPU work of the call, ns.
+    pub cpu_ns: u64,
+    /// Lost on its way (`command_loss`).
+    pub lost: bool,
+}
+
+#[derive(Debug, Clone)]
+struct Member {
+    robot: usize,
+    timing: crate::timing::Timing,
+    /// The demand of the job it runs.
+    demand: u64,
+}
+
+/// The world's side of the cores in lockstep: which robots whose compute
+/// is CPU work (`cpu = true`) read each tick's snapshot, and when their
+/// commands are sent, from the [`Cores`] model over every such robot.
+///
+/// Tick `k` covers [k dt, (k+1) dt): at its start the world's own CPU is
+/// released, and every member that is free and plans at `k` (its period,
+/// its snapshot not lost) reads snapshot `k`; a member whose job ends
+/// inside the tick sends then and, if it read an earlier snapshot, reads
+/// snapshot `k` at once (the newest it has not seen), as
+/// [`crate::timing::Clerk`] does alone. A job that ends exactly at the
+/// tick's end reads the next snapshot at its start.
+#[derive(Debug, Clone)]
+pub struct Contention {
+    cores: Cores,
+    members: Vec<Member>,
+    /// Member of each scenario robot.
+    member_of: Vec<Option<usize>>,
+    seed: u64,
+    dt_ns: u64,
+    /// Which scenario robots read the current tick's snapshot.
+    reads: Vec<bool>,
+    sends: Vec<CoreSend>,
+}
+
+impl Contention {
+    /// The model of `scenario`'s cores, if it has `[world.cpus]`, runs in
+    /// lockstep and has a robot with `cpu = true` (a robot replaying a
+    /// record keeps it).
+    pub fn of(scenario: &crate::Scenario) -> Result<Option<Self>, CoresError> {
+        let w = &scenario.world;
+        let Some(cpus) = &w.cpus else {
+            return Ok(None);
+        };
+        if w.mode != crate::Mode::Lockstep {
+            return Ok(None);
+        }
+        let mut members = Vec::new();
+        let mut tasks = Vec::new();
+        let mut member_of = vec![None; scenario.robots.len()];
+        for (i, r) in scenario.robots.iter().enumerate() {
+            let Some(t) = r.timing.as_ref().filter(|t| t.cpu && r.replay.is_none()) else {
+                continue;
+            };
+            member_of[i] = Some(members.len());
+            tasks.push(Task {
+                name: r.name.clone(),
+                period_ticks: t.period_ticks,
+                priority: t.priority,
+                reservation: t.reservation,
+            });
+            members.push(Member {
+                robot: i,
+                timing: t.clone(),
+                demand: 0,
+            });
+        }
+        if members.is_empty() {
+            return Ok(None);
+        }
+        Ok(Some(Self {
+            cores: Cores::new(cpus, &tasks)?,
+            members,
+            member_of,
+            seed: w.seed,
+            dt_ns: crate::timing::s_to_ns(w.dt).max(1),
+            reads: vec![false; scenario.robots.len()],
+            sends: Vec::new(),
+        }))
+    }
+
+    /// True if scenario robot `robot` is timed by the model.
+    pub fn has(&self, robot: usize) -> bool {
+        self.member_of.get(robot).is_some_and(Option::is_some)
+    }
+
+    /// The robot's timing, if it is timed by the model.
+    pub fn timing(&self, robot: usize) -> Option<&crate::timing::Timing> {
+        let m = (*self.member_of.get(robot)?)?;
+        Some(&self.members[m].timing)
+    }
+
+    /// Runs tick `tick` (ticks in increasing order, from 0): afterwards
+    /// [`Contention::reads`] says who reads its snapshot and
+    /// [`Contention::sends`] the commands sent within it. `sensed(robot)`
+    /// is the number of bodies the robot senses in the tick's state (for
+    /// `per-body` compute; asked only then).
+    pub fn tick(&mut self, tick: u64, mut sensed: impl FnMut(usize) -> usize) {
+        let start = tick * self.dt_ns;
+        let end = start + self.dt_ns;
+        self.sends.clear();
+        self.reads.fill(false);
+        self.cores.world_tick();
+        let seed = self.seed;
+        let demand = |m: &Member, sensed: &mut dyn FnMut(usize) -> usize| {
+            let n = match m.timing.compute {
+                crate::timing::Compute::PerBody { .. } => sensed(m.robot),
+                _ => 0,
+            };
+            m.timing.compute_ns(seed, m.robot as u64, tick, n)
+        };
+        for (i, m) in self.members.iter_mut().enumerate() {
+            if self.cores.busy(i) || m.timing.skips(seed, m.robot as u64, tick).is_some() {
+                continue;
+            }
+            m.demand = demand(m, &mut sensed);
+            self.cores.release(i, m.demand, tick);
+            self.reads[m.robot] = true;
+        }
+        let (members, reads, sends, dt_ns) = (
+            &mut self.members,
+            &mut self.reads,
+            &mut self.sends,
+            self.dt_ns,
+        );
+        self.cores.run_until(end, |d| {
+            let m = &mut members[d.task];
+            let robot = m.robot as u64;
+            sends.push(CoreSend {
+                robot: m.robot,
+                tick: d.tag,
+                sent_ns: d.at_ns - d.tag * dt_ns,
+                cpu_ns: m.demand,
+                lost: m.timing.command_lost(seed, robot, d.tag),
+            });
+            if d.tag >= tick || d.at_ns >= end || m.timing.skips(seed, robot, tick).is_some() {
+                return None;
+            }
+            m.demand = demand(m, &mut sensed);
+            reads[m.robot] = true;
+            Some((m.demand, tick))
+        });
+    }
+
+    /// The run is over: every job still running is run to its end (no
+    /// snapshot is read any more); [`Contention::sends`] lists them.
+    pub fn drain(&mut self) {
+        self.sends.clear();
+        self.reads.fill(false);
+        let (members, sends, dt_ns, seed) = (&self.members, &mut self.sends, self.dt_ns, self.seed);
+        self.cores.run_until(u64::MAX / 4, |d| {
+            let m = &members[d.task];
+            sends.push(CoreSend {
+                robot: m.robot,
+                tick: d.tag,
+                sent_ns: d.at_ns - d.tag * dt_ns,
+                cpu_ns: m.demand,
+                lost: m.timing.command_lost(seed, m.robot as u64, d.tag),
+            });
+            None
+        });
+    }
+
+    /// True if scenario robot `robot` reads the current tick's snapshot.
+    pub fn reads(&self, robot: usize) -> bool {
+        self.reads.get(robot).copied().unwrap_or(false)
+    }
+
+    /// The commands sent within the current tick, in the order they were.
+    pub fn sends(&self) -> &[CoreSend] {
+        &self.sends
     }
 }
 

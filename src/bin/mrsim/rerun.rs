@@ -41,10 +41,19 @@ pub fn main(args: &RerunArgs) -> Result<i32> {
              deterministic: the rerun may differ from the record there"
         );
     }
+    if !done.modelled.is_empty() {
+        println!(
+            "modelled counterfactual: the cores' model re-decides the timing of {} \
+             (another [world.cpus]); the other robots replay their recorded times",
+            mrsim_world::names::first_few(&done.modelled, 8)
+        );
+    }
     let what = if args.set.is_empty() {
-        "rerun"
+        "rerun (recorded times)"
+    } else if done.modelled.is_empty() {
+        "counterfactual (recorded times)"
     } else {
-        "counterfactual"
+        "modelled counterfactual"
     };
     println!(
         "{what} of {} in {}: {} ticks",

@@ -35,6 +35,7 @@ use mrsim_proto::{
 };
 use mrsim_runfolder::timing::{Status, TIMING_FILE, TIMING_PARQUET_FILE, TimingSink};
 use mrsim_runfolder::{FileError, METRICS_FILE, ROUTES_FILE, SCENARIO_FILE, TRAJECTORY_FILE};
+use mrsim_scenario::cores::Contention;
 use mrsim_scenario::timing::{Timing, s_to_ns};
 use mrsim_scenario::{MissPolicy, Mode};
 use mrsim_sys::sched::BelowAgents;
@@ -93,6 +94,12 @@ struct Timed {
     lockstep: bool,
     /// The run writes timing.csv: realtime, or some robot has a model.
     recorded: bool,
+    /// Lockstep under `[world.cpus]`: the cores' model, which decides for
+    /// the robots whose compute is CPU work when they read and send.
+    cores: Option<Contention>,
+    /// Per robot under the cores' model: when its answer to the current
+    /// tick is sent, ns after publication, if its call ends within the tick.
+    core_sent: Vec<Option<u64>>,
 }
 
 /// True if a run of `scenario` writes timing.csv: realtime, or some robot
@@ -112,7 +119,15 @@ impl Timed {
             substeps: w.substeps,
             lockstep: w.mode == Mode::Lockstep,
             recorded: records_calls(scenario),
+            // Checked by `run` before the loop is built.
+            cores: Contention::of(scenario).unwrap_or(None),
+            core_sent: vec![None; scenario.robots.len()],
         }
+    }
+
+    /// True if robot `i` is timed by the cores' model.
+    fn cored(&self, i: usize) -> bool {
+        self.cores.as_ref().is_some_and(|c| c.has(i))
     }
 
     /// True if robot `i`'s send times are judged here rather than by the
@@ -254,7 +269,9 @@ impl<'a> Loop<'a> {
     /// Records one planner call's row of the timing file (realtime runs
     /// and runs with a timing model), written by the recording thread.
     fn call(&mut self, robot: usize, cmd: &CommandMsg, status: Status) {
-        if !self.timed.recorded() {
+        // A robot under the cores' model has its rows from the model
+        // (`Loop::run_cores`).
+        if !self.timed.recorded() || self.timed.cored(robot) {
             return;
         }
         self.recording.rec.call(crate::record::Call {
@@ -265,7 +282,16 @@ impl<'a> Loop<'a> {
         });
     }
 
-    fn handle_command(&mut self, cmd: CommandMsg, received_ns: u64) {
+    fn handle_command(&mut self, mut cmd: CommandMsg, received_ns: u64) {
+        let cored = (cmd.robot_id as usize) < self.timed.core_sent.len()
+            && self.timed.cored(cmd.robot_id as usize);
+        if cored && cmd.tick == self.window.tick {
+            // The cores' model says when it was sent: within the tick, or
+            // after its deadline (its row is written when the model ends it).
+            let sent = self.timed.core_sent[cmd.robot_id as usize]
+                .unwrap_or(self.timed.deadline_ns.saturating_add(1));
+            cmd.sent_ns = self.window.published_ns.saturating_add(sent);
+        }
         match self.admission.command(&cmd, self.window) {
             Verdict::Accepted { robot, .. } if cmd.kind == command_kind::NONE => {
                 let _ = robot;
@@ -622,6 +648,9 @@ impl<'a> Loop<'a> {
             .rec
             .tick(tick, self.world.time(), self.world.states());
         self.window = self.schedule.window(tick, now_ns());
+        if self.timed.cores.is_some() {
+            self.run_cores(tick);
+        }
         let header = SnapshotHeader {
             tick,
             sim_time: self.world.time(),
@@ -692,6 +721,61 @@ impl<'a> Loop<'a> {
     }
 }
 
+impl Loop<'_> {
+    /// Lockstep under `[world.cpus]`: runs the cores' model over tick
+    /// `tick`, marks the robots that read its snapshot
+    /// ([`flags::PLANS`]), notes when their answers to it are sent, and
+    /// writes the rows of the calls the model ended within the tick.
+    /// `u64::MAX`: the run is over, the calls still running are run to
+    /// their end and written.
+    fn run_cores(&mut self, tick: u64) {
+        let Some(cores) = self.timed.cores.as_mut() else {
+            return;
+        };
+        let (states, scenario) = (self.world.states(), &self.world.scenario);
+        match tick {
+            u64::MAX => cores.drain(),
+            _ => cores.tick(tick, |robot| {
+                crate::sensed::count(states, robot, &scenario.robots[robot])
+            }),
+        }
+        self.timed.core_sent.fill(None);
+        let deadline = self.timed.deadline_ns;
+        for c in cores.sends() {
+            if c.tick == tick && c.sent_ns <= self.timed.dt_ns {
+                self.timed.core_sent[c.robot] = Some(c.sent_ns);
+            }
+            if self.timed.recorded {
+                let status = if c.lost {
+                    Status::Lost
+                } else if c.tick < tick || c.sent_ns > deadline {
+                    Status::Late
+                } else {
+                    Status::Accepted
+                };
+                self.recording.rec.call(crate::record::Call {
+                    tick: c.tick,
+                    robot: c.robot as u32,
+                    sent_ns: c.sent_ns,
+                    status,
+                });
+            }
+        }
+        for i in 0..self.timed.core_sent.len() {
+            if !cores.has(i) {
+                continue;
+            }
+            let f = self.world.states()[i].flags;
+            let f = if cores.reads(i) {
+                f | flags::PLANS
+            } else {
+                f & !flags::PLANS
+            };
+            self.world.set_flags(i, f);
+        }
+    }
+}
+
 /// Every body's name: the robots, then the obstacles.
 fn body_names(scenario: &mrsim_scenario::Scenario) -> Vec<String> {
     let robots = scenario.robots.iter().map(|r| r.name.clone());
@@ -739,6 +823,7 @@ fn run_with_clock(
     opts: RunOptions,
     clock: &dyn Clock,
 ) -> Result<RunOutcome, RunError> {
+    Contention::of(&world.scenario)?;
     let dir = opts.out_dir.clone();
     let out_err = |what| out_err(&dir, what);
     let scenario = world.scenario.clone();
@@ -818,6 +903,8 @@ fn run_with_clock(
     // Commands already on their way for the last tick (an agent that sent
     // two, a late one) are still counted and logged, not left unread.
     let _ = lp.drain_commands();
+    // The calls still on the cores end (late) after the last tick.
+    lp.run_cores(u64::MAX);
     // A termination request that came while the last tick ended the run
     // (its agents stopped with it) still makes the run an interrupted one.
     interrupted |= lp.link.termination_requested();

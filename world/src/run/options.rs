@@ -63,6 +63,10 @@ pub enum RunError {
         /// The I/O error.
         source: std::io::Error,
     },
+    /// The scenario's cores cannot be modelled (`[world.cpus]` with no
+    /// core, or `deadline` with a cpu robot without a reservation).
+    #[error(transparent)]
+    Cores(#[from] mrsim_scenario::cores::CoresError),
     /// Not every agent joined in time.
     #[error("agents for {missing} did not join within {secs:.0} s")]
     StartTimeout {

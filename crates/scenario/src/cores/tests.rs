@@ -338,3 +338,103 @@ fn deadline_without_a_reservation_is_refused() {
     let e = Cores::new(&cpus(2, Scheduler::Deadline), &[task("r9", 1)]).unwrap_err();
     assert_eq!(e, CoresError::NoReservation("r9".into()));
 }
+
+/// Three robots with `timing` under `cpus`.
+fn scene(cpus: &str, timing: &str) -> crate::Scenario {
+    let src = format!(
+        "[world]\ndt = 0.1\n\n[world.cpus]\n{cpus}\n\n[defaults.timing]\n{timing}\n\n\
+         [[robot]]\nname = \"a\"\nstart = [0, 0]\ngoal = [5, 0]\n\n\
+         [[robot]]\nname = \"b\"\nstart = [0, 2]\ngoal = [5, 2]\n\n\
+         [[robot]]\nname = \"c\"\nstart = [0, 4]\ngoal = [5, 4]\n"
+    );
+    crate::parse(&src, "t.toml").unwrap().scenario
+}
+
+#[test]
+fn with_a_core_per_robot_the_model_reads_and_sends_as_each_clerk_alone() {
+    let s = scene(
+        "count = 3",
+        "compute = { model = \"uniform\", min_ms = 20, max_ms = 260, cpu = true }\nsnapshot_loss = 0.1",
+    );
+    let mut model = Contention::of(&s).unwrap().unwrap();
+    let mut clerks: Vec<crate::timing::Clerk> = (0..3)
+        .map(|i| {
+            crate::timing::Clerk::new(
+                s.robots[i].timing.clone().unwrap(),
+                s.world.seed,
+                i as u64,
+                0.1,
+            )
+        })
+        .collect();
+    let mut expected = Vec::new();
+    let mut got = Vec::new();
+    let mut reads = 0;
+    for k in 0..300u64 {
+        model.tick(k, |_| 0);
+        got.extend(model.sends().iter().map(|c| (c.robot, c.tick, c.sent_ns)));
+        for (i, clerk) in clerks.iter_mut().enumerate() {
+            let plan = matches!(clerk.turn(k), crate::timing::Turn::Plan { .. });
+            assert_eq!(model.reads(i), plan, "robot {i} tick {k}");
+            if let crate::timing::Turn::Plan { start_ns } = clerk.turn(k) {
+                reads += 1;
+                expected.push((i, k, clerk.planned(k, start_ns, 0).sent_ns));
+            }
+        }
+    }
+    assert!(reads > 300, "{reads}");
+    // The same calls; the model lists them as they end.
+    got.sort_by_key(|&(i, k, _)| (i, k));
+    expected.sort_by_key(|&(i, k, _)| (i, k));
+    // Only each robot's last call may still run at the end.
+    let ended: Vec<_> = expected
+        .iter()
+        .copied()
+        .filter(|&(i, k, _)| got.iter().any(|&(j, t, _)| (j, t) == (i, k)))
+        .collect();
+    assert_eq!(got, ended);
+    assert!(expected.len() - got.len() <= 3);
+}
+
+#[test]
+fn three_robots_on_one_core_share_it_and_read_less_often_than_each_alone() {
+    let s = scene(
+        "count = 1\nscheduler = \"fair\"",
+        "compute = { ms = 60, cpu = true }",
+    );
+    let mut model = Contention::of(&s).unwrap().unwrap();
+    let mut sends = Vec::new();
+    for k in 0..4u64 {
+        model.tick(k, |_| 0);
+        sends.extend(
+            model
+                .sends()
+                .iter()
+                .map(|c| (c.robot, c.tick, c.sent_ns / MS)),
+        );
+    }
+    // Three jobs of 60 ms on one core: each at 1/3, all end at 180 ms, 80
+    // ms into tick 1: each reads tick 1 then, and the three end at 360 ms,
+    // 260 ms after tick 1's publication.
+    assert_eq!(
+        sends,
+        vec![
+            (0, 0, 180),
+            (1, 0, 180),
+            (2, 0, 180),
+            (0, 1, 260),
+            (1, 1, 260),
+            (2, 1, 260)
+        ]
+    );
+}
+
+#[test]
+fn a_scenario_without_cpus_or_without_cpu_robots_has_no_contention() {
+    let s = scene("count = 2", "compute = { ms = 60 }");
+    assert!(Contention::of(&s).unwrap().is_none());
+    let mut s = scene("count = 2", "compute = { ms = 60, cpu = true }");
+    assert!(Contention::of(&s).unwrap().is_some());
+    s.world.cpus = None;
+    assert!(Contention::of(&s).unwrap().is_none());
+}
