@@ -210,3 +210,63 @@ fn a_lockstep_sweep_of_robot_counts_for_each_scheduler_draws_a_line_per_schedule
         assert!(svg.contains(label), "no line {label} in the figure");
     }
 }
+
+/// The robots with deadline misses in a lockstep run of `file` under
+/// `scheduler`, and the summary's last line of the side by side.
+fn missing_in_model(file: &str, scheduler: &str) -> (Vec<String>, String) {
+    let tag = format!("vm-{scheduler}");
+    let dir = fresh_dir(&tag);
+    let set = format!("world.cpus.scheduler={scheduler}");
+    let out = run(
+        &root().join("scenarios/cores").join(file),
+        &dir,
+        &run_id(&tag),
+        &[
+            "--transport",
+            "inproc",
+            "--set",
+            &set,
+            "--set",
+            "world.duration=3",
+        ],
+    );
+    assert_ok(&out);
+    let m = metrics(&dir);
+    let missing = m["robots"]
+        .as_object()
+        .expect("robots")
+        .iter()
+        .filter(|(_, r)| r["deadline_misses"].as_u64().unwrap_or(0) > 0)
+        .map(|(n, _)| n.clone())
+        .collect();
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    let last = line_with(&text, "  robots predicted to miss").to_string();
+    (missing, last)
+}
+
+#[test]
+fn the_cores_model_misses_where_the_verdict_predicts_and_the_verdict_is_never_the_bolder() {
+    // Under deadline the reservation throttles the runaway alone.
+    let (missing, last) = missing_in_model("overrun.toml", "deadline");
+    assert_eq!(missing, ["runaway"], "{last}");
+    assert!(last.contains("matches 9 of 9"), "{last}");
+    // Under fifo the runaway holds a core and starves some of the others;
+    // every robot that misses in the model was predicted to.
+    let fifo = check(
+        "cores/overrun.toml",
+        &["--set", "world.cpus.scheduler=fifo"],
+    );
+    let predicted = line_with(&fifo, "predicted to miss: ").to_string();
+    let (missing, last) = missing_in_model("overrun.toml", "fifo");
+    assert!(missing.len() > 1, "{missing:?}");
+    for r in &missing {
+        assert!(
+            predicted.contains(r.as_str()),
+            "{r} missed, not predicted: {predicted}"
+        );
+    }
+    assert!(last.contains("robots predicted to miss 5"), "{last}");
+    // Twelve robots under fifo: the two lowest priorities starve.
+    let (missing, _) = missing_in_model("circle-12.toml", "fifo");
+    assert_eq!(missing, ["g10", "g11"]);
+}
