@@ -70,10 +70,8 @@ mod tests {
              sensing_range = 3.0\nfield_of_view_deg = 90\n",
             "t.toml",
         )
-        .map(|l| l.scenario);
-        let Ok(scenario) = scenario else {
-            panic!("{scenario:?}");
-        };
+        .unwrap()
+        .scenario;
         let spec = &scenario.robots[0];
         // At rest the heading is towards the goal (+x).
         let states = [
