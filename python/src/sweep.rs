@@ -31,6 +31,7 @@ pub fn sweep_jobs<'py>(
         mode: SweepMode::Lockstep,
         x: None,
         metrics: Vec::new(),
+        sched: Default::default(),
     };
     let checked = check(&plan).map_err(|e| match e.refused() {
         Some(i) => PyValueError::new_err(i.to_string()),

@@ -37,5 +37,6 @@ mod top;
 mod top_scale;
 mod transport;
 mod unicycle;
+mod verdict;
 mod zenoh;
 mod zhu_loh;

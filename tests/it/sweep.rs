@@ -430,7 +430,7 @@ fn a_timing_sweep_reports_the_miss_rate_and_draws_only_the_metrics_asked_for() {
 }
 
 /// The names of sweep.csv's metrics.
-const METRIC_NAMES: [&str; 23] = [
+const METRIC_NAMES: [&str; 24] = [
     "success_rate",
     "collisions_total",
     "collided",
@@ -454,4 +454,5 @@ const METRIC_NAMES: [&str; 23] = [
     "heading_change",
     "stuck_time",
     "miss_rate",
+    "predicted_missing",
 ];

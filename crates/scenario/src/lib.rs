@@ -33,6 +33,7 @@ mod overrides;
 mod raw;
 mod resolve;
 pub mod rng;
+pub mod schedulability;
 pub mod timing;
 mod types;
 

@@ -4,8 +4,9 @@
 use crate::exit::{EXIT_FAILED, EXIT_INTERRUPTED};
 use mrsim_runtime::Outcome;
 
-/// Prints `outcome` (the table unless `quiet`) and gives the exit status.
-pub fn print(outcome: &Outcome, quiet: bool) -> i32 {
+/// Prints `outcome` (the table unless `quiet`, then `beside`, the
+/// predicted and measured misses, if given) and gives the exit status.
+pub fn print(outcome: &Outcome, quiet: bool, beside: Option<&str>) -> i32 {
     match &outcome.diagnostics {
         Ok(s) if s.skipped > 0 => eprintln!(
             "note: diagnostics: {} unfinished or malformed lines left out",
@@ -34,6 +35,9 @@ pub fn print(outcome: &Outcome, quiet: bool) -> i32 {
     }
     if !quiet && let Some(m) = &outcome.metrics {
         print!("{}", crate::table::summary(m));
+        if let Some(b) = beside {
+            print!("{b}");
+        }
     }
     println!("run folder: {}", outcome.dir.display());
     if outcome.interrupted() {

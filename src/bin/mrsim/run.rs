@@ -79,6 +79,21 @@ pub fn main(args: &RunArgs) -> Result<i32> {
         _ => None,
     };
     let max_ticks = validated.scenario().max_ticks();
+    // With [world.cpus] or CPU robots: the task set and the verdict of the
+    // schedulability tests, printed as the run starts and set beside the
+    // measured misses after it.
+    let verdict = mrsim_scenario::schedulability::of_scenario(validated.scenario());
+    let periods: Vec<(String, u32)> = validated
+        .scenario()
+        .robots
+        .iter()
+        .map(|r| {
+            (
+                r.name.clone(),
+                r.timing.as_ref().map_or(1, |t| t.period_ticks.max(1)),
+            )
+        })
+        .collect();
     let prepared = mrsim_runtime::launch::prepare(
         validated,
         RunRequest {
@@ -99,6 +114,9 @@ pub fn main(args: &RunArgs) -> Result<i32> {
     .map_err(fail)?;
     if let Some(why) = &prepared.applied().rt_refused {
         eprintln!("warning: {why}");
+    }
+    if let (Some((set, v)), false) = (&verdict, args.quiet) {
+        print!("{}", mrsim_scenario::schedulability::render(set, v));
     }
     let ns = prepared.namespace().clone();
     let zenoh = prepared.zenoh_observer();
@@ -136,7 +154,13 @@ pub fn main(args: &RunArgs) -> Result<i32> {
             ),
         })
         .map_err(fail)?;
-    let status = crate::outcome::print(&outcome, args.quiet);
+    let beside = match (&verdict, &outcome.metrics, args.quiet) {
+        (Some((_, v)), Some(m), false) => {
+            Some(crate::table::predicted_and_measured(v, m, &periods))
+        }
+        _ => None,
+    };
+    let status = crate::outcome::print(&outcome, args.quiet, beside.as_deref());
     if let (Some(server), Some(feed)) = (server, feed) {
         // The world is gone: if the pump did not see the end, say so, and
         // serve a moment longer so that every open page shows it.

@@ -62,6 +62,10 @@ pub struct SweepArgs {
     /// sweep.csv's)
     #[arg(long, value_name = "METRIC,...", value_delimiter = ',')]
     pub metrics: Vec<String>,
+    /// The realtime runs' scheduling: --cpus LIST, --rt (as for `run`;
+    /// lockstep runs are not pinned).
+    #[command(flatten)]
+    pub sched: crate::cli::SchedArgs,
 }
 
 /// How a sweep's runs keep time.
@@ -111,6 +115,7 @@ pub fn main(args: &SweepArgs) -> Result<i32> {
         mode: args.mode.into(),
         x: args.x.clone(),
         metrics: args.metrics.clone(),
+        sched: (&args.sched).into(),
     })
     .map_err(fail)?;
     let (axes, combos, jobs, dir) = (&sweep.axes, &sweep.combos, &sweep.jobs, &sweep.dir);
@@ -207,14 +212,23 @@ pub fn main(args: &SweepArgs) -> Result<i32> {
     }
     summary.push_str(&sheader.join(","));
     summary.push('\n');
-    let shown = [
+    // The miss rate joins the table when some run missed a deadline (a
+    // timing model, contended cores, a realtime run that fell behind).
+    let missed = results.iter().any(|r| {
+        r.as_ref()
+            .is_ok_and(|m| m.miss_rate.is_some_and(|x| x > 0.0))
+    });
+    let shown: Vec<&str> = [
         "success_rate",
         "collided",
         "collisions_total",
         "makespan",
         "path_length_ratio",
         "min_clearance",
-    ];
+    ]
+    .into_iter()
+    .chain(missed.then_some("miss_rate"))
+    .collect();
     let mut table: Vec<Vec<String>> = Vec::new();
     let mut theader: Vec<String> = axes.iter().map(|(k, _)| k.clone()).collect();
     theader.push("mode".into());

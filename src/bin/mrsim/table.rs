@@ -144,6 +144,24 @@ fn what_happened(m: &RunMetrics) -> Vec<String> {
     lines
 }
 
+/// The verdict's predicted misses beside the run's measured ones, per
+/// robot: its `deadline_misses` of the calls its period plans (`periods`:
+/// each robot's `period_ticks`).
+pub fn predicted_and_measured(
+    v: &mrsim_scenario::schedulability::Verdict,
+    m: &RunMetrics,
+    periods: &[(String, u32)],
+) -> String {
+    let measured: Vec<(String, u64, u64)> = periods
+        .iter()
+        .map(|(name, k)| {
+            let misses = m.robots.get(name).map_or(0, |r| r.deadline_misses);
+            (name.clone(), misses, m.ticks.div_ceil(u64::from(*k)))
+        })
+        .collect();
+    mrsim_scenario::schedulability::side_by_side(v, &measured)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -93,7 +93,7 @@ pub fn main(args: &WorldArgs) -> Result<i32> {
     })
     .map_err(fail)?;
     if let Some(finished) = &ended.finished {
-        crate::outcome::print(finished, false);
+        crate::outcome::print(finished, false, None);
     }
     Ok(if ended.interrupted {
         EXIT_INTERRUPTED

@@ -174,6 +174,7 @@ pub(super) fn metric_axis(name: &str, length: &str) -> (String, bool) {
         "agents_lost" => ("agents lost per run".into(), false),
         "ticks" => ("ticks per run".into(), false),
         "miss_rate" => ("deadline misses per robot and tick".into(), true),
+        "predicted_missing" => ("robots predicted to miss (fraction)".into(), true),
         "spl" => ("success weighted by path length".into(), true),
         "deadlocks" => ("deadlocks per run".into(), false),
         "time_not_moving" | "time_intimate" | "time_personal" | "time_social" | "stuck_time" => {

@@ -36,6 +36,10 @@ pub struct SweepRow {
     /// Deadline misses per robot and tick (lockstep: those its timing
     /// model decides; realtime: those measured).
     pub miss_rate: Option<f64>,
+    /// The fraction of robots the schedulability verdict predicts may
+    /// miss deadlines (`mrsim_scenario::schedulability`), for a scenario
+    /// with `[world.cpus]` or CPU robots.
+    pub predicted_missing: Option<f64>,
 }
 
 /// How a per-robot metric is read from a robot's entry of metrics.json.
@@ -61,7 +65,7 @@ pub const ROBOT_MEANS: [RobotColumn; 9] = [
 pub type Column = (&'static str, fn(&SweepRow) -> Option<f64>);
 
 /// The metric columns of sweep.csv, in order, with how to get each.
-pub const METRICS: [Column; 23] = [
+pub const METRICS: [Column; 24] = [
     ("success_rate", |m| Some(m.success_rate)),
     ("collisions_total", |m| Some(m.collisions_total)),
     // 1 if the run had any collision: its mean is the collision rate.
@@ -88,6 +92,7 @@ pub const METRICS: [Column; 23] = [
     ("heading_change", |m| m.robot_means[7]),
     ("stuck_time", |m| m.robot_means[8]),
     ("miss_rate", |m| m.miss_rate),
+    ("predicted_missing", |m| m.predicted_missing),
 ];
 
 /// A run folder's file that could not be read, in words.
@@ -146,8 +151,11 @@ pub fn read_run(dir: &Path) -> Result<SweepRow, String> {
             .sum::<f64>()
             / slots
     });
+    let predicted_missing = mrsim_scenario::schedulability::of_scenario(&sc)
+        .map(|(set, v)| v.predicted_misses().len() as f64 / set.tasks.len().max(1) as f64);
     Ok(SweepRow {
         miss_rate,
+        predicted_missing,
         spl: m.spl,
         flowtime: m.flowtime.flatten(),
         collisions_per_robot_km: m.collisions_per_robot_km.flatten(),

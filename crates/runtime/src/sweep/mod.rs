@@ -65,6 +65,10 @@ pub struct SweepPlan {
     /// The metrics the figure draws, in this order (empty: every one of
     /// [`METRICS`]).
     pub metrics: Vec<String>,
+    /// How the realtime runs are scheduled (`--cpus LIST`, `--rt`, given
+    /// to each realtime run; lockstep runs are not pinned, since the model
+    /// decides their timing).
+    pub sched: crate::sched::Sched,
 }
 
 /// How a sweep's runs keep time.
@@ -426,6 +430,14 @@ impl Sweep {
             .arg(&out);
         for s in sets(&self.axes, &self.combos[job.combo], job.seed) {
             cmd.arg("--set").arg(s);
+        }
+        if job.mode == Mode::Realtime {
+            if let Some(cpus) = &self.plan.sched.cpus {
+                cmd.args(["--cpus", cpus]);
+            }
+            if self.plan.sched.rt {
+                cmd.arg("--rt");
+            }
         }
         let o = cmd
             .stdin(Stdio::null())
