@@ -16,13 +16,22 @@
 //! The trajectory is `trajectory.csv` ([`csv`] reads its rows),
 //! `trajectory.parquet` ([`trajectory`] has its schema, a writer and a
 //! reader) or absent, as the scenario's `[output]` says. What timing decided per planner call is `timing.csv`
-//! ([`timing`]).
+//! ([`timing`]); encounters.csv and scan.csv have their readers in
+//! [`encounters`] and [`scan`].
+//!
+//! The files written while the run goes on are written in whole rows and
+//! flushed on one clock ([`stream`]); every reader here accepts a torn last
+//! row of a cut run, leaves it out and says so ([`stream::Cut`]), and
+//! refuses any other bad line with the file and line.
 #![warn(missing_docs)]
 
 pub mod bench;
 pub mod csv;
+pub mod encounters;
 pub mod metrics;
 mod parquet_out;
+pub mod scan;
+pub mod stream;
 pub mod timing;
 pub mod trajectory;
 pub mod usage;
@@ -39,6 +48,16 @@ pub const TRAJECTORY_FILE: &str = "trajectory.csv";
 /// The same rows as [`TRAJECTORY_FILE`], typed, as Parquet (`[output]
 /// trajectory = "parquet"`; schema in [`trajectory`]).
 pub const TRAJECTORY_PARQUET_FILE: &str = "trajectory.parquet";
+/// [`TRAJECTORY_PARQUET_FILE`]'s rows in [`TRAJECTORY_FILE`]'s format while
+/// the run lives, removed once the Parquet footer is written: what a cut
+/// run's trajectory is read from.
+pub const TRAJECTORY_JOURNAL_FILE: &str = "trajectory.journal.csv";
+/// The laser scans of the robots that record theirs ([`scan`]).
+pub const SCAN_FILE: &str = "scan.csv";
+/// `mrsim ros2`'s message counts per robot.
+pub const ROS2_STATS_FILE: &str = "ros2.json";
+/// The run as an MCAP file for Foxglove (`mrsim export`).
+pub const MCAP_FILE: &str = "run.mcap";
 /// One JSON object per line: joins, losses, contacts, goals, rejections.
 pub const EVENTS_FILE: &str = "events.jsonl";
 /// How the run's scenario was given ([`SourceDoc`]): what `mrsim rerun`
@@ -51,6 +70,8 @@ pub const ENCOUNTERS_FILE: &str = "encounters.csv";
 pub const METRICS_FILE: &str = "metrics.json";
 /// The planners' per-tick diagnostics (only when some planner reported any).
 pub const DIAGNOSTICS_FILE: &str = "diagnostics.csv";
+/// [`DIAGNOSTICS_FILE`]'s header.
+pub const DIAGNOSTICS_HEADER: &str = "tick,time,robot,name,value";
 /// The routes of the robots with `route = "shortest"`, as planned at the
 /// start: `robot,seq,x,y`, one row a point, start to goal.
 pub const ROUTES_FILE: &str = "routes.csv";
@@ -144,13 +165,24 @@ pub enum FileError {
         /// The parse (or encoding) error.
         source: serde_json::Error,
     },
+    /// A line of a CSV file is not a row of its schema (a torn last row of
+    /// a cut run is not this: it is left out and reported).
+    #[error("{}:{line}: {reason}", path.display())]
+    Row {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line (the header is line 1).
+        line: usize,
+        /// What is wrong with it.
+        reason: String,
+    },
 }
 
 impl FileError {
     /// The file concerned.
     pub fn path(&self) -> &Path {
         match self {
-            Self::Io { path, .. } | Self::Json { path, .. } => path,
+            Self::Io { path, .. } | Self::Json { path, .. } | Self::Row { path, .. } => path,
         }
     }
 }
