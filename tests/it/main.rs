@@ -12,6 +12,7 @@
 mod common;
 
 mod bench;
+mod cut;
 mod designated_path;
 mod faults;
 mod golden;

@@ -6,7 +6,7 @@
 
 pub use crate::metrics::{ENCOUNTERS_HEADER, Encounter};
 
-use crate::FileError;
+use crate::RowsError;
 use crate::csv::{Columns, CsvError, numbered_lines};
 use crate::stream::{Cut, read_whole_rows};
 use std::path::Path;
@@ -70,16 +70,16 @@ pub fn parse_encounters(text: &str) -> Result<Vec<Encounter>, CsvError> {
 
 /// Reads `dir/encounters.csv`: its rows (none if the file is absent) and
 /// the cut, if its last row is torn.
-pub fn read_encounters(dir: &Path) -> Result<(Vec<Encounter>, Option<Cut>), FileError> {
+pub fn read_encounters(dir: &Path) -> Result<(Vec<Encounter>, Option<Cut>), RowsError> {
     let path = dir.join(crate::ENCOUNTERS_FILE);
-    let Some((text, cut)) = read_whole_rows(&path).map_err(|source| FileError::Io {
+    let Some((text, cut)) = read_whole_rows(&path).map_err(|source| RowsError::Io {
         path: path.clone(),
         source,
     })?
     else {
         return Ok((Vec::new(), None));
     };
-    let rows = parse_encounters(&text).map_err(|e| FileError::Row {
+    let rows = parse_encounters(&text).map_err(|e| RowsError::Row {
         path,
         line: e.line,
         reason: e.reason,

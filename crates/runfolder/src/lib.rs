@@ -32,6 +32,7 @@ pub mod metrics;
 mod parquet_out;
 pub mod scan;
 pub mod stream;
+pub mod sweep;
 pub mod timing;
 pub mod trajectory;
 pub mod usage;
@@ -110,11 +111,21 @@ pub const DIAGNOSTICS_PART_PREFIX: &str = "diagnostics-";
 /// Suffix of an agent's diagnostics part file.
 pub const DIAGNOSTICS_PART_SUFFIX: &str = ".part";
 
-/// Name of the diagnostics part file of robot `robot_id` written by process
-/// `pid` (one per process, so a restarted agent does not overwrite its
-/// predecessor's values).
-pub fn diagnostics_part_file(robot_id: usize, pid: u32) -> String {
-    format!("{DIAGNOSTICS_PART_PREFIX}{robot_id}-{pid}{DIAGNOSTICS_PART_SUFFIX}")
+/// Name of the diagnostics part file written by process `pid` (one per
+/// process, so an agent that restarts does not overwrite its predecessor's
+/// values). Each of its lines is a row of [`DIAGNOSTICS_FILE`] preceded by
+/// the robot's id (`id,tick,time,robot,name,value`).
+pub fn diagnostics_part_file(pid: u32) -> String {
+    format!("{DIAGNOSTICS_PART_PREFIX}{pid}{DIAGNOSTICS_PART_SUFFIX}")
+}
+
+/// The process id of a diagnostics part file's name, or `None` for any
+/// other file.
+pub fn diagnostics_part_pid(name: &str) -> Option<u32> {
+    name.strip_prefix(DIAGNOSTICS_PART_PREFIX)?
+        .strip_suffix(DIAGNOSTICS_PART_SUFFIX)?
+        .parse()
+        .ok()
 }
 
 /// Name of the file in which the agent of `robot` leaves its usage for the
@@ -165,8 +176,22 @@ pub enum FileError {
         /// The parse (or encoding) error.
         source: serde_json::Error,
     },
-    /// A line of a CSV file is not a row of its schema (a torn last row of
-    /// a cut run is not this: it is left out and reported).
+}
+
+/// Why a streamed CSV file of the run folder (encounters.csv, scan.csv)
+/// could not be read.
+#[derive(Debug, thiserror::Error)]
+pub enum RowsError {
+    /// The file could not be read.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// A line is not a row of the file's schema (a torn last row of a cut
+    /// run is not this: it is left out and reported).
     #[error("{}:{line}: {reason}", path.display())]
     Row {
         /// The file.
@@ -182,7 +207,7 @@ impl FileError {
     /// The file concerned.
     pub fn path(&self) -> &Path {
         match self {
-            Self::Io { path, .. } | Self::Json { path, .. } | Self::Row { path, .. } => path,
+            Self::Io { path, .. } | Self::Json { path, .. } => path,
         }
     }
 }

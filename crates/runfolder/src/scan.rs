@@ -8,7 +8,7 @@
 //! nothing within `range_max`. Robots with fewer beams than the most leave
 //! the last fields empty.
 
-use crate::FileError;
+use crate::RowsError;
 use crate::stream::{Cut, read_whole_rows};
 use std::path::Path;
 
@@ -95,9 +95,9 @@ pub fn parse_scans(text: &str) -> Result<Vec<ScanRow>, (usize, String)> {
 
 /// Reads `dir/scan.csv`: `None` without the file, else its rows and the
 /// cut, if its last row is torn.
-pub fn read_scans(dir: &Path) -> Result<Option<(Vec<ScanRow>, Option<Cut>)>, FileError> {
+pub fn read_scans(dir: &Path) -> Result<Option<(Vec<ScanRow>, Option<Cut>)>, RowsError> {
     let path = dir.join(crate::SCAN_FILE);
-    let Some((text, cut)) = read_whole_rows(&path).map_err(|source| FileError::Io {
+    let Some((text, cut)) = read_whole_rows(&path).map_err(|source| RowsError::Io {
         path: path.clone(),
         source,
     })?
@@ -105,7 +105,7 @@ pub fn read_scans(dir: &Path) -> Result<Option<(Vec<ScanRow>, Option<Cut>)>, Fil
         return Ok(None);
     };
     let rows =
-        parse_scans(&text).map_err(|(line, reason)| FileError::Row { path, line, reason })?;
+        parse_scans(&text).map_err(|(line, reason)| RowsError::Row { path, line, reason })?;
     Ok(Some((rows, cut)))
 }
 

@@ -102,7 +102,9 @@ impl RowFile {
         }
         let r = self.file.write_all(&self.buf);
         self.buf.clear();
-        if self.buf.capacity() > 4 * ROW_FILE_BUFFER {
+        // Room for one big tick (100,000 robots: 6 MB) is kept; more, left
+        // by a burst, is given back.
+        if self.buf.capacity() > 64 * ROW_FILE_BUFFER {
             self.buf.shrink_to(ROW_FILE_BUFFER);
         }
         r

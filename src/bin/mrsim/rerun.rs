@@ -41,6 +41,17 @@ pub fn main(args: &RerunArgs) -> Result<i32> {
              deterministic: the rerun may differ from the record there"
         );
     }
+    if let Some(cut) = &done.cut {
+        println!(
+            "note: {} was cut (its world killed before the end): rerun up to tick {}, its \
+             trajectory's last whole tick",
+            args.run.display(),
+            cut.tick
+        );
+        for c in &cut.files {
+            println!("note: {c}");
+        }
+    }
     let what = if args.set.is_empty() {
         "rerun"
     } else {
