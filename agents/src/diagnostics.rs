@@ -10,9 +10,11 @@
 //! robot, so 100,000 robots in one process create one file and keep one
 //! open, not 100,000. The values are handed over after the command has been
 //! sent, so the control loop never waits on the disk, in batches per robot
-//! (at most [`BATCH_ROWS`] rows or about half a second old); the thread
-//! writes whatever has come and then flushes, so a killed agent loses at
-//! most its last half second. A planner that reports nothing leaves no file.
+//! (at most [`BATCH_ROWS`] rows, about half a second old, or at the first
+//! tick of a new simulated second); the thread writes whatever has come, in
+//! whole lines ([`RowFile`]), and then flushes, so a killed agent loses at
+//! most its last half second or simulated second, whichever is shorter. A
+//! planner that reports nothing leaves no file.
 //!
 //! When every agent has ended, [`merge`] joins the part files into
 //! `diagnostics.csv` (`tick,time,robot,name,value`), sorted by tick, then by
@@ -29,6 +31,8 @@
 //! reader parses and the plots leave out.
 
 use mrsim_planners::{Diagnostic, Planner};
+use mrsim_runfolder::stream::{FlushClock, RowFile};
+pub use mrsim_runfolder::{DIAGNOSTICS_FILE, DIAGNOSTICS_HEADER as HEADER};
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 use std::fs::File;
@@ -38,28 +42,8 @@ use std::sync::Arc;
 use std::sync::mpsc::{Receiver, Sender, channel};
 use std::time::{Duration, Instant};
 
-/// The merged file's name in a run folder.
-pub const DIAGNOSTICS_FILE: &str = "diagnostics.csv";
-/// Its header.
-pub const HEADER: &str = "tick,time,robot,name,value";
-const PART_PREFIX: &str = "diagnostics-";
-const PART_SUFFIX: &str = ".part";
-
-/// Name of the part file written by process `pid` (one per process, so an
-/// agent that restarts does not overwrite its predecessor's values). Each
-/// of its lines is a row of `diagnostics.csv` preceded by the robot's id
-/// (`id,tick,time,robot,name,value`).
-pub fn part_file_name(pid: u32) -> String {
-    format!("{PART_PREFIX}{pid}{PART_SUFFIX}")
-}
-
-/// The process id of a part file's name, or `None` for any other file.
-fn part_file_pid(name: &str) -> Option<u32> {
-    name.strip_prefix(PART_PREFIX)?
-        .strip_suffix(PART_SUFFIX)?
-        .parse()
-        .ok()
-}
+pub use mrsim_runfolder::diagnostics_part_file as part_file_name;
+use mrsim_runfolder::diagnostics_part_pid as part_file_pid;
 
 /// One tick's values of a robot: those of its batch's flat list of values
 /// after the previous row's, up to `end`.
@@ -193,7 +177,12 @@ impl DiagnosticsWriter {
             time,
             end: self.values.len(),
         });
-        if self.batch.len() >= BATCH_ROWS || self.batch_started.elapsed() >= BATCH_AGE {
+        let new_second = self
+            .batch
+            .first()
+            .is_some_and(|first| FlushClock::second_of(time) > FlushClock::second_of(first.time));
+        if self.batch.len() >= BATCH_ROWS || new_second || self.batch_started.elapsed() >= BATCH_AGE
+        {
             self.hand_over();
         }
     }
@@ -254,7 +243,7 @@ impl Drop for DiagnosticsWriter {
 
 /// A part file the writer thread has open, and the robots writing to it.
 struct Open {
-    file: BufWriter<File>,
+    file: RowFile,
     robots: usize,
 }
 
@@ -293,18 +282,12 @@ fn write_jobs(rx: Receiver<Job>) {
                         std::collections::hash_map::Entry::Occupied(o) => o.into_mut(),
                         std::collections::hash_map::Entry::Vacant(v) => {
                             let file = if created.insert(path.clone()) {
-                                File::create(&path)
+                                RowFile::create(&path, "")
                             } else {
-                                std::fs::OpenOptions::new()
-                                    .append(true)
-                                    .create(true)
-                                    .open(&path)
+                                RowFile::append(&path)
                             };
                             match file {
-                                Ok(f) => v.insert(Open {
-                                    file: BufWriter::with_capacity(1 << 16, f),
-                                    robots: 0,
-                                }),
+                                Ok(file) => v.insert(Open { file, robots: 0 }),
                                 Err(e) => {
                                     fail(&mut failed, &path, e);
                                     continue;
@@ -370,12 +353,7 @@ impl Batch<'_> {
     /// `format!` where that is exact: the integers, and a value that is a
     /// whole number (most are counts); the time with six decimals is
     /// formatted once per tick (`times`).
-    fn write(
-        &self,
-        w: &mut BufWriter<File>,
-        line: &mut Vec<u8>,
-        times: &mut Times,
-    ) -> std::io::Result<()> {
+    fn write(&self, w: &mut RowFile, line: &mut Vec<u8>, times: &mut Times) -> std::io::Result<()> {
         let mut first = 0;
         for row in self.rows {
             // The row's start (`id,tick,time,robot,`) is written once for

@@ -57,7 +57,7 @@ def main():
             raise SystemExit(f"mrsim run failed: {err}")
     finally:
         proc.kill()
-    robots = json.loads((out / "metrics.json").read_text())["robots"]
+    robots = json.loads((out / mrsim.FILES["metrics"]).read_text())["robots"]
     py = robots["g00"]["latency_us"]
     rust = [r["latency_us"] for name, r in robots.items() if name != "g00"]
     med = {q: float(np.median([r[q] for r in rust])) for q in ("p50", "p99")}

@@ -13,22 +13,28 @@ navigation environments.
 - :class:`mrsim.pettingzoo.ParallelNavEnv`: every robot a learning agent
   (PettingZoo parallel API).
 - :class:`mrsim.Sim`: the stepping engine the environments are built on.
+- :func:`mrsim.load_rows`: a run folder's CSV or JSONL file, read up to a
+  cut run's torn last row (reported) and refusing any other bad row.
 """
 
 import json
 from importlib import resources as _resources
 from pathlib import Path
-from typing import NamedTuple
+from typing import NamedTuple, Optional
 
-from ._mrsim import Agent, Observation, PlannerError, Sim, rerun_inproc, run_inproc
+from ._mrsim import FILES, Agent, Observation, PlannerError, Sim, rerun_inproc, run_inproc
+from ._folder import Rows, load_rows
 
 __all__ = [
+    "FILES",
     "Agent",
     "Observation",
     "PlannerError",
     "Rerun",
+    "Rows",
     "Run",
     "Sim",
+    "load_rows",
     "rerun",
     "run",
     "scenario_path",
@@ -78,7 +84,7 @@ def run(scenario=None, planners=None, out=None, set=(), render=False, plan_timeo
         plan_timeout,
     )
     folder = Path(folder)
-    metrics = json.loads((folder / "metrics.json").read_text())
+    metrics = json.loads((folder / FILES["metrics"]).read_text())
     return Run(metrics, folder)
 
 
@@ -93,6 +99,10 @@ class Rerun(NamedTuple):
     """``(robot, planner)`` pairs whose planner is not built in (a Python
     planner, say): not known to be deterministic, the reason the rerun may
     differ from the recorded run."""
+    cut: Optional[str] = None
+    """``None`` for a recorded run that ended; for one that was cut (its
+    world killed), where the rerun stopped (the trajectory's last whole
+    tick) and which files end at the cut."""
 
 
 def rerun(run_dir, out=None, set=(), planners=None, render=False) -> Rerun:
@@ -108,7 +118,7 @@ def rerun(run_dir, out=None, set=(), planners=None, render=False) -> Rerun:
     is not a recorded run, or whose scenario file no longer gives the
     scenario it recorded, raises ``ValueError``.
     """
-    folder, unsure = rerun_inproc(
+    folder, unsure, cut = rerun_inproc(
         str(run_dir),
         None if out is None else str(out),
         list(set),
@@ -116,8 +126,8 @@ def rerun(run_dir, out=None, set=(), planners=None, render=False) -> Rerun:
         render,
     )
     folder = Path(folder)
-    metrics = json.loads((folder / "metrics.json").read_text())
-    return Rerun(metrics, folder, [tuple(p) for p in unsure])
+    metrics = json.loads((folder / FILES["metrics"]).read_text())
+    return Rerun(metrics, folder, [tuple(p) for p in unsure], cut)
 
 
 from ._sweep import sweep  # noqa: E402

@@ -318,5 +318,41 @@ fn _mrsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run::run_inproc, m)?)?;
     m.add_function(wrap_pyfunction!(run::rerun_inproc, m)?)?;
     m.add("PlannerError", m.py().get_type::<run::PlannerError>())?;
+    m.add("FILES", files(m.py())?)?;
     Ok(())
+}
+
+/// The run folder's file names by what they hold, from the one crate that
+/// names them (`mrsim_runfolder`): Python code names a file through it.
+fn files(py: Python<'_>) -> PyResult<Bound<'_, pyo3::types::PyDict>> {
+    use mrsim_runfolder as f;
+    let d = pyo3::types::PyDict::new(py);
+    for (what, name) in [
+        ("scenario", f::SCENARIO_FILE),
+        ("source", f::SOURCE_FILE),
+        ("trajectory", f::TRAJECTORY_FILE),
+        ("trajectory_parquet", f::TRAJECTORY_PARQUET_FILE),
+        ("trajectory_journal", f::TRAJECTORY_JOURNAL_FILE),
+        ("timing", f::timing::TIMING_FILE),
+        ("timing_parquet", f::timing::TIMING_PARQUET_FILE),
+        ("timing_journal", f::timing::TIMING_JOURNAL_FILE),
+        ("events", f::EVENTS_FILE),
+        ("encounters", f::ENCOUNTERS_FILE),
+        ("scan", f::SCAN_FILE),
+        ("diagnostics", f::DIAGNOSTICS_FILE),
+        ("routes", f::ROUTES_FILE),
+        ("metrics", f::METRICS_FILE),
+        ("usage", f::USAGE_FILE),
+        ("ros2_stats", f::ROS2_STATS_FILE),
+        ("mcap", f::MCAP_FILE),
+        ("replay", f::REPLAY_FILE),
+        ("plot_svg", f::PLOT_SVG_FILE),
+        ("plot_png", f::PLOT_PNG_FILE),
+        ("sweep", f::SWEEP_FILE),
+        ("summary", f::SUMMARY_FILE),
+        ("allowable", f::ALLOWABLE_FILE),
+    ] {
+        d.set_item(what, name)?;
+    }
+    Ok(d)
 }

@@ -130,7 +130,8 @@ pub fn run_inproc(
 /// Reruns the recorded run folder `run` in this process in lockstep with
 /// the timing it recorded (`mrsim rerun`); returns the rerun's folder and
 /// the robots (name, planner) whose planner is not built in: not known to
-/// be deterministic, the reason a replay may differ.
+/// be deterministic, the reason a replay may differ; and, for a run that
+/// was cut, where the rerun stopped and why (`None` for a run that ended).
 #[pyfunction]
 #[pyo3(signature = (run, out=None, set=Vec::new(), planners=None, render=false))]
 pub fn rerun_inproc(
@@ -140,7 +141,7 @@ pub fn rerun_inproc(
     set: Vec<String>,
     planners: Option<Bound<'_, PyDict>>,
     render: bool,
-) -> PyResult<(String, Vec<(String, String)>)> {
+) -> PyResult<(String, Vec<(String, String)>, Option<String>)> {
     let req = mrsim_runtime::rerun::Rerun {
         run,
         out,
@@ -154,9 +155,17 @@ pub fn rerun_inproc(
             mrsim_runtime::rerun::RerunError::Invalid(i) => PyValueError::new_err(i.to_string()),
             mrsim_runtime::rerun::RerunError::Run(e) => run_error(py, e),
         })?;
+    let cut = done.cut.map(|c| {
+        let mut text = format!("the run was cut: rerun up to tick {}", c.tick);
+        for f in &c.files {
+            text.push_str(&format!("; {f}"));
+        }
+        text
+    });
     Ok((
         done.result.dir.to_string_lossy().into_owned(),
         done.not_deterministic,
+        cut,
     ))
 }
 

@@ -57,7 +57,7 @@ fn homing_robots_head_on_in_a_corridor_deadlock_and_the_summary_says_so() {
     }
     // The heads met head-on and neither gave way (homing pushes on).
     let text = std::fs::read_to_string(dir.join("encounters.csv")).expect("encounters.csv");
-    let rows = mrsim_runfolder::metrics::parse_encounters(&text);
+    let rows = mrsim_runfolder::encounters::parse_encounters(&text).expect("encounters.csv reads");
     let heads = rows
         .iter()
         .find(|e| e.a == "l0" && e.b == "r0")
@@ -110,7 +110,7 @@ goal = [-5.0, 0.75]
     }
     assert!(m["makespan"].as_f64().is_some() && m["flowtime"].as_f64().is_some());
     let text = std::fs::read_to_string(out.join("encounters.csv")).expect("encounters.csv");
-    let rows = mrsim_runfolder::metrics::parse_encounters(&text);
+    let rows = mrsim_runfolder::encounters::parse_encounters(&text).expect("encounters.csv reads");
     assert_eq!(rows.len(), 1, "{text}");
     assert_eq!(rows[0].kind, "head-on");
 }

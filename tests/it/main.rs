@@ -14,6 +14,7 @@ mod common;
 mod bench;
 mod cores;
 mod cores_real;
+mod cut;
 mod designated_path;
 mod faults;
 mod golden;

@@ -401,19 +401,6 @@ fn wrap(a: f64) -> f64 {
     if w > std::f64::consts::PI { w - t } else { w }
 }
 
-/// encounters.csv's rows for `encounters`, each ending in a newline.
-pub fn encounter_rows(encounters: &[Encounter]) -> String {
-    let mut out = String::new();
-    for e in encounters {
-        let ttc = e.min_ttc.map(|t| format!("{t:.6}")).unwrap_or_default();
-        out.push_str(&format!(
-            "{},{},{},{},{:.6},{},{},{}\n",
-            e.a, e.b, e.start_tick, e.end_tick, e.min_gap, ttc, e.kind, e.gave_way
-        ));
-    }
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

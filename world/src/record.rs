@@ -1,13 +1,19 @@
-//! Recording off the tick loop: the trajectory and events.jsonl are written
-//! by their own thread, fed through a crossbeam channel, flushed about once
-//! a second (also when no tick comes), so a crash loses at most the last
-//! second and the tick loop never waits on the disk. A tick's rows and an
-//! event's line are written in one piece, so what reaches the disk ends
-//! with a whole tick and a whole line (no torn rows after a crash).
+//! Recording off the tick loop: the trajectory, events.jsonl, timing.csv,
+//! scan.csv and encounters.csv are written by their own thread, fed
+//! through a crossbeam channel, so the tick loop never waits on the disk.
+//! Every file is a [`RowFile`]: rows gather in memory, whole, and the
+//! thread puts all the files on the disk together (timing, events,
+//! encounters, scans, then the trajectory) at the first tick of every
+//! simulated second, after [`FLUSH_WALL`] less [`BATCH_AGE`] of wall time
+//! (also when no tick comes), and when a buffer is full; so a process
+//! killed loses at most the rows of the last simulated second or wall
+//! second, whichever is shorter, and never leaves a partial row but one
+//! cut inside the kernel's `write` (which the readers leave out).
 //!
 //! Ticks go to the thread in batches of up to [`BATCH_TICKS`] (or whatever
-//! is pending after [`BATCH_AGE`]), so the loop does not pay a futex wake
-//! of the thread each tick. Batch buffers are returned to the loop for reuse.
+//! is pending after [`BATCH_AGE`], or at once at the first tick of a
+//! simulated second), so the loop does not pay a futex wake of the thread
+//! each tick. Batch buffers are returned to the loop for reuse.
 //!
 //! The trajectory is trajectory.csv, trajectory.parquet or nothing, of
 //! every tick or every K-th (`[output]`); encounters.csv gets each
@@ -17,19 +23,19 @@
 //! it writes ([`crate::tracking`]) and hands them back at the end.
 
 use crate::batch::{Batch, Batcher};
-use crate::interaction::encounter_rows;
 use crate::tracking::Tracker;
 use crossbeam::channel::{RecvTimeoutError, bounded, unbounded};
 use mrsim_proto::{BodyState, body_kind};
+use mrsim_runfolder::encounters::{ENCOUNTERS_HEADER, rows as encounter_rows};
+use mrsim_runfolder::stream::{FLUSH_WALL, FlushClock, RowFile};
 use mrsim_runfolder::timing::{Status, TimingSink};
 use mrsim_runfolder::trajectory::{BodyCells, ParquetTrajectoryWriter};
-use mrsim_runfolder::{TRAJECTORY_FILE, TRAJECTORY_PARQUET_FILE};
+use mrsim_runfolder::{TRAJECTORY_FILE, TRAJECTORY_JOURNAL_FILE, TRAJECTORY_PARQUET_FILE};
 use mrsim_scenario::{OutputConfig, TrajectoryFormat};
-use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::Write;
 use std::path::Path;
 use std::thread::JoinHandle;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// Ticks sent to the thread at once, at most.
 pub const BATCH_TICKS: usize = 16;
@@ -110,13 +116,17 @@ impl Extras {
 pub struct Recorder {
     batches: Batcher<Ticks, Msg>,
     thread: Option<JoinHandle<std::io::Result<Tracker>>>,
+    /// The simulated second of the last tick queued.
+    second: i64,
 }
 
 /// Where the trajectory's rows go (`[output] trajectory`).
 enum Sink {
     /// trajectory.csv; `true`: with a `theta` column.
-    Csv(BufWriter<File>, bool),
-    Parquet(Box<ParquetTrajectoryWriter>),
+    Csv(RowFile, bool),
+    /// trajectory.parquet, and its journal (trajectory.csv's rows while
+    /// the run lives, removed once the footer is written).
+    Parquet(Box<ParquetTrajectoryWriter>, RowFile, bool),
     None,
 }
 
@@ -127,24 +137,27 @@ impl Sink {
     fn create(dir: &Path, output: OutputConfig, theta: bool) -> std::io::Result<Self> {
         let csv = dir.join(TRAJECTORY_FILE);
         let parquet = dir.join(TRAJECTORY_PARQUET_FILE);
+        let journal = dir.join(TRAJECTORY_JOURNAL_FILE);
         for (path, keep) in [
             (&csv, output.trajectory == TrajectoryFormat::Csv),
             (&parquet, output.trajectory == TrajectoryFormat::Parquet),
+            (&journal, false),
         ] {
             if !keep && path.exists() {
                 std::fs::remove_file(path)?;
             }
         }
+        let header = format!("{CSV_HEADER}{}", if theta { ",theta" } else { "" });
         Ok(match output.trajectory {
-            TrajectoryFormat::Csv => {
-                let mut traj = BufWriter::with_capacity(1 << 16, File::create(csv)?);
-                writeln!(traj, "{CSV_HEADER}{}", if theta { ",theta" } else { "" })?;
-                traj.flush()?;
-                Sink::Csv(traj, theta)
-            }
-            TrajectoryFormat::Parquet => Sink::Parquet(Box::new(
-                ParquetTrajectoryWriter::create(&parquet, theta).map_err(std::io::Error::other)?,
-            )),
+            TrajectoryFormat::Csv => Sink::Csv(RowFile::create(&csv, &header)?, theta),
+            TrajectoryFormat::Parquet => Sink::Parquet(
+                Box::new(
+                    ParquetTrajectoryWriter::create(&parquet, theta)
+                        .map_err(std::io::Error::other)?,
+                ),
+                RowFile::create(&journal, &header)?,
+                theta,
+            ),
             TrajectoryFormat::None => Sink::None,
         })
     }
@@ -154,34 +167,50 @@ impl Sink {
         &mut self,
         labels: &mut Labels,
         names: &[String],
-        block: &mut Vec<u8>,
         tick: (u64, f64),
         bodies: &[BodyState],
     ) -> std::io::Result<()> {
         match self {
             Sink::Csv(traj, theta) => {
-                csv_rows(block, labels, names, tick, bodies, *theta);
-                traj.write_all(block)
+                csv_rows(traj.rows_mut(), labels, names, tick, bodies, *theta);
+                Ok(())
             }
-            Sink::Parquet(w) => parquet_rows(w, labels, names, tick, bodies),
+            Sink::Parquet(w, journal, theta) => {
+                csv_rows(journal.rows_mut(), labels, names, tick, bodies, *theta);
+                parquet_rows(w, labels, names, tick, bodies)
+            }
             Sink::None => Ok(()),
         }
     }
 
-    /// Puts what is buffered on the disk (the Parquet file's row groups go
-    /// when full, its footer at [`Sink::finish`]).
-    fn flush(&mut self) -> std::io::Result<()> {
+    /// Holds enough rows to be written out.
+    fn is_full(&self) -> bool {
         match self {
-            Sink::Csv(traj, _) => traj.flush(),
-            Sink::Parquet(_) | Sink::None => Ok(()),
+            Sink::Csv(f, _) | Sink::Parquet(_, f, _) => f.is_full(),
+            Sink::None => false,
         }
     }
 
-    /// Writes what is left and closes the file.
+    /// Puts the rows held on the disk (the CSV, or the Parquet file's
+    /// journal: its row groups go when full, its footer at
+    /// [`Sink::finish`]).
+    fn flush(&mut self) -> std::io::Result<()> {
+        match self {
+            Sink::Csv(f, _) | Sink::Parquet(_, f, _) => f.write_out(),
+            Sink::None => Ok(()),
+        }
+    }
+
+    /// Writes what is left and closes the file (the Parquet file's footer,
+    /// then its journal removed).
     fn finish(self) -> std::io::Result<()> {
         match self {
-            Sink::Csv(mut traj, _) => traj.flush(),
-            Sink::Parquet(w) => w.finish().map_err(std::io::Error::other),
+            Sink::Csv(mut traj, _) => traj.write_out(),
+            Sink::Parquet(w, mut journal, _) => {
+                journal.write_out()?;
+                w.finish().map_err(std::io::Error::other)?;
+                std::fs::remove_file(journal.path())
+            }
             Sink::None => Ok(()),
         }
     }
@@ -190,9 +219,9 @@ impl Sink {
 /// trajectory.csv's header.
 const CSV_HEADER: &str = "tick,time,body,kind,x,y,vx,vy";
 
-/// Fills `block` with one tick's CSV rows, in one piece, so the file only
-/// ever ends after a whole tick. `tick,time,` is the same on every row;
-/// `theta` appends each body's heading.
+/// Appends one tick's CSV rows to `block`, each ended by its newline.
+/// `tick,time,` is the same on every row; `theta` appends each body's
+/// heading.
 fn csv_rows(
     block: &mut Vec<u8>,
     labels: &mut Labels,
@@ -201,15 +230,18 @@ fn csv_rows(
     bodies: &[BodyState],
     theta: bool,
 ) {
-    block.clear();
+    if bodies.is_empty() {
+        return;
+    }
+    let start = block.len();
     push_u64(block, tick);
     block.push(b',');
     push_fixed6(block, time);
     block.push(b',');
-    let prefix = block.len();
+    let prefix = start..block.len();
     for (k, b) in bodies.iter().enumerate() {
         if k > 0 {
-            block.extend_from_within(..prefix);
+            block.extend_from_within(prefix.clone());
         }
         // tick,time,body,kind,x,y,vx,vy
         block.extend_from_slice(&labels.of(b, names).csv);
@@ -272,13 +304,10 @@ impl Recorder {
             mut calls,
         } = extras;
         let mut sink = Sink::create(dir, output, theta)?;
-        let mut events = BufWriter::new(File::create(dir.join(mrsim_runfolder::EVENTS_FILE))?);
-        let mut encounters =
-            BufWriter::new(File::create(dir.join(mrsim_runfolder::ENCOUNTERS_FILE))?);
-        writeln!(
-            encounters,
-            "{}",
-            mrsim_runfolder::metrics::ENCOUNTERS_HEADER
+        let mut events = RowFile::create(&dir.join(mrsim_runfolder::EVENTS_FILE), "")?;
+        let mut encounters = RowFile::create(
+            &dir.join(mrsim_runfolder::ENCOUNTERS_FILE),
+            ENCOUNTERS_HEADER,
         )?;
         let (tx, rx) = bounded::<Msg>(256);
         let (back_tx, recycled) = unbounded();
@@ -286,36 +315,60 @@ impl Recorder {
             .name("recorder".into())
             .spawn(move || {
                 mrsim_sys::sched::background_thread();
-                let period = Duration::from_secs(1);
-                let mut last_flush = Instant::now();
-                let mut block = Vec::with_capacity(1 << 12);
+                // A row waits at most BATCH_AGE in the loop, so the files
+                // go out this much later than it, and a row reaches the
+                // disk within FLUSH_WALL of its tick.
+                let mut clock = FlushClock::new(FLUSH_WALL.saturating_sub(BATCH_AGE));
+                // The latest simulated time taken in.
+                let mut latest: Option<f64> = None;
                 let mut labels = Labels::default();
                 // The last tick taken in if `every` skipped it: written at
                 // the end, so the trajectory ends where the run did.
                 let mut skipped: Option<(u64, f64)> = None;
                 let mut skipped_bodies = Vec::new();
+                // Every file to the disk, the trajectory last: a tick seen
+                // in it means the other files hold everything before it.
+                macro_rules! flush_all {
+                    () => {
+                        flush_calls(&mut calls);
+                        events.write_out()?;
+                        encounters.write_out()?;
+                        if let Some(s) = &mut scans {
+                            s.flush()?;
+                        }
+                        sink.flush()?;
+                        clock.flushed(latest);
+                    };
+                }
                 loop {
                     // Wake at least once a period, so rows reach the disk
                     // even while the tick loop waits (a lockstep stall).
-                    let left = period.saturating_sub(last_flush.elapsed());
-                    match rx.recv_timeout(left) {
+                    match rx.recv_timeout(clock.left()) {
                         Ok(Msg::Ticks(batch)) => {
+                            // The batch's calls and events first: they are
+                            // of its ticks (or earlier), so a flush within
+                            // the batch has them on the disk before the
+                            // trajectory's rows.
+                            events.write_all(&batch.events)?;
+                            write_calls(&mut calls, &names, &batch.calls);
                             let mut from = 0;
                             for &(tick, time, count) in &batch.ticks {
                                 let bodies = &batch.bodies[from..from + count];
                                 from += count;
+                                latest = Some(time);
                                 tracker.track(tick, time, bodies);
                                 if output.records(tick) {
                                     skipped = None;
-                                    sink.write_tick(
-                                        &mut labels,
-                                        &names,
-                                        &mut block,
-                                        (tick, time),
-                                        bodies,
-                                    )?;
+                                    sink.write_tick(&mut labels, &names, (tick, time), bodies)?;
                                     if let Some(s) = &mut scans {
                                         s.write(tick, bodies)?;
+                                    }
+                                    // A big tick (100,000 robots) goes out
+                                    // at once rather than a batch of them
+                                    // held.
+                                    if sink.is_full() || scans.as_ref().is_some_and(|s| s.is_full())
+                                    {
+                                        flush_all!();
                                     }
                                 } else {
                                     skipped = Some((tick, time));
@@ -323,8 +376,6 @@ impl Recorder {
                                     skipped_bodies.extend_from_slice(bodies);
                                 }
                             }
-                            events.write_all(&batch.events)?;
-                            write_calls(&mut calls, &names, &batch.calls);
                             let _ = back_tx.send(batch);
                             let ended = tracker.interaction_mut().take_closed(&names);
                             encounters.write_all(encounter_rows(&ended).as_bytes())?;
@@ -332,21 +383,19 @@ impl Recorder {
                         Err(RecvTimeoutError::Timeout) => {}
                         Err(RecvTimeoutError::Disconnected) => break,
                     }
-                    if last_flush.elapsed() >= period {
-                        sink.flush()?;
-                        if let Some(s) = &mut scans {
-                            s.flush()?;
-                        }
-                        events.flush()?;
-                        encounters.flush()?;
-                        last_flush = Instant::now();
+                    let full = sink.is_full()
+                        || events.is_full()
+                        || encounters.is_full()
+                        || scans.as_ref().is_some_and(|s| s.is_full())
+                        || calls.as_ref().is_some_and(TimingSink::is_full);
+                    if full || clock.due(latest) {
+                        flush_all!();
                     }
                 }
                 if let Some(tick) = skipped {
-                    sink.write_tick(&mut labels, &names, &mut block, tick, &skipped_bodies)?;
+                    sink.write_tick(&mut labels, &names, tick, &skipped_bodies)?;
                 }
-                sink.finish()?;
-                events.flush()?;
+                events.write_out()?;
                 if let Some(w) = calls.take()
                     && let Err(e) = w.finish()
                 {
@@ -355,23 +404,29 @@ impl Recorder {
                 tracker.interaction_mut().close_all();
                 let ended = tracker.interaction_mut().take_closed(&names);
                 encounters.write_all(encounter_rows(&ended).as_bytes())?;
-                encounters.flush()?;
+                encounters.write_out()?;
                 if let Some(s) = &mut scans {
                     s.flush()?;
                 }
+                sink.finish()?;
                 Ok(tracker)
             })?;
         Ok(Self {
             batches: Batcher::new(tx, recycled, Ticks::default(), Msg::Ticks),
             thread: Some(thread),
+            second: i64::MIN,
         })
     }
-    /// Queues one tick's bodies; they go to the thread with the batch.
+    /// Queues one tick's bodies; they go to the thread with the batch (at
+    /// once if it is the first tick of a simulated second, when the thread
+    /// flushes the files).
     pub fn tick(&mut self, tick: u64, time: f64, bodies: &[BodyState]) {
         let pending = self.batches.pending();
         pending.ticks.push((tick, time, bodies.len()));
         pending.bodies.extend_from_slice(bodies);
-        if pending.ticks.len() >= BATCH_TICKS {
+        let second = FlushClock::second_of(time);
+        if pending.ticks.len() >= BATCH_TICKS || second > self.second {
+            self.second = self.second.max(second);
             self.batches.send();
         } else {
             self.batches.send_if_older(BATCH_AGE);
@@ -431,6 +486,17 @@ fn write_calls(sink: &mut Option<TimingSink>, names: &[String], calls: &[Call]) 
             *sink = None;
             return;
         }
+    }
+}
+
+/// Puts the timing file's rows held on the disk; a failure ends the file
+/// (said once), never the run.
+fn flush_calls(sink: &mut Option<TimingSink>) {
+    if let Some(w) = sink
+        && let Err(e) = w.flush()
+    {
+        eprintln!("world: {e}; {} stops here", w.file_name());
+        *sink = None;
     }
 }
 

@@ -5,26 +5,22 @@
 //! bodies, walls and per-tick noise stream), from the states of the
 //! trajectory row of the same tick: the very scan the planner got.
 //!
-//! Columns: `tick,robot,angle_min,angle_increment,range_max,r0,...`; angles
-//! in radians in the robot's frame (ROS LaserScan's meanings, written in
-//! full precision), ranges with
-//! six decimals, `inf` where a beam hit nothing within `range_max`. Robots
-//! with fewer beams than the most leave the last fields empty.
+//! The file's name, columns and reader are [`mrsim_runfolder::scan`]'s;
+//! rows are whole ([`RowFile`]) and reach the disk when the recording
+//! thread flushes.
 
 use mrsim_lidar::{Scanner, Walls};
 use mrsim_planners::lidar::LaserScan;
 use mrsim_proto::BodyState;
+use mrsim_runfolder::SCAN_FILE;
+use mrsim_runfolder::stream::RowFile;
 use mrsim_scenario::{RobotSpec, Scenario};
-use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::Write;
 use std::path::Path;
-
-/// The file the scans go to, in the run folder.
-pub const SCAN_FILE: &str = "scan.csv";
 
 /// Writes scan.csv.
 pub struct ScanWriter {
-    out: BufWriter<File>,
+    out: RowFile,
     /// (robot index, entry) of every recorded robot.
     robots: Vec<(usize, RobotSpec)>,
     scanner: Scanner,
@@ -53,12 +49,7 @@ impl ScanWriter {
             .filter_map(|(_, r)| r.sensor.map(|l| l.beams as usize))
             .max()
             .unwrap_or(0);
-        let mut out = BufWriter::new(File::create(dir.join(SCAN_FILE))?);
-        write!(out, "tick,robot,angle_min,angle_increment,range_max")?;
-        for k in 0..width {
-            write!(out, ",r{k}")?;
-        }
-        writeln!(out)?;
+        let out = RowFile::create(&dir.join(SCAN_FILE), &mrsim_runfolder::scan::header(width))?;
         Ok(Some(Self {
             out,
             robots,
@@ -102,8 +93,13 @@ impl ScanWriter {
         Ok(())
     }
 
-    /// Flushes what is written.
+    /// Puts the rows held on the disk.
     pub fn flush(&mut self) -> std::io::Result<()> {
-        self.out.flush()
+        self.out.write_out()
+    }
+
+    /// Holds enough rows to be written out.
+    pub fn is_full(&self) -> bool {
+        self.out.is_full()
     }
 }

@@ -24,7 +24,7 @@ use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 
 /// The file [`write_mcap`] writes in the run folder.
-pub const MCAP_FILE: &str = "run.mcap";
+pub use mrsim_runfolder::MCAP_FILE;
 
 /// Height of the discs and walls drawn in the 3D panel, m (the world is
 /// flat; a little height makes them visible from any angle).
@@ -39,6 +39,9 @@ pub struct McapWritten {
     /// run found it (a folder moved elsewhere): the file has the map's
     /// outline among the walls, but no `/map` grid. The YAML's path.
     pub map_not_found: Option<String>,
+    /// The files the run was cut in ([`RunData::cut`]): the export goes up
+    /// to the cut.
+    pub cut: Vec<mrsim_runfolder::stream::Cut>,
 }
 
 /// Reads the run folder `dir` and writes `run.mcap` into it.
@@ -81,7 +84,7 @@ pub fn write_mcap(run: &RunData, dir: &Path) -> Result<McapWritten, RenderError>
 
     let scene = &run.scenario;
     let specs = run.specs_by_name();
-    let headings = sensing::headings(dir);
+    let headings = sensing::headings(dir)?;
     let heading_at: HashMap<(&str, u64), f64> = headings
         .iter()
         .flat_map(|(name, rows)| rows.iter().map(move |&(t, th)| ((name.as_str(), t), th)))
@@ -223,7 +226,7 @@ pub fn write_mcap(run: &RunData, dir: &Path) -> Result<McapWritten, RenderError>
     // The scans, each on its robot's topic.
     let dt = scene.world.dt;
     let mut scan_topics: HashMap<String, u16> = HashMap::new();
-    for row in sensing::scans(dir) {
+    for row in sensing::scans(dir)?.unwrap_or_default() {
         let id = match scan_topics.get(&row.robot) {
             Some(&id) => id,
             None => {
@@ -256,6 +259,7 @@ pub fn write_mcap(run: &RunData, dir: &Path) -> Result<McapWritten, RenderError>
     Ok(McapWritten {
         path,
         map_not_found,
+        cut: run.cut.clone(),
     })
 }
 

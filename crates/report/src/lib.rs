@@ -113,12 +113,13 @@ pub enum RenderError {
 }
 
 /// Reads the run folder `dir` and writes `plot.svg`, `plot.png` and
-/// `replay.html` into it.
-pub fn render_all(dir: &Path) -> Result<(), RenderError> {
+/// `replay.html` into it; gives back where the run was cut, if it was
+/// ([`RunData::cut`]: empty for a run that ended).
+pub fn render_all(dir: &Path) -> Result<Vec<mrsim_runfolder::stream::Cut>, RenderError> {
     let run = RunData::load(dir)?;
     write_plots(&run, dir)?;
     write_replay(&run, dir)?;
-    Ok(())
+    Ok(run.cut)
 }
 
 pub(crate) fn write_file(path: &Path, bytes: &[u8]) -> Result<(), RenderError> {

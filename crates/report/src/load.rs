@@ -1,17 +1,20 @@
-//! Reading a finished run's folder: `scenario.json`, the trajectory
+//! Reading a run's folder: `scenario.json`, the trajectory
 //! (`trajectory.csv` or `trajectory.parquet`, read with the run folder
-//! crate's readers), `events.jsonl`, `metrics.json`, `diagnostics.csv` and
-//! `routes.csv`, each error naming the file and, where there is one, the
-//! line.
+//! crate's readers), `events.jsonl`, `metrics.json`, `diagnostics.csv`,
+//! `encounters.csv` and `routes.csv`, each error naming the file and, where
+//! there is one, the line. A run that was cut (its world killed) is read up
+//! to the cut: a torn last row is left out, a Parquet trajectory without
+//! its footer is read from its journal, and [`RunData::cut`] says so.
 
 use crate::RenderError;
 use crate::records::{BodyKind, BodyTrack, DiagnosticSample, Event, EventKind, Sample, Trajectory};
 use crate::run::RunData;
 use mrsim_runfolder::csv::{Columns, CsvError, numbered_lines, trajectory_rows};
+use mrsim_runfolder::stream::{Cut, read_whole_rows};
 use mrsim_runfolder::trajectory::{TrajectoryError, TrajectoryRow, read_parquet_trajectory};
 use mrsim_runfolder::{
-    DIAGNOSTICS_FILE, EVENTS_FILE, METRICS_FILE, ROUTES_FILE, SCENARIO_FILE, TRAJECTORY_FILE,
-    TRAJECTORY_PARQUET_FILE,
+    DIAGNOSTICS_FILE, EVENTS_FILE, METRICS_FILE, ROUTES_FILE, RowsError, SCENARIO_FILE,
+    TRAJECTORY_FILE, TRAJECTORY_JOURNAL_FILE, TRAJECTORY_PARQUET_FILE,
 };
 use mrsim_scenario::{Scenario, TrajectoryFormat};
 use std::collections::{BTreeMap, HashMap};
@@ -23,7 +26,8 @@ impl RunData {
     /// `trajectory = "none"`: then [`RunData::trajectory`] is empty) and
     /// `events.jsonl` are required; `metrics.json` and `diagnostics.csv` are
     /// read when present. Errors name the file and, for CSV and JSONL, the
-    /// line.
+    /// line; a torn last row (a cut run) is left out and named in
+    /// [`RunData::cut`].
     pub fn load(dir: &Path) -> Result<RunData, RenderError> {
         if !dir.is_dir() {
             return Err(RenderError::NotADirectory {
@@ -32,29 +36,30 @@ impl RunData {
         }
         let scenario_path = dir.join(SCENARIO_FILE);
         let scenario: Scenario =
-            serde_json::from_str(&read_required(&scenario_path)?).map_err(|source| {
-                RenderError::Json {
+            serde_json::from_str(&read_json_text(&scenario_path)?.ok_or_else(|| {
+                RenderError::Missing {
                     path: scenario_path.clone(),
-                    source,
                 }
+            })?)
+            .map_err(|source| RenderError::Json {
+                path: scenario_path.clone(),
+                source,
             })?;
+        let mut cut = Vec::new();
         let trajectory = match scenario.output.trajectory {
             TrajectoryFormat::Csv => {
                 let trajectory_path = dir.join(TRAJECTORY_FILE);
-                cut_short(
-                    &trajectory_path,
-                    &read_required(&trajectory_path)?,
-                    parse_trajectory,
-                )?
+                let text = read_required(&trajectory_path, &mut cut)?;
+                parse_trajectory(&trajectory_path, &text)?
             }
-            TrajectoryFormat::Parquet => load_parquet(&dir.join(TRAJECTORY_PARQUET_FILE))?,
+            TrajectoryFormat::Parquet => load_parquet(dir, &mut cut)?,
             // Nothing was recorded: the pictures show the scene alone.
             TrajectoryFormat::None => Trajectory::default(),
         };
         let events_path = dir.join(EVENTS_FILE);
-        let events = cut_short(&events_path, &read_required(&events_path)?, parse_events)?;
+        let events = parse_events(&events_path, &read_required(&events_path, &mut cut)?)?;
         let metrics_path = dir.join(METRICS_FILE);
-        let metrics = match read_optional(&metrics_path)? {
+        let metrics = match read_json_text(&metrics_path)? {
             Some(text) => {
                 Some(
                     serde_json::from_str(&text).map_err(|source| RenderError::Json {
@@ -66,21 +71,20 @@ impl RunData {
             None => None,
         };
         let diagnostics_path = dir.join(DIAGNOSTICS_FILE);
-        let diagnostics = match read_optional(&diagnostics_path)? {
+        let diagnostics = match read_optional(&diagnostics_path, &mut cut)? {
             // An empty file (no header either) means no diagnostics, as no file.
             Some(text) if text.trim().is_empty() => None,
             Some(text) => Some(parse_diagnostics(&diagnostics_path, &text)?),
             None => None,
         };
         let routes_path = dir.join(ROUTES_FILE);
-        let routes = match read_optional(&routes_path)? {
+        let routes = match read_json_text(&routes_path)? {
             Some(text) => parse_routes(&routes_path, &text)?,
             None => BTreeMap::new(),
         };
-        let encounters_path = dir.join(mrsim_runfolder::ENCOUNTERS_FILE);
-        let encounters = read_optional(&encounters_path)?
-            .map(|text| mrsim_runfolder::metrics::parse_encounters(&text))
-            .unwrap_or_default();
+        let (encounters, torn) =
+            mrsim_runfolder::encounters::read_encounters(dir).map_err(file_error)?;
+        cut.extend(torn);
         Ok(RunData {
             dir: dir.to_path_buf(),
             scenario,
@@ -90,20 +94,52 @@ impl RunData {
             diagnostics,
             routes,
             encounters,
+            cut,
         })
     }
 }
 
-fn read_required(path: &Path) -> Result<String, RenderError> {
-    read_optional(path)?.ok_or_else(|| RenderError::Missing {
+/// A run folder reader's error as the report's.
+pub(crate) fn file_error(e: RowsError) -> RenderError {
+    match e {
+        RowsError::Io { path, source } => RenderError::Io { path, source },
+        RowsError::Row { path, line, reason } => RenderError::Parse { path, line, reason },
+    }
+}
+
+/// The text of a file written whole at the end of a run (a JSON file,
+/// routes.csv), `None` if there is none.
+fn read_json_text(path: &Path) -> Result<Option<String>, RenderError> {
+    match std::fs::read_to_string(path) {
+        Ok(text) => Ok(Some(text)),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+        Err(source) => Err(RenderError::Io {
+            path: path.to_path_buf(),
+            source,
+        }),
+    }
+}
+
+/// The whole rows of the file at `path`, which must exist; a torn last row
+/// is left out and added to `cut`.
+fn read_required(path: &Path, cut: &mut Vec<Cut>) -> Result<String, RenderError> {
+    read_optional(path, cut)?.ok_or_else(|| RenderError::Missing {
         path: path.to_path_buf(),
     })
 }
 
-fn read_optional(path: &Path) -> Result<Option<String>, RenderError> {
-    match std::fs::read_to_string(path) {
-        Ok(text) => Ok(Some(text)),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+/// The whole rows of the file at `path`, `None` if there is none; a torn
+/// last row is left out and added to `cut`.
+pub(crate) fn read_optional(
+    path: &Path,
+    cut: &mut Vec<Cut>,
+) -> Result<Option<String>, RenderError> {
+    match read_whole_rows(path) {
+        Ok(Some((text, torn))) => {
+            cut.extend(torn);
+            Ok(Some(text))
+        }
+        Ok(None) => Ok(None),
         Err(source) => Err(RenderError::Io {
             path: path.to_path_buf(),
             source,
@@ -117,26 +153,6 @@ fn parse_error(path: &Path, e: CsvError) -> RenderError {
         path: path.to_path_buf(),
         line: e.line,
         reason: e.reason,
-    }
-}
-
-/// Parses `text` with `parse`; if that fails on the last line and the text
-/// does not end with a newline, the line was cut by a writer that was
-/// killed (the world flushes its files about once a second): it is dropped
-/// and the rest parsed.
-fn cut_short<T>(
-    path: &Path,
-    text: &str,
-    parse: impl Fn(&Path, &str) -> Result<T, RenderError>,
-) -> Result<T, RenderError> {
-    match parse(path, text) {
-        Err(RenderError::Parse { line, .. })
-            if !text.ends_with('\n') && line == text.lines().count() =>
-        {
-            let whole = text.rfind('\n').map_or("", |i| &text[..=i]);
-            parse(path, whole)
-        }
-        r => r,
     }
 }
 
@@ -157,17 +173,34 @@ fn parse_trajectory(path: &Path, text: &str) -> Result<Trajectory, RenderError> 
     Ok(tracks.finish())
 }
 
-/// Reads the Parquet trajectory at `path`.
-fn load_parquet(path: &Path) -> Result<Trajectory, RenderError> {
+/// Reads `dir`'s Parquet trajectory, or, if the run was cut before its
+/// footer was written, its journal (noted in `cut`).
+fn load_parquet(dir: &Path, cut: &mut Vec<Cut>) -> Result<Trajectory, RenderError> {
+    let path = &dir.join(TRAJECTORY_PARQUET_FILE);
+    let journal = dir.join(TRAJECTORY_JOURNAL_FILE);
     if !path.exists() {
         return Err(RenderError::Missing {
             path: path.to_path_buf(),
         });
     }
-    let table = read_parquet_trajectory(path).map_err(|e| match e {
-        TrajectoryError::Io { path, source } => RenderError::Io { path, source },
-        other => RenderError::Parquet(other),
-    })?;
+    let table = match read_parquet_trajectory(path) {
+        Ok(table) => table,
+        Err(TrajectoryError::Parquet { .. }) if journal.exists() => {
+            let mut torn = Vec::new();
+            let text = read_required(&journal, &mut torn)?;
+            cut.push(Cut {
+                path: path.to_path_buf(),
+                line: 0,
+                detail: format!(
+                    "no Parquet footer; read its journal {TRAJECTORY_JOURNAL_FILE}{}",
+                    torn.first().map_or(String::new(), |c| format!(" ({c})"))
+                ),
+            });
+            return parse_trajectory(&journal, &text);
+        }
+        Err(TrajectoryError::Io { path, source }) => return Err(RenderError::Io { path, source }),
+        Err(other) => return Err(RenderError::Parquet(other)),
+    };
     let mut tracks = Tracks::default();
     for (i, row) in table.rows().enumerate() {
         tracks.push_row(&row).map_err(|reason| RenderError::Parse {

@@ -58,7 +58,7 @@ pub fn plot_size(run: &RunData) -> (u32, u32) {
 /// Writes `plot.svg` and `plot.png` for `run` into `dir`.
 pub fn write_plots(run: &RunData, dir: &Path) -> Result<(), RenderError> {
     let size = plot_size(run);
-    let svg_path = dir.join("plot.svg");
+    let svg_path = dir.join(mrsim_runfolder::PLOT_SVG_FILE);
     let plot_error = |path: &PathBuf| {
         let path = path.clone();
         move |reason: String| RenderError::Plot { path, reason }
@@ -74,7 +74,7 @@ pub fn write_plots(run: &RunData, dir: &Path) -> Result<(), RenderError> {
     }
     write_file(&svg_path, svg.as_bytes())?;
 
-    let png_path = dir.join("plot.png");
+    let png_path = dir.join(mrsim_runfolder::PLOT_PNG_FILE);
     let mut pixels = vec![0u8; size.0 as usize * size.1 as usize * 3];
     {
         let root = BitMapBackend::with_buffer(&mut pixels, size).into_drawing_area();

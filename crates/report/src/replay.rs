@@ -99,12 +99,12 @@ pub fn write_replay(run: &RunData, dir: &Path) -> Result<(), RenderError> {
         .filter(|r| r.kinematics == mrsim_scenario::Kinematics::Unicycle)
         .map(|r| r.name.as_str())
         .collect();
-    crate::sensing::add(&mut data, dir, &run.trajectory.ticks, &unicycles);
+    crate::sensing::add(&mut data, dir, &run.trajectory.ticks, &unicycles)?;
     // `<` only occurs inside JSON strings, where \u003c means the same:
     // no `</script>` can end the data block early.
     let json = data.to_string().replace('<', "\\u003c");
     let page = TEMPLATE.replacen(PLACEHOLDER, &json, 1);
-    write_file(&dir.join("replay.html"), page.as_bytes())
+    write_file(&dir.join(mrsim_runfolder::REPLAY_FILE), page.as_bytes())
 }
 
 /// Every how many recorded ticks the page shows a frame: 1 unless bodies
@@ -330,5 +330,6 @@ fn replay_data(run: &RunData) -> Value {
         "encountersTotal": run.encounters.len(),
         "eventsTotal": run.events.len(),
         "metrics": run.metrics,
+        "cut": run.cut.iter().map(|c| c.to_string()).collect::<Vec<_>>(),
     })
 }

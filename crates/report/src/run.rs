@@ -36,6 +36,9 @@ pub struct RunData {
     pub routes: BTreeMap<String, Vec<[f64; 2]>>,
     /// `encounters.csv`'s rows (empty if the file is absent).
     pub encounters: Vec<mrsim_runfolder::metrics::Encounter>,
+    /// The files that end where the run was cut (its world killed): each
+    /// was read up to its last whole row. Empty for a run that ended.
+    pub cut: Vec<mrsim_runfolder::stream::Cut>,
 }
 
 impl RunData {

@@ -401,6 +401,40 @@ fn a_last_line_cut_by_a_killed_writer_is_dropped_and_the_rest_kept() {
     let cut = RunData::load(&dir).unwrap();
     assert_eq!(samples(&cut), samples(&whole) - 1);
     assert_eq!(cut.events.len(), whole.events.len() - 1);
+    assert!(whole.cut.is_empty(), "{:?}", whole.cut);
+    // Both cut files are named, with their torn line.
+    let named: Vec<String> = cut.cut.iter().map(|c| c.to_string()).collect();
+    assert_eq!(named.len(), 2, "{named:?}");
+    assert!(named[0].contains("trajectory.csv:") && named[0].contains("the run was cut"));
+    assert!(named[1].contains("events.jsonl:"), "{named:?}");
+}
+
+#[test]
+fn a_parquet_trajectory_without_its_footer_is_read_from_its_journal_and_named_as_cut() {
+    let dir = temp_dir("cutpq");
+    write_run(&dir, 2, false);
+    let whole = RunData::load(&dir).unwrap();
+    // The same run as a Parquet one killed before its footer: the journal
+    // holds the CSV's rows, the Parquet file only its first bytes.
+    let scenario = dir.join("scenario.json");
+    let mut sc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&scenario).unwrap()).unwrap();
+    sc["output"]["trajectory"] = "parquet".into();
+    std::fs::write(&scenario, sc.to_string()).unwrap();
+    std::fs::rename(
+        dir.join("trajectory.csv"),
+        dir.join(mrsim_runfolder::TRAJECTORY_JOURNAL_FILE),
+    )
+    .unwrap();
+    std::fs::write(dir.join("trajectory.parquet"), b"PAR1").unwrap();
+    let cut = RunData::load(&dir).unwrap();
+    assert_eq!(cut.trajectory, whole.trajectory);
+    assert_eq!(cut.cut.len(), 1, "{:?}", cut.cut);
+    assert!(
+        cut.cut[0].to_string().contains("no Parquet footer"),
+        "{}",
+        cut.cut[0]
+    );
 }
 
 #[test]

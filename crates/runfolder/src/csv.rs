@@ -148,6 +148,35 @@ pub fn trajectory_rows(
     }))
 }
 
+/// The last tick of `trajectory.csv`'s text whose rows are all there (as
+/// many as the first tick's: a run cut while writing a tick leaves that
+/// tick short), `None` without one; a bad line is the error.
+pub fn last_whole_tick(text: &str) -> Result<Option<u64>, CsvError> {
+    let mut first_count = None;
+    let (mut tick, mut count) = (None, 0usize);
+    let mut whole = None;
+    for row in trajectory_rows(text)? {
+        let (_, row) = row?;
+        if tick != Some(row.tick) {
+            if let Some(t) = tick {
+                let full = *first_count.get_or_insert(count);
+                if count >= full {
+                    whole = Some(t);
+                }
+            }
+            tick = Some(row.tick);
+            count = 0;
+        }
+        count += 1;
+    }
+    if let Some(t) = tick
+        && count >= first_count.unwrap_or(count)
+    {
+        whole = Some(t);
+    }
+    Ok(whole)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -210,5 +239,18 @@ mod tests {
         );
         let e = rows("tick,time,body,kind,x,y,vx,vy\n-1,0,r0,robot,1,2,3,4\n").expect_err("tick");
         assert!(e.reason.contains("tick number"), "{e}");
+    }
+
+    #[test]
+    fn the_last_whole_tick_is_the_last_with_every_body() {
+        let h = "tick,time,body,kind,x,y,vx,vy\n";
+        let row = |t: u64, b: &str| format!("{t},0,{b},robot,0,0,0,0\n");
+        let two = |t| row(t, "a") + &row(t, "b");
+        assert_eq!(last_whole_tick(h), Ok(None));
+        let text = format!("{h}{}{}", two(0), two(5));
+        assert_eq!(last_whole_tick(&text), Ok(Some(5)));
+        let text = format!("{h}{}{}{}", two(0), two(5), row(10, "a"));
+        assert_eq!(last_whole_tick(&text), Ok(Some(5)));
+        assert_eq!(last_whole_tick(&format!("{h}{}", row(0, "a"))), Ok(Some(0)));
     }
 }

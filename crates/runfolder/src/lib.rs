@@ -16,13 +16,23 @@
 //! The trajectory is `trajectory.csv` ([`csv`] reads its rows),
 //! `trajectory.parquet` ([`trajectory`] has its schema, a writer and a
 //! reader) or absent, as the scenario's `[output]` says. What timing decided per planner call is `timing.csv`
-//! ([`timing`]).
+//! ([`timing`]); encounters.csv and scan.csv have their readers in
+//! [`encounters`] and [`scan`].
+//!
+//! The files written while the run goes on are written in whole rows and
+//! flushed on one clock ([`stream`]); every reader here accepts a torn last
+//! row of a cut run, leaves it out and says so ([`stream::Cut`]), and
+//! refuses any other bad line with the file and line.
 #![warn(missing_docs)]
 
 pub mod bench;
 pub mod csv;
+pub mod encounters;
 pub mod metrics;
 mod parquet_out;
+pub mod scan;
+pub mod stream;
+pub mod sweep;
 pub mod timing;
 pub mod trajectory;
 pub mod usage;
@@ -39,6 +49,16 @@ pub const TRAJECTORY_FILE: &str = "trajectory.csv";
 /// The same rows as [`TRAJECTORY_FILE`], typed, as Parquet (`[output]
 /// trajectory = "parquet"`; schema in [`trajectory`]).
 pub const TRAJECTORY_PARQUET_FILE: &str = "trajectory.parquet";
+/// [`TRAJECTORY_PARQUET_FILE`]'s rows in [`TRAJECTORY_FILE`]'s format while
+/// the run lives, removed once the Parquet footer is written: what a cut
+/// run's trajectory is read from.
+pub const TRAJECTORY_JOURNAL_FILE: &str = "trajectory.journal.csv";
+/// The laser scans of the robots that record theirs ([`scan`]).
+pub const SCAN_FILE: &str = "scan.csv";
+/// `mrsim ros2`'s message counts per robot.
+pub const ROS2_STATS_FILE: &str = "ros2.json";
+/// The run as an MCAP file for Foxglove (`mrsim export`).
+pub const MCAP_FILE: &str = "run.mcap";
 /// One JSON object per line: joins, losses, contacts, goals, rejections.
 pub const EVENTS_FILE: &str = "events.jsonl";
 /// How the run's scenario was given ([`SourceDoc`]): what `mrsim rerun`
@@ -51,6 +71,8 @@ pub const ENCOUNTERS_FILE: &str = "encounters.csv";
 pub const METRICS_FILE: &str = "metrics.json";
 /// The planners' per-tick diagnostics (only when some planner reported any).
 pub const DIAGNOSTICS_FILE: &str = "diagnostics.csv";
+/// [`DIAGNOSTICS_FILE`]'s header.
+pub const DIAGNOSTICS_HEADER: &str = "tick,time,robot,name,value";
 /// The routes of the robots with `route = "shortest"`, as planned at the
 /// start: `robot,seq,x,y`, one row a point, start to goal.
 pub const ROUTES_FILE: &str = "routes.csv";
@@ -89,11 +111,21 @@ pub const DIAGNOSTICS_PART_PREFIX: &str = "diagnostics-";
 /// Suffix of an agent's diagnostics part file.
 pub const DIAGNOSTICS_PART_SUFFIX: &str = ".part";
 
-/// Name of the diagnostics part file of robot `robot_id` written by process
-/// `pid` (one per process, so a restarted agent does not overwrite its
-/// predecessor's values).
-pub fn diagnostics_part_file(robot_id: usize, pid: u32) -> String {
-    format!("{DIAGNOSTICS_PART_PREFIX}{robot_id}-{pid}{DIAGNOSTICS_PART_SUFFIX}")
+/// Name of the diagnostics part file written by process `pid` (one per
+/// process, so an agent that restarts does not overwrite its predecessor's
+/// values). Each of its lines is a row of [`DIAGNOSTICS_FILE`] preceded by
+/// the robot's id (`id,tick,time,robot,name,value`).
+pub fn diagnostics_part_file(pid: u32) -> String {
+    format!("{DIAGNOSTICS_PART_PREFIX}{pid}{DIAGNOSTICS_PART_SUFFIX}")
+}
+
+/// The process id of a diagnostics part file's name, or `None` for any
+/// other file.
+pub fn diagnostics_part_pid(name: &str) -> Option<u32> {
+    name.strip_prefix(DIAGNOSTICS_PART_PREFIX)?
+        .strip_suffix(DIAGNOSTICS_PART_SUFFIX)?
+        .parse()
+        .ok()
 }
 
 /// Name of the file in which the agent of `robot` leaves its usage for the
@@ -143,6 +175,31 @@ pub enum FileError {
         path: PathBuf,
         /// The parse (or encoding) error.
         source: serde_json::Error,
+    },
+}
+
+/// Why a streamed CSV file of the run folder (encounters.csv, scan.csv)
+/// could not be read.
+#[derive(Debug, thiserror::Error)]
+pub enum RowsError {
+    /// The file could not be read.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// A line is not a row of the file's schema (a torn last row of a cut
+    /// run is not this: it is left out and reported).
+    #[error("{}:{line}: {reason}", path.display())]
+    Row {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line (the header is line 1).
+        line: usize,
+        /// What is wrong with it.
+        reason: String,
     },
 }
 

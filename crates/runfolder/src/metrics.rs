@@ -164,29 +164,6 @@ pub struct Encounter {
     pub gave_way: String,
 }
 
-/// Reads encounters.csv's rows (as [`Encounter`]s) from `text`.
-pub fn parse_encounters(text: &str) -> Vec<Encounter> {
-    text.lines()
-        .skip(1)
-        .filter_map(|l| {
-            let c: Vec<&str> = l.split(',').collect();
-            let [a, b, s, e, g, t, k, w] = c.as_slice() else {
-                return None;
-            };
-            Some(Encounter {
-                a: (*a).to_string(),
-                b: (*b).to_string(),
-                start_tick: s.parse().ok()?,
-                end_tick: e.parse().ok()?,
-                min_gap: g.parse().ok()?,
-                min_ttc: t.parse().ok(),
-                kind: (*k).to_string(),
-                gave_way: (*w).to_string(),
-            })
-        })
-        .collect()
-}
-
 /// `metrics.json`.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default)]

@@ -14,19 +14,29 @@
 //! A run whose `[output] trajectory = "parquet"` writes the same rows as
 //! `timing.parquet` instead (columns `tick` INT64, `robot` UTF8 string,
 //! `sent_ns` INT64, `status` UTF8 string): [`TimingSink`] writes either,
-//! [`read_timing`] reads whichever the folder holds.
+//! [`read_timing`] reads whichever the folder holds. While such a run
+//! lives its rows also go to `timing.journal.csv` (timing.csv's format),
+//! removed once the Parquet file's footer is written: a cut run's
+//! `timing.parquet` has no footer, and [`read_timing`] reads the journal.
+//!
+//! Rows are written whole ([`RowFile`]) and reach the disk when the
+//! recording thread flushes ([`TimingSink::flush`]); a torn last row (a
+//! cut run) is left out and reported ([`Timing::cut`]).
 
 use crate::parquet_out::{self, Column};
+use crate::stream::{Cut, RowFile, read_whole_rows};
 use parquet::data_type::ByteArray;
 use parquet::file::reader::{FileReader, SerializedFileReader};
 use parquet::file::writer::SerializedFileWriter;
-use std::io::{BufRead, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// The file's name in the run folder.
 pub const TIMING_FILE: &str = "timing.csv";
 /// The file's name when the run writes Parquet.
 pub const TIMING_PARQUET_FILE: &str = "timing.parquet";
+/// timing.parquet's rows as CSV while the run lives (removed at its end).
+pub const TIMING_JOURNAL_FILE: &str = "timing.journal.csv";
 /// Rows per Parquet row group.
 const ROW_GROUP_ROWS: usize = 1 << 16;
 /// Its header line.
@@ -108,24 +118,42 @@ pub enum TimingFileError {
     },
 }
 
-/// Writes rows to `dir/timing.csv` as they come.
+/// Writes rows to `dir/timing.csv` as they come, whole: they reach the
+/// file at [`TimingWriter::flush`].
 pub struct TimingWriter {
     path: PathBuf,
-    out: std::io::BufWriter<std::fs::File>,
+    out: RowFile,
 }
 
 impl TimingWriter {
     /// Creates `dir/timing.csv` with its header.
     pub fn create(dir: &Path) -> Result<Self, TimingFileError> {
-        let path = dir.join(TIMING_FILE);
-        let io = |source| TimingFileError::Io {
-            path: path.clone(),
+        Self::create_at(&dir.join(TIMING_FILE))
+    }
+
+    /// Creates the CSV file at `path` with its header.
+    fn create_at(path: &Path) -> Result<Self, TimingFileError> {
+        let out = RowFile::create(path, HEADER).map_err(|source| TimingFileError::Io {
+            path: path.to_path_buf(),
             source,
-        };
-        let file = std::fs::File::create(&path).map_err(io)?;
-        let mut out = std::io::BufWriter::new(file);
-        writeln!(out, "{HEADER}").map_err(io)?;
-        Ok(Self { path, out })
+        })?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            out,
+        })
+    }
+
+    /// Puts the rows held on the disk.
+    pub fn flush(&mut self) -> Result<(), TimingFileError> {
+        self.out.write_out().map_err(|source| TimingFileError::Io {
+            path: self.path.clone(),
+            source,
+        })
+    }
+
+    /// Holds enough to be written out.
+    pub fn is_full(&self) -> bool {
+        self.out.is_full()
     }
 
     /// Appends one row.
@@ -153,10 +181,12 @@ impl TimingWriter {
     }
 }
 
-/// Writes `timing.parquet` a row group at a time.
+/// Writes `timing.parquet` a row group at a time, and every row to its
+/// journal as it comes.
 pub struct ParquetTimingWriter {
     path: PathBuf,
     writer: SerializedFileWriter<std::fs::File>,
+    journal: TimingWriter,
     tick: Vec<i64>,
     robot: Vec<ByteArray>,
     sent_ns: Vec<i64>,
@@ -185,9 +215,11 @@ impl ParquetTimingWriter {
                 source,
             }
         })?;
+        let journal = TimingWriter::create_at(&dir.join(TIMING_JOURNAL_FILE))?;
         Ok(Self {
             path,
             writer,
+            journal,
             tick: Vec::new(),
             robot: Vec::new(),
             sent_ns: Vec::new(),
@@ -203,6 +235,7 @@ impl ParquetTimingWriter {
         sent_ns: u64,
         status: Status,
     ) -> Result<(), TimingFileError> {
+        self.journal.row(tick, robot, sent_ns, status)?;
         self.tick.push(tick as i64);
         self.robot.push(ByteArray::from(robot));
         self.sent_ns.push(sent_ns as i64);
@@ -237,14 +270,19 @@ impl ParquetTimingWriter {
         Ok(())
     }
 
-    /// Writes the last row group and the footer.
+    /// Writes the last row group and the footer, and removes the journal.
     pub fn finish(mut self) -> Result<(), TimingFileError> {
         self.write_group()?;
         let path = self.path.clone();
         self.writer
             .close()
             .map(drop)
-            .map_err(|source| TimingFileError::Parquet { path, source })
+            .map_err(|source| TimingFileError::Parquet { path, source })?;
+        let journal = self.journal.path;
+        std::fs::remove_file(&journal).map_err(|source| TimingFileError::Io {
+            path: journal,
+            source,
+        })
     }
 }
 
@@ -300,6 +338,23 @@ impl TimingSink {
         }
     }
 
+    /// Puts the rows held on the disk (timing.csv, or timing.parquet's
+    /// journal).
+    pub fn flush(&mut self) -> Result<(), TimingFileError> {
+        match self {
+            TimingSink::Csv(w) => w.flush(),
+            TimingSink::Parquet(w) => w.journal.flush(),
+        }
+    }
+
+    /// Holds enough rows to be written out.
+    pub fn is_full(&self) -> bool {
+        match self {
+            TimingSink::Csv(w) => w.is_full(),
+            TimingSink::Parquet(w) => w.journal.is_full(),
+        }
+    }
+
     /// Writes what is held and closes the file.
     pub fn finish(self) -> Result<(), TimingFileError> {
         match self {
@@ -309,14 +364,42 @@ impl TimingSink {
     }
 }
 
+/// A run folder's timing rows, and where the file was cut if it was.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Timing {
+    /// The rows, in file order.
+    pub rows: Vec<Row>,
+    /// The run was cut: timing.csv's torn last row (left out), or a
+    /// timing.parquet without its footer (its journal read instead).
+    pub cut: Option<Cut>,
+}
+
 /// Reads the run folder `dir`'s timing rows: `timing.parquet` if it has
-/// one, else `timing.csv`.
-pub fn read_timing(dir: &Path) -> Result<Vec<Row>, TimingFileError> {
+/// one (its journal, `timing.journal.csv`, if the run was cut before the
+/// footer was written), else `timing.csv`. A torn last row is left out
+/// and reported; any other bad line is an error naming it.
+pub fn read_timing(dir: &Path) -> Result<Timing, TimingFileError> {
     let parquet = dir.join(TIMING_PARQUET_FILE);
+    let journal = dir.join(TIMING_JOURNAL_FILE);
     if parquet.exists() {
-        return read_parquet_timing(&parquet);
+        return match read_parquet_timing(&parquet) {
+            Ok(rows) => Ok(Timing { rows, cut: None }),
+            Err(TimingFileError::Parquet { .. }) if journal.exists() => {
+                let mut t = read_csv_timing(&journal)?;
+                t.cut = Some(Cut {
+                    path: parquet,
+                    line: 0,
+                    detail: format!(
+                        "no Parquet footer; read its journal {TIMING_JOURNAL_FILE}{}",
+                        t.cut.map_or(String::new(), |c| format!(" ({c})"))
+                    ),
+                });
+                Ok(t)
+            }
+            Err(e) => Err(e),
+        };
     }
-    read_csv_timing(dir)
+    read_csv_timing(&dir.join(TIMING_FILE))
 }
 
 /// Reads a `timing.parquet` at `path`.
@@ -400,19 +483,21 @@ fn read_parquet_timing(path: &Path) -> Result<Vec<Row>, TimingFileError> {
     Ok(rows)
 }
 
-/// Reads `dir/timing.csv`.
-fn read_csv_timing(dir: &Path) -> Result<Vec<Row>, TimingFileError> {
-    let path = dir.join(TIMING_FILE);
-    let file = std::fs::File::open(&path).map_err(|source| TimingFileError::Io {
-        path: path.clone(),
+/// Reads the timing CSV at `path` (timing.csv or the journal).
+fn read_csv_timing(path: &Path) -> Result<Timing, TimingFileError> {
+    let io = |source| TimingFileError::Io {
+        path: path.to_path_buf(),
         source,
+    };
+    let (text, cut) = read_whole_rows(path).map_err(io)?.ok_or_else(|| {
+        io(std::io::Error::new(
+            std::io::ErrorKind::NotFound,
+            "no such file",
+        ))
     })?;
+    let path = path.to_path_buf();
     let mut rows = Vec::new();
-    for (i, line) in std::io::BufReader::new(file).lines().enumerate() {
-        let line = line.map_err(|source| TimingFileError::Io {
-            path: path.clone(),
-            source,
-        })?;
+    for (i, line) in text.lines().enumerate() {
         let bad = |reason: String| TimingFileError::Malformed {
             path: path.clone(),
             line: i + 1,
@@ -444,7 +529,7 @@ fn read_csv_timing(dir: &Path) -> Result<Vec<Row>, TimingFileError> {
             status,
         });
     }
-    Ok(rows)
+    Ok(Timing { rows, cut })
 }
 
 #[cfg(test)]
@@ -460,7 +545,7 @@ mod tests {
         w.row(1, "r1", 12, Status::Accepted).unwrap();
         w.row(2, "r0", 0, Status::Lost).unwrap();
         w.finish().unwrap();
-        let rows = read_timing(&dir).unwrap();
+        let rows = read_timing(&dir).unwrap().rows;
         assert_eq!(rows.len(), 3);
         assert_eq!(
             rows[1],
@@ -505,7 +590,45 @@ mod tests {
             !dir.join(TIMING_FILE).exists(),
             "the csv of a previous run stays"
         );
-        assert_eq!(read_timing(&dir).unwrap(), written);
+        assert_eq!(read_timing(&dir).unwrap().rows, written);
+        assert!(
+            !dir.join(TIMING_JOURNAL_FILE).exists(),
+            "the journal stays after the footer"
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_torn_last_row_is_left_out_and_reported_and_a_bad_middle_row_is_an_error() {
+        let dir = std::env::temp_dir().join(format!("mrsim-timing-cut-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join(TIMING_FILE);
+        std::fs::write(&path, format!("{HEADER}\n0,r0,5,accepted\n1,r0,6,acc")).unwrap();
+        let t = read_timing(&dir).unwrap();
+        assert_eq!(t.rows.len(), 1);
+        let cut = t.cut.expect("reported as cut");
+        assert_eq!((cut.path.as_path(), cut.line), (path.as_path(), 3));
+        std::fs::write(&path, format!("{HEADER}\n0,r0,5\n1,r0,6,accepted\n")).unwrap();
+        let e = read_timing(&dir).unwrap_err().to_string();
+        assert!(e.ends_with("timing.csv:2: expected 4 fields, got 3"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_parquet_file_cut_before_its_footer_is_read_from_its_journal() {
+        let dir = std::env::temp_dir().join(format!("mrsim-timing-journal-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut w = TimingSink::create(&dir, true).unwrap();
+        w.row(0, "r0", 10, Status::Accepted).unwrap();
+        w.row(0, "r1", 20, Status::Late).unwrap();
+        w.flush().unwrap();
+        // The run is killed here: no footer, the journal on the disk.
+        std::mem::forget(w);
+        let t = read_timing(&dir).unwrap();
+        assert_eq!(t.rows.len(), 2);
+        assert_eq!(t.rows[1].status, Status::Late);
+        let cut = t.cut.expect("reported as cut");
+        assert!(cut.to_string().contains("no Parquet footer"), "{cut}");
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

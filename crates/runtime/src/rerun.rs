@@ -16,13 +16,24 @@
 //! ([`Rerunning::modelled`] names them). Planners that are
 //! not built in (a program's own, a Python planner) may hold their own
 //! random state: the rerun names them as the reason a replay may differ.
+//!
+//! A run that was cut (its world killed: no metrics.json, or a file with a
+//! torn last row) is rerun up to its last tick the trajectory holds whole
+//! (the files are flushed together, the trajectory last, so timing.csv
+//! holds every call before it), byte for byte for those ticks:
+//! [`Rerunning::cut`] says where and why.
 
 use crate::error::{Invalid, Refusal};
 use crate::launch::{InProcessError, RunResult, run_validated_in_process};
 use crate::validate::{ScenarioSource, Validated};
 use mrsim_planners::Registry;
+use mrsim_runfolder::stream::{Cut, read_whole_rows};
 use mrsim_runfolder::timing::{Status, read_timing};
-use mrsim_runfolder::{SCENARIO_FILE, SOURCE_FILE, SourceDoc, read_json};
+use mrsim_runfolder::trajectory::read_parquet_trajectory;
+use mrsim_runfolder::{
+    METRICS_FILE, SCENARIO_FILE, SOURCE_FILE, SourceDoc, TRAJECTORY_FILE, TRAJECTORY_JOURNAL_FILE,
+    TRAJECTORY_PARQUET_FILE, read_json,
+};
 use mrsim_scenario::timing::{CallStatus, RecordedCall};
 use mrsim_scenario::{Mode, Scenario};
 use std::collections::BTreeMap;
@@ -57,6 +68,20 @@ pub struct Rerunning {
     /// whose compute is CPU work); empty when every robot replays its
     /// recorded times.
     pub modelled: Vec<String>,
+    /// The recorded run was cut: the rerun stopped at its last whole tick.
+    pub cut: Option<RerunCut>,
+}
+
+/// Where a cut run's rerun stopped, and why it was cut.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RerunCut {
+    /// The last tick the rerun ran to (the recorded trajectory's last whole
+    /// tick; the last tick timing.csv names when the run kept no
+    /// trajectory).
+    pub tick: u64,
+    /// The files that end at the cut (a torn last row, a Parquet file
+    /// without its footer); empty when only metrics.json is missing.
+    pub files: Vec<Cut>,
 }
 
 /// Why a rerun did not happen or failed.
@@ -87,7 +112,9 @@ pub fn rerun(req: &Rerun) -> Result<Rerunning, RerunError> {
         |e: &dyn std::fmt::Display| Invalid(format!("cannot rerun {}: {e}", dir.display()));
     let doc: SourceDoc = read_json(dir, SOURCE_FILE).map_err(|e| not_a_run(&e))?;
     let recorded: Scenario = read_json(dir, SCENARIO_FILE).map_err(|e| not_a_run(&e))?;
-    let rows = read_timing(dir).map_err(|e| not_a_run(&e))?;
+    let timing = read_timing(dir).map_err(|e| not_a_run(&e))?;
+    let cut = cut_of(dir, &recorded, &timing).map_err(|e| not_a_run(&e))?;
+    let rows = timing.rows;
     let source = |extra: &[String]| ScenarioSource {
         path: doc.file.clone(),
         set: doc.set.iter().chain(extra).cloned().collect(),
@@ -105,10 +132,25 @@ pub fn rerun(req: &Rerun) -> Result<Rerunning, RerunError> {
         ))
         .into());
     }
-    let validated = if req.set.is_empty() {
+    let mut set = req.set.clone();
+    if let Some(c) = &cut {
+        if c.tick == 0 {
+            return Err(Invalid(format!(
+                "cannot rerun {}: the run was cut before any tick after tick 0 reached its trajectory",
+                dir.display()
+            ))
+            .into());
+        }
+        // The run ends at the cut: max_ticks = duration / dt, rounded.
+        set.push(format!(
+            "world.duration={:?}",
+            c.tick as f64 * recorded.world.dt
+        ));
+    }
+    let validated = if set.is_empty() {
         same
     } else {
-        Validated::with_registry(source(&req.set), req.registry.clone())?
+        Validated::with_registry(source(&set), req.registry.clone())?
     };
     let mut calls: BTreeMap<String, Vec<RecordedCall>> = BTreeMap::new();
     for r in rows {
@@ -155,5 +197,55 @@ pub fn rerun(req: &Rerun) -> Result<Rerunning, RerunError> {
         result,
         not_deterministic,
         modelled,
+        cut,
     })
+}
+
+/// Whether the run in `dir` was cut and where its rerun must stop: `None`
+/// for a run that ended (metrics.json written, no torn file).
+fn cut_of(
+    dir: &std::path::Path,
+    recorded: &Scenario,
+    timing: &mrsim_runfolder::timing::Timing,
+) -> Result<Option<RerunCut>, String> {
+    let mut files: Vec<Cut> = timing.cut.iter().cloned().collect();
+    let last_timing_tick = timing.rows.iter().map(|r| r.tick).max();
+    let csv = |path: &std::path::Path, files: &mut Vec<Cut>| -> Result<Option<u64>, String> {
+        let Some((text, torn)) =
+            read_whole_rows(path).map_err(|e| format!("{}: {e}", path.display()))?
+        else {
+            return Ok(None);
+        };
+        files.extend(torn);
+        mrsim_runfolder::csv::last_whole_tick(&text)
+            .map_err(|e| format!("{}:{}: {}", path.display(), e.line, e.reason))
+    };
+    let last_tick = match recorded.output.trajectory {
+        mrsim_scenario::TrajectoryFormat::Csv => csv(&dir.join(TRAJECTORY_FILE), &mut files)?,
+        mrsim_scenario::TrajectoryFormat::Parquet => {
+            let parquet = dir.join(TRAJECTORY_PARQUET_FILE);
+            match read_parquet_trajectory(&parquet) {
+                Ok(table) => table.rows().last().map(|r| r.tick),
+                Err(_) => {
+                    let t = csv(&dir.join(TRAJECTORY_JOURNAL_FILE), &mut files)?;
+                    files.push(Cut {
+                        path: parquet,
+                        line: 0,
+                        detail: format!(
+                            "no Parquet footer; read its journal {TRAJECTORY_JOURNAL_FILE}"
+                        ),
+                    });
+                    t
+                }
+            }
+        }
+        mrsim_scenario::TrajectoryFormat::None => last_timing_tick,
+    };
+    if files.is_empty() && dir.join(METRICS_FILE).exists() {
+        return Ok(None);
+    }
+    Ok(Some(RerunCut {
+        tick: last_tick.unwrap_or(0),
+        files,
+    }))
 }

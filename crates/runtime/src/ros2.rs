@@ -54,7 +54,7 @@ pub const STALE_AFTER: Duration = Duration::from_millis(500);
 
 /// The counts file `mrsim run` has the ROS 2 agent write into the run
 /// folder.
-pub const STATS_FILE: &str = "ros2.json";
+pub const STATS_FILE: &str = mrsim_runfolder::ROS2_STATS_FILE;
 
 /// What `mrsim ros2` is asked to do.
 #[derive(Debug, Clone, Default)]

@@ -19,6 +19,9 @@ pub fn main(dir: &Path, mcap: bool) -> Result<i32> {
              walls but no /map grid (export from where the run was started)"
         );
     }
+    for c in &written.cut {
+        eprintln!("note: {c}");
+    }
     println!("wrote {}", written.path.display());
     Ok(0)
 }

@@ -15,7 +15,10 @@ use std::path::Path;
 /// Runs `mrsim report DIR`; returns the exit status.
 pub fn main(dir: &Path) -> Result<i32> {
     match mrsim_report::render_all(dir) {
-        Ok(()) => {
+        Ok(cut) => {
+            for c in &cut {
+                eprintln!("note: {c}");
+            }
             if !dir.join(mrsim_runfolder::METRICS_FILE).exists() {
                 eprintln!(
                     "note: {} has no {}: the run was cut short; drew what was recorded",
@@ -32,8 +35,11 @@ pub fn main(dir: &Path) -> Result<i32> {
                 );
             }
             println!(
-                "wrote {0}/plot.svg, {0}/plot.png, {0}/replay.html",
-                dir.display()
+                "wrote {0}/{1}, {0}/{2}, {0}/{3}",
+                dir.display(),
+                mrsim_runfolder::PLOT_SVG_FILE,
+                mrsim_runfolder::PLOT_PNG_FILE,
+                mrsim_runfolder::REPLAY_FILE
             );
             Ok(0)
         }

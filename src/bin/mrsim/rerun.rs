@@ -48,6 +48,17 @@ pub fn main(args: &RerunArgs) -> Result<i32> {
             mrsim_world::names::first_few(&done.modelled, 8)
         );
     }
+    if let Some(cut) = &done.cut {
+        println!(
+            "note: {} was cut (its world killed before the end): rerun up to tick {}, its \
+             trajectory's last whole tick",
+            args.run.display(),
+            cut.tick
+        );
+        for c in &cut.files {
+            println!("note: {c}");
+        }
+    }
     let what = if args.set.is_empty() {
         "rerun (recorded times)"
     } else if done.modelled.is_empty() {

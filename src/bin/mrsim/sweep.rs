@@ -18,7 +18,7 @@
 //! speed" when KEY is the robot's speed limit.
 
 use crate::exit::fail;
-use anyhow::{Context, Result, anyhow};
+use anyhow::{Result, anyhow};
 use clap::{Args, ValueEnum};
 use mrsim_runfolder::{ALLOWABLE_FILE, SUMMARY_FILE, SWEEP_FILE};
 use mrsim_runtime::sweep::{
@@ -91,17 +91,7 @@ impl From<SweepModeArg> for mrsim_runtime::sweep::SweepMode {
     }
 }
 
-fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
-}
-
-fn fmt_opt(v: Option<f64>) -> String {
-    v.map(|x| format!("{x}")).unwrap_or_default()
-}
+use mrsim_runfolder::sweep::{number as fmt_opt, write_table};
 
 /// Runs `mrsim sweep`; returns the exit status.
 pub fn main(args: &SweepArgs) -> Result<i32> {
@@ -174,17 +164,15 @@ pub fn main(args: &SweepArgs) -> Result<i32> {
     }
 
     // sweep.csv
-    let mut csv = String::new();
-    let mut header: Vec<String> = axes.iter().map(|(k, _)| csv_field(k)).collect();
+    let mut header: Vec<String> = axes.iter().map(|(k, _)| k.clone()).collect();
     header.push("mode".into());
     header.push("seed".into());
     header.extend(METRICS.iter().map(|(n, _)| n.to_string()));
     header.push("run".into());
-    csv.push_str(&header.join(","));
-    csv.push('\n');
+    let mut rows = Vec::with_capacity(jobs.len());
     let mut failed = 0;
     for (job, r) in jobs.iter().zip(&results) {
-        let mut row: Vec<String> = combos[job.combo].iter().map(|v| csv_field(v)).collect();
+        let mut row: Vec<String> = combos[job.combo].clone();
         row.push(job.mode.to_string());
         row.push(job.seed.to_string());
         match r {
@@ -194,24 +182,20 @@ pub fn main(args: &SweepArgs) -> Result<i32> {
                 row.extend(METRICS.iter().map(|_| String::new()));
             }
         }
-        row.push(csv_field(&job.folder));
-        csv.push_str(&row.join(","));
-        csv.push('\n');
+        row.push(job.folder.clone());
+        rows.push(row);
     }
-    std::fs::write(dir.join(SWEEP_FILE), &csv)
-        .with_context(|| format!("writing {}", dir.join(SWEEP_FILE).display()))?;
+    write_table(dir, SWEEP_FILE, &header, &rows)?;
 
     // Summary: per combination, mean and 95 % half-width of each metric.
-    let mut summary = String::new();
-    let mut sheader: Vec<String> = axes.iter().map(|(k, _)| csv_field(k)).collect();
+    let mut summary = Vec::new();
+    let mut sheader: Vec<String> = axes.iter().map(|(k, _)| k.clone()).collect();
     sheader.push("mode".into());
     sheader.push("runs".into());
     for (n, _) in METRICS {
         sheader.push(format!("{n}_mean"));
         sheader.push(format!("{n}_ci95"));
     }
-    summary.push_str(&sheader.join(","));
-    summary.push('\n');
     // The miss rate joins the table when some run missed a deadline (a
     // timing model, contended cores, a realtime run that fell behind).
     let missed = results.iter().any(|r| {
@@ -244,7 +228,7 @@ pub fn main(args: &SweepArgs) -> Result<i32> {
     let summaries = sweep.summarize(&results);
     for sum in &summaries {
         let combo = &combos[sum.combo];
-        let mut srow: Vec<String> = combo.iter().map(|v| csv_field(v)).collect();
+        let mut srow: Vec<String> = combo.clone();
         srow.push(sum.mode.to_string());
         srow.push(sum.runs.to_string());
         let mut trow: Vec<String> = combo.clone();
@@ -261,12 +245,10 @@ pub fn main(args: &SweepArgs) -> Result<i32> {
                 });
             }
         }
-        summary.push_str(&srow.join(","));
-        summary.push('\n');
+        summary.push(srow);
         table.push(trow);
     }
-    std::fs::write(dir.join(SUMMARY_FILE), &summary)
-        .with_context(|| format!("writing {}", dir.join(SUMMARY_FILE).display()))?;
+    write_table(dir, SUMMARY_FILE, &sheader, &summary)?;
     let widths: Vec<usize> = (0..table[0].len())
         .map(|c| {
             table
@@ -310,10 +292,9 @@ pub fn main(args: &SweepArgs) -> Result<i32> {
         }
     };
     if let Some(key) = &args.allowable {
-        let text = allowable(key, axes, combos, jobs, &results)?;
-        std::fs::write(dir.join(ALLOWABLE_FILE), &text.0)
-            .with_context(|| format!("writing {}", dir.join(ALLOWABLE_FILE).display()))?;
-        print!("{}", text.1);
+        let (header, rows, text) = allowable(key, axes, combos, jobs, &results)?;
+        write_table(dir, ALLOWABLE_FILE, &header, &rows)?;
+        print!("{text}");
     }
     println!(
         "sweep folder: {} (sweep.csv, summary.csv{drawn}, runs/)",
@@ -334,7 +315,7 @@ fn allowable(
     combos: &[Vec<String>],
     jobs: &[Job],
     results: &[JobResult],
-) -> Result<(String, String)> {
+) -> Result<(Vec<String>, Vec<Vec<String>>, String)> {
     let k = axes
         .iter()
         .position(|(a, _)| a == key)
@@ -372,13 +353,11 @@ fn allowable(
             None => groups.push((rest, job.seed, vec![run])),
         }
     }
-    let mut csv = String::new();
-    let mut header: Vec<String> = others.iter().map(|o| csv_field(o)).collect();
+    let mut header: Vec<String> = others.iter().map(|o| o.to_string()).collect();
     header.push("seeds".into());
     header.push(format!("{key}_allowable_mean"));
     header.push(format!("{key}_allowable_ci95"));
-    csv.push_str(&header.join(","));
-    csv.push('\n');
+    let mut csv = Vec::new();
     let mut table =
         format!("\nlargest collision-free {key}, mean over seeds (0: every value collided):\n");
     let mut keys: Vec<Vec<String>> = Vec::new();
@@ -394,12 +373,11 @@ fn allowable(
             .map(|(_, _, runs)| largest_allowable(runs))
             .collect();
         let (mean, hw) = mean_ci(&xs);
-        let mut row: Vec<String> = rest.iter().map(|v| csv_field(v)).collect();
+        let mut row: Vec<String> = rest.clone();
         row.push(xs.len().to_string());
         row.push(fmt_opt(mean));
         row.push(fmt_opt(hw));
-        csv.push_str(&row.join(","));
-        csv.push('\n');
+        csv.push(row);
         let what: Vec<String> = others
             .iter()
             .zip(rest)
@@ -417,5 +395,5 @@ fn allowable(
             xs.len()
         ));
     }
-    Ok((csv, table))
+    Ok((header, csv, table))
 }

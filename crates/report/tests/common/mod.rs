@@ -346,6 +346,7 @@ pub fn big_run(dir: &Path, n: usize, ticks: u64) -> mrsim_report::RunData {
         diagnostics: None,
         routes: Default::default(),
         encounters: Vec::new(),
+        cut: Vec::new(),
     }
 }
 
