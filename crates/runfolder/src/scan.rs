@@ -75,8 +75,8 @@ pub fn parse_scans(text: &str) -> Result<Vec<ScanRow>, (usize, String)> {
             .parse::<u64>()
             .map_err(|_| (n, format!("column `tick`: `{}` is not a tick number", f[0])))?;
         let mut ranges = Vec::with_capacity(width - FIXED_COLUMNS.len());
-        for k in FIXED_COLUMNS.len()..width {
-            if f[k].is_empty() {
+        for (k, cell) in f.iter().enumerate().skip(FIXED_COLUMNS.len()) {
+            if cell.is_empty() {
                 continue;
             }
             ranges.push(Some(num(k)?).filter(|r| r.is_finite()));
@@ -93,9 +93,12 @@ pub fn parse_scans(text: &str) -> Result<Vec<ScanRow>, (usize, String)> {
     Ok(out)
 }
 
+/// scan.csv's rows and, if its last row is torn, the cut.
+pub type ScanFile = (Vec<ScanRow>, Option<Cut>);
+
 /// Reads `dir/scan.csv`: `None` without the file, else its rows and the
 /// cut, if its last row is torn.
-pub fn read_scans(dir: &Path) -> Result<Option<(Vec<ScanRow>, Option<Cut>)>, RowsError> {
+pub fn read_scans(dir: &Path) -> Result<Option<ScanFile>, RowsError> {
     let path = dir.join(crate::SCAN_FILE);
     let Some((text, cut)) = read_whole_rows(&path).map_err(|source| RowsError::Io {
         path: path.clone(),
