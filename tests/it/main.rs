@@ -18,6 +18,7 @@ mod golden;
 mod interaction;
 mod invalid;
 mod lidar;
+mod limits;
 mod maps;
 mod orca;
 mod outputs;

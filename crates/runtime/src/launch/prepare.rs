@@ -104,14 +104,14 @@ pub(super) fn check_transport(validated: &Validated, transport: Transport) -> Re
     )))
 }
 
-/// Refuses a run that would not fit in the memory available now
-/// ([`crate::memory`]).
+/// Refuses a run that would not fit in the memory available now or under
+/// this process's limits ([`crate::memory`]).
 pub(super) fn check_memory(validated: &Validated, transport: Transport) -> Result<(), Invalid> {
     crate::memory::check(
         validated.origin(),
         validated.scenario(),
         transport,
-        mrsim_sys::memory::available_bytes(),
+        &mrsim_sys::memory::limits(),
     )
 }
 
