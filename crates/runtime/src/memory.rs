@@ -26,7 +26,7 @@
 //! RLIMIT_AS only just may still fail to allocate.
 
 use crate::error::Invalid;
-use crate::launch::Transport;
+use crate::transport::Transport;
 use mrsim_scenario::Scenario;
 use mrsim_sys::memory::{Limit, LimitKind};
 

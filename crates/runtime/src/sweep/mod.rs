@@ -345,7 +345,7 @@ pub fn check(plan: &SweepPlan) -> Result<Checked, SweepError> {
             if mode == plan.mode.modes()[0] {
                 combo_estimates.push(crate::memory::estimate(
                     v.scenario(),
-                    crate::launch::Transport::Shm,
+                    crate::transport::Transport::Shm,
                 ));
             }
             name = v.scenario().name.clone();
