@@ -21,6 +21,7 @@ mod golden;
 mod interaction;
 mod invalid;
 mod lidar;
+mod limits;
 mod maps;
 mod orca;
 mod outputs;

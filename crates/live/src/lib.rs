@@ -205,40 +205,41 @@ fn with_header(response: Response, name: &str, value: &str) -> Response {
     }
 }
 
-fn answer(request: tiny_http::Request, feed: &Feed) {
-    let url = request.url().to_string();
-    let (path, query) = url.split_once('?').unwrap_or((url.as_str(), ""));
-    let json = |body: String| {
-        with_header(
-            Response::from_string(body),
-            "Content-Type",
-            "application/json",
-        )
-    };
-    let response = match (request.method(), path) {
-        (tiny_http::Method::Get, "/") => with_header(
-            Response::from_string(PAGE),
-            "Content-Type",
-            "text/html; charset=utf-8",
-        ),
-        (tiny_http::Method::Get, "/setup") => match feed.with(|s| s.setup.clone()) {
-            Some(setup) => json(setup.as_str().to_string()),
+/// What the page asked for, answered: the status, the content type and the
+/// body for a request of `method` on `url` (whatever a browser, or anyone
+/// who reaches the port, sends).
+fn route(get: bool, url: &str, feed: &Feed) -> (u16, &'static str, String) {
+    let (path, query) = url.split_once('?').unwrap_or((url, ""));
+    const JSON: &str = "application/json";
+    match (get, path) {
+        (true, "/") => (200, "text/html; charset=utf-8", PAGE.to_string()),
+        (true, "/setup") => match feed.with(|s| s.setup.clone()) {
+            Some(setup) => (200, JSON, setup.as_str().to_string()),
             // Not yet: the world has not published its setup.
-            None => json("{}".to_string()).with_status_code(503),
+            None => (503, JSON, "{}".to_string()),
         },
-        (tiny_http::Method::Get, "/frame") => {
+        (true, "/frame") => {
             let after = query
                 .split('&')
                 .find_map(|kv| kv.strip_prefix("after="))
                 .and_then(|v| v.parse::<u64>().ok())
                 .unwrap_or(0);
             match feed.frame_after(after) {
-                Some(body) => json(body),
-                None => Response::from_string("").with_status_code(204),
+                Some(body) => (200, JSON, body),
+                None => (204, "text/plain", String::new()),
             }
         }
-        _ => Response::from_string("not found").with_status_code(404),
-    };
+        _ => (404, "text/plain", "not found".to_string()),
+    }
+}
+
+fn answer(request: tiny_http::Request, feed: &Feed) {
+    let get = *request.method() == tiny_http::Method::Get;
+    let (status, kind, body) = route(get, request.url(), feed);
+    let mut response = Response::from_string(body).with_status_code(status);
+    if kind != "text/plain" {
+        response = with_header(response, "Content-Type", kind);
+    }
     // A viewer that closed its tab mid-answer is no error of the run's.
     let _ = request.respond(with_header(response, "Cache-Control", "no-store"));
 }
@@ -520,6 +521,9 @@ fn page_setup(run_id: &Value, s: &Scenario) -> Value {
         "obstacles": s.obstacles.iter().map(|o| json!({ "name": o.name, "radius": o.radius })).collect::<Vec<_>>(),
     })
 }
+
+#[cfg(test)]
+mod fuzz;
 
 #[cfg(test)]
 mod tests {

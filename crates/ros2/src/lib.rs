@@ -15,6 +15,8 @@
 
 pub mod attachment;
 pub mod cdr;
+#[cfg(test)]
+mod fuzz;
 pub mod msgs;
 pub mod names;
 pub mod node;

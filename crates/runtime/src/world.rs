@@ -46,7 +46,7 @@ pub enum WorldError {
     },
     /// The tick loop failed.
     #[error("world: {0}")]
-    Run(mrsim_world::run::RunError),
+    Run(mrsim_world::run::WorldRunError),
     /// The run ended but could not be finished.
     #[error(transparent)]
     Finish(#[from] FinishError),
@@ -87,7 +87,7 @@ pub fn serve(
     if !req.launched && req.zenoh.is_none() {
         // A world started by hand owns its namespace: clear what a crashed
         // earlier world of the same run id left behind.
-        crate::launch::claim_namespace(&ns)?;
+        crate::namespace::claim(&ns)?;
     }
     // An agent process that drives a group of robots sends that many join
     // requests, ready commands and commands at once, and the world's

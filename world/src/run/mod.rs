@@ -49,7 +49,7 @@ use std::time::{Duration, Instant};
 pub use crate::metrics::RunMetrics;
 use mrsim_sys::process::pid_alive;
 use options::out_err;
-pub use options::{Route, RunError, RunOptions, RunOutcome};
+pub use options::{Route, RunOptions, RunOutcome, WorldRunError};
 
 /// The loop's state: the world and its transport, and one struct per role.
 struct Loop<'a> {
@@ -483,7 +483,7 @@ impl<'a> Loop<'a> {
 
     /// Waits until every robot has an agent and every agent is ready (or
     /// the start timeout, or a termination request: then true).
-    fn join_phase(&mut self) -> Result<bool, RunError> {
+    fn join_phase(&mut self) -> Result<bool, WorldRunError> {
         let join_start = self.clock.now();
         while self.admission.any_waiting() || !self.admission.all_ready() {
             if self.link.termination_requested() {
@@ -505,7 +505,7 @@ impl<'a> Loop<'a> {
                     ..Default::default()
                 };
                 let _ = self.link.publish_snapshot(&header, &[]);
-                return Err(RunError::StartTimeout {
+                return Err(WorldRunError::StartTimeout {
                     missing,
                     secs: t.as_secs_f64(),
                 });
@@ -518,7 +518,7 @@ impl<'a> Loop<'a> {
     /// Connects the tick's channels and, over a transport that says so,
     /// waits (a bounded time, not at all if `interrupted`) for each agent
     /// to have taken up its side. True if the run is interrupted.
-    fn prepare_ticks(&mut self, interrupted: bool) -> Result<bool, RunError> {
+    fn prepare_ticks(&mut self, interrupted: bool) -> Result<bool, WorldRunError> {
         if !self.link.prepare_ticks()? {
             return Ok(interrupted);
         }
@@ -828,7 +828,7 @@ pub fn run(
     world: World,
     link: &mut dyn WorldTransport,
     opts: RunOptions,
-) -> Result<RunOutcome, RunError> {
+) -> Result<RunOutcome, WorldRunError> {
     run_with_clock(world, link, opts, &SystemClock)
 }
 
@@ -838,7 +838,7 @@ fn run_with_clock(
     link: &mut dyn WorldTransport,
     opts: RunOptions,
     clock: &dyn Clock,
-) -> Result<RunOutcome, RunError> {
+) -> Result<RunOutcome, WorldRunError> {
     Contention::of(&world.scenario)?;
     let dir = opts.out_dir.clone();
     let out_err = |what| out_err(&dir, what);
@@ -960,7 +960,7 @@ fn finish(
     cpu_s: f64,
     maxrss_kb: u64,
     cpus_start: Option<CpusTime>,
-) -> Result<RunOutcome, RunError> {
+) -> Result<RunOutcome, WorldRunError> {
     let dir = lp.opts.out_dir.clone();
     let out_err = |what| out_err(&dir, what);
     // Every command's timings recorded (the live summary too).

@@ -49,7 +49,7 @@ pub struct RunOutcome {
 
 /// Why a run could not be carried out.
 #[derive(Debug, thiserror::Error)]
-pub enum RunError {
+pub enum WorldRunError {
     /// The transport failed.
     #[error(transparent)]
     Transport(#[from] TransportError),
@@ -81,7 +81,7 @@ pub enum RunError {
 pub(super) fn out_err(
     dir: &std::path::Path,
     what: &'static str,
-) -> impl FnOnce(std::io::Error) -> RunError + use<> {
+) -> impl FnOnce(std::io::Error) -> WorldRunError + use<> {
     let dir = dir.display().to_string();
-    move |source| RunError::Output { what, dir, source }
+    move |source| WorldRunError::Output { what, dir, source }
 }

@@ -37,8 +37,8 @@ mod scene;
 mod tests;
 
 use crate::error::{Invalid, Refusal};
-use crate::launch::Transport;
 use crate::sched::{Applied, Sched};
+use crate::transport::Transport;
 use mrsim_runfolder::bench::{BenchDoc, BenchRow, Overhead};
 use mrsim_runfolder::usage::Usage;
 use mrsim_runfolder::{

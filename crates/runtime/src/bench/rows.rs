@@ -2,7 +2,7 @@
 //! metrics.json and usage.json, and the overhead over the bare fan-out
 //! from pairs of rows.
 
-use crate::launch::Transport;
+use crate::transport::Transport;
 use mrsim_runfolder::bench::{BenchRow, MedianP99, Overhead, Quantiles};
 use mrsim_runfolder::usage::Usage;
 use mrsim_runfolder::{Percentiles, RunMetrics};

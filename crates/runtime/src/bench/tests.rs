@@ -2,7 +2,7 @@
 //! pairs of rows.
 
 use super::rows::{overhead, quantile, row_from_run};
-use crate::launch::Transport;
+use crate::transport::Transport;
 use mrsim_runfolder::RunMetrics;
 use mrsim_runfolder::bench::{BenchRow, MedianP99};
 use mrsim_runfolder::usage::Usage;

@@ -47,7 +47,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Duration;
 
-pub use mrsim_world::run::RunError as WorldRunError;
+pub use mrsim_world::run::WorldRunError;
 
 /// Why an in-process run failed. (The messages hold their causes: none is
 /// a `source`, so a chain printed by a caller says each thing once.)

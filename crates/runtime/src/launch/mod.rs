@@ -26,7 +26,6 @@ mod zenoh;
 
 pub(crate) use embed::run_validated_in_process;
 pub use embed::{InProcess, InProcessError, RunResult, run_in_process};
-pub(crate) use prepare::claim_namespace;
 pub use prepare::{Prepared, prepare};
 pub use spec::{ProcessSpec, Starter};
 
@@ -41,29 +40,7 @@ use std::time::Duration;
 /// How often `--restart-agents` restarts one robot's agent at most.
 pub const MAX_RESTARTS: u32 = 10;
 
-/// The transport between the world and its agents.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub enum Transport {
-    /// iceoryx2 shared memory, one process per agent.
-    #[default]
-    Shm,
-    /// crossbeam channels, the agents in a pool of threads of one process.
-    Inproc,
-    /// Zenoh over TCP, one process per agent (here on loopback; by hand,
-    /// agents on other machines).
-    Zenoh,
-}
-
-impl Transport {
-    /// The name used on the command line and in metrics.json.
-    pub fn name(self) -> &'static str {
-        match self {
-            Transport::Shm => "shm",
-            Transport::Inproc => "inproc",
-            Transport::Zenoh => "zenoh",
-        }
-    }
-}
+pub use crate::transport::Transport;
 
 /// How to carry a run out, beyond its scenario.
 #[derive(Debug, Clone, Default)]
@@ -139,7 +116,7 @@ impl std::fmt::Debug for Observing<'_> {
 
 /// Why a run failed.
 #[derive(Debug, thiserror::Error)]
-pub enum RunError {
+pub enum LaunchError {
     /// Refused before anything started: the output folder, the run id, the
     /// CPU list.
     #[error(transparent)]
@@ -169,11 +146,11 @@ pub enum RunError {
     Finish(#[from] FinishError),
 }
 
-impl Refusal for RunError {
+impl Refusal for LaunchError {
     fn refused(&self) -> Option<&Invalid> {
         match self {
-            RunError::Invalid(i) => Some(i),
-            RunError::InProcess(e) => e.refused(),
+            LaunchError::Invalid(i) => Some(i),
+            LaunchError::InProcess(e) => e.refused(),
             _ => None,
         }
     }

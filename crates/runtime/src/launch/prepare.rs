@@ -3,7 +3,7 @@
 
 use super::zenoh::{free_loopback_endpoint, loopback_of};
 use super::{Event, Starter};
-use super::{RunError, RunRequest, Transport};
+use super::{LaunchError, RunRequest, Transport};
 use crate::error::Invalid;
 use crate::finish::Outcome;
 use crate::sched::Applied;
@@ -29,7 +29,7 @@ pub struct Prepared {
 /// world's is refused), the scheduling of this process and its children,
 /// and the termination signals (from now on they stop the run instead of
 /// this process).
-pub fn prepare(validated: Validated, request: RunRequest) -> Result<Prepared, RunError> {
+pub fn prepare(validated: Validated, request: RunRequest) -> Result<Prepared, LaunchError> {
     check_transport(&validated, request.transport)?;
     check_memory(&validated, request.transport)?;
     let dir = crate::out::prepare(request.out.as_deref(), &validated.scenario().name)?;
@@ -39,7 +39,7 @@ pub fn prepare(validated: Validated, request: RunRequest) -> Result<Prepared, Ru
         .clone()
         .unwrap_or_else(Namespace::fresh_run_id);
     let ns = Namespace::new(&run_id).map_err(|e| Invalid(e.to_string()))?;
-    claim_namespace(&ns)?;
+    crate::namespace::claim(&ns)?;
     let applied = crate::sched::apply(&request.sched)?;
     let cores = crate::cores::claim(
         validated.scenario(),
@@ -113,30 +113,15 @@ pub(super) fn check_transport(validated: &Validated, transport: Transport) -> Re
     )))
 }
 
-/// Refuses a run that would not fit in the memory available now
-/// ([`crate::memory`]).
+/// Refuses a run that would not fit in the memory available now or under
+/// this process's limits ([`crate::memory`]).
 pub(super) fn check_memory(validated: &Validated, transport: Transport) -> Result<(), Invalid> {
     crate::memory::check(
         validated.origin(),
         validated.scenario(),
         transport,
-        mrsim_sys::memory::available_bytes(),
+        &mrsim_sys::memory::limits(),
     )
-}
-
-/// Clears what a crashed earlier run with this id left behind, unless a
-/// live world holds the run (then refuses: two worlds cannot share one).
-pub(crate) fn claim_namespace(ns: &Namespace) -> Result<(), Invalid> {
-    match mrsim_transport::shm::world_running(ns) {
-        Ok(true) => Err(Invalid(format!(
-            "run id `{}` is in use by a running world; choose another --run",
-            ns.run_id()
-        ))),
-        _ => {
-            ns.remove_leftovers();
-            Ok(())
-        }
-    }
 }
 
 impl Prepared {
@@ -177,7 +162,7 @@ impl Prepared {
         self,
         starter: &dyn Starter,
         on_event: &mut dyn FnMut(Event<'_>),
-    ) -> Result<Outcome, RunError> {
+    ) -> Result<Outcome, LaunchError> {
         match self.request.transport {
             Transport::Inproc => Ok(self.run_inproc(on_event)?),
             Transport::Shm | Transport::Zenoh => self.run_processes(starter, on_event),

@@ -4,7 +4,7 @@
 
 use super::prepare::Prepared;
 use super::zenoh::zenoh_sides;
-use super::{Event, MAX_RESTARTS, ProcessSpec, RunError, Starter, Transport, describe};
+use super::{Event, LaunchError, MAX_RESTARTS, ProcessSpec, Starter, Transport, describe};
 use crate::agent::{AgentRequest, Misbehave, RECONNECT};
 use crate::finish::{AgentFailure, Ending, Outcome, WorldFailure};
 use crate::ros2::Ros2Request;
@@ -20,7 +20,7 @@ impl Prepared {
         self,
         starter: &dyn Starter,
         on_event: &mut dyn FnMut(Event<'_>),
-    ) -> Result<Outcome, RunError> {
+    ) -> Result<Outcome, LaunchError> {
         // The world runs in its own process: this one's copy goes.
         let (source, scenario) = self.validated.into_scenario();
         let (dir, run_id) = (&self.dir, self.ns.run_id());
@@ -65,7 +65,7 @@ impl Prepared {
                 zenoh: world_net,
             },
         })
-        .map_err(RunError::SpawnWorld)?;
+        .map_err(LaunchError::SpawnWorld)?;
         // One process per group of `robots_per_agent` robots (the last
         // takes the rest), named after the group's first robot.
         // An `external` robot's agent is its user's program: none is started.
@@ -77,7 +77,7 @@ impl Prepared {
             .collect();
         let k = (scenario.world.robots_per_agent as usize).max(1);
         let groups: Vec<&[&str]> = names.chunks(k).collect();
-        let spawn = |group: &[&str]| -> Result<Child, RunError> {
+        let spawn = |group: &[&str]| -> Result<Child, LaunchError> {
             let first = group.first().copied().unwrap_or_default();
             start(ProcessSpec::Agent(AgentRequest {
                 robots: group.iter().map(|r| r.to_string()).collect(),
@@ -88,7 +88,7 @@ impl Prepared {
                 zenoh: agent_net.clone(),
                 reconnect: RECONNECT,
             }))
-            .map_err(|source| RunError::SpawnAgent {
+            .map_err(|source| LaunchError::SpawnAgent {
                 robot: group_name(group),
                 source,
             })
@@ -126,7 +126,7 @@ impl Prepared {
                 map: scenario.map.as_ref().map(|m| PathBuf::from(&m.file)),
                 stats_out: Some(dir.join(crate::ros2::STATS_FILE)),
             }))
-            .map_err(|source| RunError::SpawnAgent {
+            .map_err(|source| LaunchError::SpawnAgent {
                 robot: group_name(&ros2),
                 source,
             })?;
@@ -136,7 +136,7 @@ impl Prepared {
         // Wait for the world; forward a signal to everything we started.
         let mut forwarded: Option<Instant> = None;
         let world_status = loop {
-            if let Some(status) = world.try_wait().map_err(RunError::Wait)? {
+            if let Some(status) = world.try_wait().map_err(LaunchError::Wait)? {
                 break status;
             }
             on_event(Event::Waiting);

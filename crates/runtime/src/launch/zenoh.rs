@@ -1,12 +1,12 @@
 //! Zenoh between a world and agents started here: where the world listens
 //! and where the agents connect.
 
-use super::RunError;
+use super::LaunchError;
 use crate::error::Invalid;
 use mrsim_transport::zenoh::ZenohOptions;
 
 /// A loopback endpoint on a port free a moment ago.
-pub(super) fn free_loopback_endpoint() -> Result<String, RunError> {
+pub(super) fn free_loopback_endpoint() -> Result<String, LaunchError> {
     let port = std::net::TcpListener::bind("127.0.0.1:0")
         .and_then(|l| l.local_addr())
         .map_err(|e| Invalid(format!("cannot find a free loopback port for zenoh: {e}")))?
@@ -26,7 +26,9 @@ pub(super) fn loopback_of(listen: &str) -> String {
 /// port unless given) and where its agents connect (the same place,
 /// loopback when the world listens on every address), both with the
 /// config file.
-pub(super) fn zenoh_sides(opts: &ZenohOptions) -> Result<(ZenohOptions, ZenohOptions), RunError> {
+pub(super) fn zenoh_sides(
+    opts: &ZenohOptions,
+) -> Result<(ZenohOptions, ZenohOptions), LaunchError> {
     let listen = match &opts.endpoint {
         Some(e) => e.clone(),
         None => free_loopback_endpoint()?,

@@ -205,9 +205,15 @@ pub struct Checked {
     /// Every file the runs read besides the scenario itself (maps' YAML
     /// files and images), as the scenario's loader found them.
     pub files: Vec<PathBuf>,
+    /// Each run's memory estimate, in [`Checked::jobs`]' order (every run
+    /// an `mrsim run` over shared memory, as [`Sweep::run`] starts them).
+    pub estimates: Vec<crate::memory::Estimate>,
 }
 
-/// Checks the plan and every combination, and makes the sweep's folder.
+/// Checks the plan and every combination, refuses runs at once that would
+/// not fit in memory together ([`crate::memory::check_at_once`]: the
+/// lockstep ones `workers` at once, the realtime ones one at a time), and
+/// makes the sweep's folder.
 pub fn prepare(plan: &SweepPlan) -> Result<Sweep, SweepError> {
     let Checked {
         axes,
@@ -216,7 +222,28 @@ pub fn prepare(plan: &SweepPlan) -> Result<Sweep, SweepError> {
         name,
         length_unit,
         files: _,
+        estimates,
     } = check(plan)?;
+    let workers = plan
+        .jobs
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+        .min(jobs.len())
+        .max(1);
+    let limits = mrsim_sys::memory::limits();
+    let origin = plan.scenario.display().to_string();
+    for &mode in plan.mode.modes() {
+        let batch: Vec<crate::memory::Estimate> = jobs
+            .iter()
+            .zip(&estimates)
+            .filter(|(j, _)| j.mode == mode)
+            .map(|(_, e)| *e)
+            .collect();
+        let at_once = match mode {
+            Mode::Lockstep => workers,
+            Mode::Realtime => 1,
+        };
+        crate::memory::check_at_once(&origin, &batch, at_once, &limits)?;
+    }
     let dir = crate::out::prepare(plan.out.as_deref(), &format!("sweep-{name}"))?;
     std::fs::create_dir_all(dir.join("runs")).map_err(|e| {
         Invalid(format!(
@@ -224,11 +251,6 @@ pub fn prepare(plan: &SweepPlan) -> Result<Sweep, SweepError> {
             dir.display()
         ))
     })?;
-    let workers = plan
-        .jobs
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
-        .min(jobs.len())
-        .max(1);
     Ok(Sweep {
         plan: plan.clone(),
         axes,
@@ -292,6 +314,7 @@ pub fn check(plan: &SweepPlan) -> Result<Checked, SweepError> {
     let mut name = String::new();
     let mut length_unit = "m";
     let mut files: Vec<PathBuf> = Vec::new();
+    let mut combo_estimates: Vec<crate::memory::Estimate> = Vec::new();
     for &mode in plan.mode.modes() {
         for combo in &combos {
             let v = Validated::new(ScenarioSource {
@@ -323,6 +346,12 @@ pub fn check(plan: &SweepPlan) -> Result<Checked, SweepError> {
                     }
                 }
             }
+            if mode == plan.mode.modes()[0] {
+                combo_estimates.push(crate::memory::estimate(
+                    v.scenario(),
+                    crate::transport::Transport::Shm,
+                ));
+            }
             name = v.scenario().name.clone();
             length_unit = match v.scenario().length_unit {
                 mrsim_scenario::LengthUnit::M => "m",
@@ -332,6 +361,7 @@ pub fn check(plan: &SweepPlan) -> Result<Checked, SweepError> {
         }
     }
     let mut jobs: Vec<Job> = Vec::new();
+    let mut estimates = Vec::new();
     for &mode in plan.mode.modes() {
         for (i, c) in combos.iter().enumerate() {
             let l = label(i, &axes, c);
@@ -345,6 +375,7 @@ pub fn check(plan: &SweepPlan) -> Result<Checked, SweepError> {
                 mode,
                 folder: format!("runs/{l}-s{seed}{suffix}"),
             }));
+            estimates.extend((1..=plan.seeds).map(|_| combo_estimates[i]));
         }
     }
     Ok(Checked {
@@ -354,6 +385,7 @@ pub fn check(plan: &SweepPlan) -> Result<Checked, SweepError> {
         name,
         length_unit,
         files,
+        estimates,
     })
 }
 

@@ -44,6 +44,10 @@ pub(crate) fn decode(bytes: &[u8]) -> Result<Pixels, String> {
     }
 }
 
+/// The most pixel bytes a PNG's bytes can decode to: deflate's largest
+/// ratio (about 1032:1), with room for the filter bytes.
+const PNG_MAX_RATIO: usize = 1100;
+
 fn png(bytes: &[u8]) -> Result<Pixels, String> {
     let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
     decoder.set_transformations(png::Transformations::EXPAND);
@@ -51,6 +55,19 @@ fn png(bytes: &[u8]) -> Result<Pixels, String> {
     let size = reader
         .output_buffer_size()
         .ok_or("bad PNG: the image is too large")?;
+    // Deflate expands at most about 1032 times: an image whose pixels
+    // could not come out of the file's bytes is refused before its buffer
+    // is made, rather than allocated on the header's word.
+    if size > bytes.len().saturating_mul(PNG_MAX_RATIO) {
+        let info = reader.info();
+        return Err(format!(
+            "bad PNG: its header says {} x {} pixels ({size} bytes), more than its {} bytes \
+             can hold",
+            info.width,
+            info.height,
+            bytes.len()
+        ));
+    }
     let mut buf = vec![0u8; size];
     let frame = reader
         .next_frame(&mut buf)
@@ -119,7 +136,10 @@ fn pgm(bytes: &[u8], binary: bool) -> Result<Pixels, String> {
     let count = width
         .checked_mul(height)
         .ok_or("bad PGM header: the image is too large")?;
-    let mut samples = Vec::with_capacity(count);
+    // Room only for what the file can hold: at least one byte a sample in
+    // P5, two (a digit and a space) in P2; a header claiming more than that
+    // is caught below without allocating for its claim.
+    let mut samples = Vec::with_capacity(count.min(bytes.len()));
     if binary {
         // Exactly one whitespace character ends the header.
         if !bytes.get(at).is_some_and(u8::is_ascii_whitespace) {
@@ -127,7 +147,9 @@ fn pgm(bytes: &[u8], binary: bool) -> Result<Pixels, String> {
         }
         let raster = &bytes[at + 1..];
         let wide = max > 255;
-        let need = count * if wide { 2 } else { 1 };
+        let need = count
+            .checked_mul(if wide { 2 } else { 1 })
+            .ok_or("bad PGM header: the image is too large")?;
         if raster.len() < need {
             return Err(format!(
                 "the PGM's pixel data is too short: {width} x {height} pixels need {need} bytes, \

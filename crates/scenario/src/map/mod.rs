@@ -24,6 +24,8 @@
 //! default: nobody has seen what is there); any other value is free.
 //! [`OccupancyMap::walls`] traces the walls' outlines into segments.
 
+#[cfg(test)]
+mod fuzz;
 mod image;
 mod trace;
 
@@ -319,7 +321,13 @@ pub fn load(yaml: &Path) -> Result<OccupancyMap, MapError> {
         path: meta.image.clone(),
         source,
     })?;
-    let pixels = image::decode(&bytes).map_err(|reason| MapError::Image {
+    from_image(yaml, meta, &bytes)
+}
+
+/// A map from its checked YAML `meta` (read from `yaml`) and its image's
+/// bytes.
+fn from_image(yaml: &Path, meta: MapMeta, bytes: &[u8]) -> Result<OccupancyMap, MapError> {
+    let pixels = image::decode(bytes).map_err(|reason| MapError::Image {
         path: meta.image.clone(),
         reason,
     })?;

@@ -51,6 +51,8 @@
 
 mod agent;
 mod auth;
+#[cfg(test)]
+mod fuzz;
 mod inbox;
 pub mod keys;
 mod observer;
