@@ -102,7 +102,7 @@ fn slice_is_bounded<H: Wire + Default, T: Wire>(
     let mut items: Vec<T> = Vec::new();
     let (ok, largest) = largest::measure(|| decode_slice(bytes, max, &mut header, &mut items));
     let whole = bytes.len() >= H::LEN
-        && (bytes.len() - H::LEN) % T::LEN == 0
+        && (bytes.len() - H::LEN).is_multiple_of(T::LEN)
         && (bytes.len() - H::LEN) / T::LEN <= max;
     prop_assert_eq!(ok, whole);
     prop_assert!(items.len() <= max);
