@@ -127,6 +127,11 @@ pub fn run_inproc(
     Ok(result.dir.to_string_lossy().into_owned())
 }
 
+/// What `rerun_inproc` returns to Python: the rerun's folder, the robots
+/// (name, planner) not known to be deterministic, and where a cut run's
+/// rerun stopped.
+type RerunDone = (String, Vec<(String, String)>, Option<String>);
+
 /// Reruns the recorded run folder `run` in this process in lockstep with
 /// the timing it recorded (`mrsim rerun`); returns the rerun's folder and
 /// the robots (name, planner) whose planner is not built in: not known to
@@ -141,7 +146,7 @@ pub fn rerun_inproc(
     set: Vec<String>,
     planners: Option<Bound<'_, PyDict>>,
     render: bool,
-) -> PyResult<(String, Vec<(String, String)>, Option<String>)> {
+) -> PyResult<RerunDone> {
     let req = mrsim_runtime::rerun::Rerun {
         run,
         out,
