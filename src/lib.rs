@@ -113,17 +113,17 @@ pub use mrsim_planners::{
     Vec2,
 };
 pub use mrsim_runfolder::{FileError, RobotMetrics, RunMetrics};
-pub use mrsim_runtime::finish::{AgentFailure, FinishError};
-pub use mrsim_runtime::inproc::InprocError;
-/// Why the world of a run in this process could not carry it out (its
-/// output files), as [`InprocError::Run`] holds it.
-pub use mrsim_runtime::inproc::WorldRunError;
 /// Why [`run_in_process`] failed: refused before anything ran
 /// ([`RunError::Invalid`]), a planner that failed in lockstep
 /// ([`RunError::Planner`]), the run or its ending ([`RunError::Run`],
 /// [`RunError::Finish`]). A run in this process starts no process, so no
 /// variant speaks of one.
-pub use mrsim_runtime::launch::InProcessError as RunError;
-pub use mrsim_runtime::launch::{InProcess, RunResult, run_in_process};
+pub use mrsim_runtime::InProcessError as RunError;
+pub use mrsim_runtime::InprocError;
+/// Why the world of a run in this process could not carry it out (its
+/// output files), as [`InprocError::Run`] holds it.
+pub use mrsim_runtime::WorldRunError;
+pub use mrsim_runtime::{AgentFailure, FinishError};
+pub use mrsim_runtime::{InProcess, RunResult, run_in_process};
 pub use mrsim_runtime::{Invalid, ScenarioSource};
 pub use mrsim_scenario::Mode;

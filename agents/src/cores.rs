@@ -8,10 +8,11 @@
 //! - `fifo` -> SCHED_FIFO one level below the robot's level in the model
 //!   ([`mrsim_scenario::cores::fifo_levels`]: its `timing.priority`, or
 //!   rate-monotonic, 99 for the shortest `period_ticks`, one below for the
-//!   next, ...): 99 is the world's, which runs above every agent. The
-//!   order is the model's, but for levels 1 and 2, which both run at 1.
-//!   Equal levels run in the order they became runnable (Linux), where the
-//!   model orders them by name.
+//!   next robot by period and then name, ...): 99 is the world's, which
+//!   runs above every agent. The order is the model's, but for levels 1
+//!   and 2, which both run at 1. Equal levels given by hand run in the
+//!   order they became runnable (Linux), where the model orders them by
+//!   name.
 //! - `deadline` -> SCHED_DEADLINE with the robot's `timing.reservation`
 //!   (runtime, deadline = period, period); a robot without one (its
 //!   compute takes no core, `cpu = false`) runs SCHED_OTHER.

@@ -48,6 +48,10 @@ pub(crate) struct Seat {
     /// Realtime: the calling thread's CPU clock when the current planner
     /// call began (taken by the command that answers it).
     call_cpu_ns: Option<u64>,
+    /// Lockstep: the CPU of the current call as the model or the record
+    /// has it (sent instead of a measurement, so the run's timing.csv is
+    /// the same whatever the machine).
+    model_cpu_ns: Option<u64>,
 }
 
 /// How timing drives one robot's planner (`mrsim_scenario::timing`).
@@ -189,6 +193,7 @@ pub(crate) fn seat_of(
         timed,
         policy,
         call_cpu_ns: None,
+        model_cpu_ns: None,
         me,
         claim: opts.impersonate.unwrap_or(me as u32),
         token: reply.token,
@@ -403,9 +408,10 @@ impl Seat {
         };
         // Realtime: the CPU the planner call took on this thread, and
         // under SCHED_DEADLINE the overruns so far.
-        let cpu_ns = self.call_cpu_ns.take().map_or(0, |start| {
+        let measured = self.call_cpu_ns.take().map_or(0, |start| {
             mrsim_sys::cpu::thread_cpu_ns().saturating_sub(start)
         });
+        let cpu_ns = self.model_cpu_ns.take().unwrap_or(measured);
         let overruns = match self.policy {
             Some(mrsim_sys::policy::Policy::Deadline { .. }) => {
                 u32::try_from(mrsim_sys::policy::overruns()).unwrap_or(u32::MAX)
@@ -556,6 +562,7 @@ impl Seat {
         match (step, self.timed.as_mut().map(|t| &mut t.how)) {
             (Step::Modelled { start_ns }, Some(TimedBy::Modelled(clerk))) => {
                 let s = clerk.planned(header.tick, *start_ns, sensed);
+                self.model_cpu_ns = Some(s.cpu_ns);
                 (header.published_ns + s.sent_ns, s.lost)
             }
             (Step::Cored, Some(TimedBy::Cored { timing, seed })) => (
@@ -569,6 +576,7 @@ impl Seat {
                     CallStatus::Late => c.sent_ns.max(*deadline_ns + 1),
                     _ => c.sent_ns,
                 };
+                self.model_cpu_ns = Some(c.cpu_ns);
                 (header.published_ns + sent, c.status == CallStatus::Lost)
             }
             (Step::Spent, Some(TimedBy::Spent { timing, seed })) => {

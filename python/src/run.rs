@@ -5,7 +5,7 @@
 use crate::planner::{PyPlanner, describe};
 use mrsim_planners::{BuildError, ParamValue, Params, Registry};
 use mrsim_runtime::ScenarioSource;
-use mrsim_runtime::launch::{self, InProcess, InProcessError as RunError};
+use mrsim_runtime::{InProcess, InProcessError as RunError};
 use mrsim_scenario::Mode;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -122,7 +122,7 @@ pub fn run_inproc(
     // The GIL is released for the run: its worker threads take it to call
     // the Python planners.
     let result = py
-        .detach(|| launch::run_in_process(&req))
+        .detach(|| mrsim_runtime::run_in_process(&req))
         .map_err(|e| run_error(py, e))?;
     Ok(result.dir.to_string_lossy().into_owned())
 }
@@ -190,6 +190,6 @@ fn run_error(py: Python<'_>, e: RunError) -> PyErr {
             err
         }
         RunError::Invalid(i) => PyValueError::new_err(i.to_string()),
-        other => PyRuntimeError::new_err(mrsim_runtime::error::in_words(&other)),
+        other => PyRuntimeError::new_err(mrsim_runtime::in_words(&other)),
     }
 }

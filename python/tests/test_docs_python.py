@@ -19,8 +19,8 @@ def in_scratch(repo, tmp_path, monkeypatch):
     return tmp_path
 
 
-def test_the_chapter_shows_three_python_examples(repo):
-    assert len(blocks(repo, "python")) == 3
+def test_the_chapter_shows_four_python_examples(repo):
+    assert len(blocks(repo, "python")) == 4
 
 
 def test_the_make_vec_example_runs_and_builds_a_nav_vector_env(repo, capsys):
@@ -46,3 +46,17 @@ def test_the_dask_example_runs_on_a_local_cluster(repo, in_scratch):
     exec(code, scope)
     frame = scope["rows"]
     assert list(frame["ticks"]) == [30.0, 60.0]
+
+
+def test_the_load_rows_example_reads_a_cut_timing_file(repo, tmp_path, capsys):
+    import mrsim
+
+    run_dir = tmp_path / "run"
+    run_dir.mkdir()
+    (run_dir / mrsim.FILES["timing"]).write_text(
+        "tick,robot,sent_ns,status,cpu_ns\n0,r0,5,accepted,3\n1,r0,6,acc"
+    )
+    scope = {"mrsim": mrsim, "run_dir": run_dir}
+    exec(blocks(repo, "python")[3], scope)
+    assert [r["sent_ns"] for r in scope["rows"]] == ["5"]
+    assert "the run was cut" in capsys.readouterr().out

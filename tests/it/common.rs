@@ -434,3 +434,113 @@ pub fn segment_distance(p: [f64; 2], [a, b]: [[f64; 2]; 2]) -> f64 {
     let t = (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0);
     (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy)
 }
+
+/// The four robots r0..r3 of the timing tests, crossing in pairs (orca,
+/// radius 0.3, 1 m/s) at 10 Hz: a scenario named `name` whose `[world]`
+/// table ends with `world` (extra lines), followed by `tables` (a
+/// `[world.cpus]` or `[defaults.timing]`, say) and, if `obstacle`, one
+/// randomly moving obstacle o1.
+pub fn four_crossing(name: &str, world: &str, tables: &str, obstacle: bool) -> String {
+    let obstacle = if obstacle {
+        r#"
+[[obstacle]]
+name = "o1"
+start = [1.5, 2.0]
+radius = 0.3
+motion = { model = "random", accel_sigma = 0.5, alpha1 = 0.8, beta1 = 0.5, max_speed = 0.4 }
+"#
+    } else {
+        ""
+    };
+    format!(
+        r#"name = "{name}"
+[world]
+dt = 0.1
+substeps = 10
+seed = 7
+{world}
+
+[defaults]
+radius = 0.3
+max_speed = 1.0
+max_accel = 4.0
+planner = "orca"
+
+{tables}
+
+[[robot]]
+name = "r0"
+start = [0.0, 0.0]
+goal = [6.0, 0.0]
+
+[[robot]]
+name = "r1"
+start = [6.0, 0.3]
+goal = [0.0, 0.3]
+
+[[robot]]
+name = "r2"
+start = [3.0, -3.0]
+goal = [3.0, 3.0]
+
+[[robot]]
+name = "r3"
+start = [3.2, 3.0]
+goal = [3.2, -3.0]
+{obstacle}"#
+    )
+}
+
+/// Writes `text` as `dir/tag.toml` and runs it into `dir/tag` (quiet, no
+/// report) with `extra` arguments, asserting it succeeds; the run folder.
+pub fn run_quietly(dir: &Path, text: &str, tag: &str, extra: &[&str]) -> PathBuf {
+    let f = dir.join(format!("{tag}.toml"));
+    std::fs::write(&f, text).expect("write scenario");
+    let out = dir.join(tag);
+    let mut args = vec!["--quiet", "--no-report"];
+    args.extend(extra);
+    assert_ok(&run(&f, &out, &run_id(tag), &args));
+    out
+}
+
+/// The bytes of the run folder `dir`'s file `name`.
+pub fn file_bytes(dir: &Path, name: &str) -> Vec<u8> {
+    std::fs::read(dir.join(name)).unwrap_or_else(|e| panic!("{}: {e}", dir.join(name).display()))
+}
+
+/// Per robot r0..r(n-1) of metrics.json: (deadline_misses, commands_late).
+pub fn misses_of(dir: &Path, n: usize) -> Vec<(u64, u64)> {
+    let m = metrics(dir);
+    (0..n)
+        .map(|i| {
+            let r = &m["robots"][format!("r{i}")];
+            (
+                r["deadline_misses"].as_u64().expect("misses"),
+                r["commands_late"].as_u64().expect("late"),
+            )
+        })
+        .collect()
+}
+
+/// One row of timing.csv: (tick, robot, sent_ns, status, cpu_ns).
+pub type CallRow = (u64, String, u64, String, u64);
+
+/// timing.csv's rows in file order (its header checked).
+pub fn timing_rows(dir: &Path) -> Vec<CallRow> {
+    let text = std::fs::read_to_string(dir.join("timing.csv")).expect("timing.csv");
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("tick,robot,sent_ns,status,cpu_ns"));
+    lines
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            assert_eq!(f.len(), 5, "{l}");
+            (
+                f[0].parse().expect("tick"),
+                f[1].to_string(),
+                f[2].parse().expect("sent_ns"),
+                f[3].to_string(),
+                f[4].parse().expect("cpu_ns"),
+            )
+        })
+        .collect()
+}

@@ -16,99 +16,17 @@ fn crossing(cpus: &str, timing: &str, duration: f64) -> String {
     } else {
         format!("[world.cpus]\n{cpus}\n")
     };
-    format!(
-        r#"name = "cored-crossing"
-[world]
-dt = 0.1
-substeps = 10
-duration = {duration}
-seed = 7
-stall_timeout = 10.0
-
-{cpus}
-[defaults]
-radius = 0.3
-max_speed = 1.0
-max_accel = 4.0
-planner = "orca"
-
-[defaults.timing]
-{timing}
-
-[[robot]]
-name = "r0"
-start = [0.0, 0.0]
-goal = [6.0, 0.0]
-
-[[robot]]
-name = "r1"
-start = [6.0, 0.3]
-goal = [0.0, 0.3]
-
-[[robot]]
-name = "r2"
-start = [3.0, -3.0]
-goal = [3.0, 3.0]
-
-[[robot]]
-name = "r3"
-start = [3.2, 3.0]
-goal = [3.2, -3.0]
-
-[[obstacle]]
-name = "o1"
-start = [1.5, 2.0]
-radius = 0.3
-motion = {{ model = "random", accel_sigma = 0.5, alpha1 = 0.8, beta1 = 0.5, max_speed = 0.4 }}
-"#
+    four_crossing(
+        "cored-crossing",
+        &format!("duration = {duration}\nstall_timeout = 10.0"),
+        &format!("[defaults.timing]\n{timing}\n\n{cpus}"),
+        true,
     )
 }
 
-/// Runs `text` into `dir/tag` with `extra` arguments; the run folder.
-fn go(dir: &Path, text: &str, tag: &str, extra: &[&str]) -> std::path::PathBuf {
-    let f = dir.join(format!("{tag}.toml"));
-    std::fs::write(&f, text).expect("write scenario");
-    let out = dir.join(tag);
-    let mut args = vec!["--quiet", "--no-report"];
-    args.extend(extra);
-    assert_ok(&run(&f, &out, &run_id(tag), &args));
-    out
-}
-
-fn bytes(dir: &Path, name: &str) -> Vec<u8> {
-    std::fs::read(dir.join(name)).unwrap_or_else(|e| panic!("{}: {e}", dir.join(name).display()))
-}
-
-/// Per robot: (deadline_misses, commands_late).
-fn misses(dir: &Path) -> Vec<(u64, u64)> {
-    let m = metrics(dir);
-    (0..4)
-        .map(|i| {
-            let r = &m["robots"][format!("r{i}")];
-            (
-                r["deadline_misses"].as_u64().expect("misses"),
-                r["commands_late"].as_u64().expect("late"),
-            )
-        })
-        .collect()
-}
-
-/// timing.csv's rows, sorted: (tick, robot, sent_ns, status).
-fn calls(dir: &Path) -> Vec<(u64, String, u64, String)> {
-    let text = std::fs::read_to_string(dir.join("timing.csv")).expect("timing.csv");
-    let mut rows: Vec<_> = text
-        .lines()
-        .skip(1)
-        .map(|l| {
-            let f: Vec<&str> = l.split(',').collect();
-            (
-                f[0].parse().expect("tick"),
-                f[1].to_string(),
-                f[2].parse().expect("sent_ns"),
-                f[3].to_string(),
-            )
-        })
-        .collect();
+/// timing.csv's rows, sorted.
+fn calls(dir: &Path) -> Vec<CallRow> {
+    let mut rows = timing_rows(dir);
     rows.sort();
     rows
 }
@@ -129,22 +47,22 @@ fn shared_cores_give_the_same_trajectory_and_misses_over_shared_memory_and_in_pr
     ] {
         let timing = format!("{VARIED}\nreservation = {{ runtime_ms = 25, period_ms = 100 }}");
         let text = crossing(cpus, &timing, 6.0);
-        let a = go(&dir, &text, "a", &["--transport", "inproc"]);
-        let b = go(&dir, &text, "b", &["--transport", "inproc"]);
-        let c = go(&dir, &text, "c", &[]);
-        let ma = misses(&a);
+        let a = run_quietly(&dir, &text, "a", &["--transport", "inproc"]);
+        let b = run_quietly(&dir, &text, "b", &["--transport", "inproc"]);
+        let c = run_quietly(&dir, &text, "c", &[]);
+        let ma = misses_of(&a, 4);
         assert!(
             ma.iter().any(|&(_, l)| l > 0),
             "{cpus}: one core for four makes late commands: {ma:?}"
         );
         for other in [&b, &c] {
             assert_eq!(
-                bytes(&a, "trajectory.csv"),
-                bytes(other, "trajectory.csv"),
+                file_bytes(&a, "trajectory.csv"),
+                file_bytes(other, "trajectory.csv"),
                 "{cpus}"
             );
             assert_eq!(calls(&a), calls(other), "{cpus}");
-            assert_eq!(ma, misses(other), "{cpus}");
+            assert_eq!(ma, misses_of(other, 4), "{cpus}");
         }
     }
     let _ = std::fs::remove_dir_all(&dir);
@@ -155,15 +73,21 @@ fn a_core_per_robot_gives_what_the_timing_model_gives_alone() {
     let dir = fresh_dir("cores-own");
     let alone = crossing("", &VARIED.replace(", cpu = true", ""), 6.0);
     let cored = crossing("count = 4", VARIED, 6.0);
-    let a = go(&dir, &alone, "alone", &["--transport", "inproc"]);
-    let b = go(&dir, &cored, "cored", &["--transport", "inproc"]);
-    assert_eq!(bytes(&a, "trajectory.csv"), bytes(&b, "trajectory.csv"));
+    let a = run_quietly(&dir, &alone, "alone", &["--transport", "inproc"]);
+    let b = run_quietly(&dir, &cored, "cored", &["--transport", "inproc"]);
+    assert_eq!(
+        file_bytes(&a, "trajectory.csv"),
+        file_bytes(&b, "trajectory.csv")
+    );
     assert_eq!(calls(&a), calls(&b));
-    assert_eq!(misses(&a), misses(&b));
+    assert_eq!(misses_of(&a, 4), misses_of(&b, 4));
     // Without [world.cpus], cpu = true is a core of its own per agent too.
     let own = crossing("", VARIED, 6.0);
-    let c = go(&dir, &own, "own", &["--transport", "inproc"]);
-    assert_eq!(bytes(&a, "trajectory.csv"), bytes(&c, "trajectory.csv"));
+    let c = run_quietly(&dir, &own, "own", &["--transport", "inproc"]);
+    assert_eq!(
+        file_bytes(&a, "trajectory.csv"),
+        file_bytes(&c, "trajectory.csv")
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -171,38 +95,62 @@ fn a_core_per_robot_gives_what_the_timing_model_gives_alone() {
 fn four_planners_of_40_ms_on_one_core_miss_where_each_on_its_own_core_does_not() {
     let dir = fresh_dir("cores-share");
     let timing = "compute = { ms = 40, cpu = true }";
-    let own = go(
+    let own = run_quietly(
         &dir,
         &crossing("count = 4", timing, 3.0),
         "own",
         &["--transport", "inproc"],
     );
-    assert_eq!(misses(&own), vec![(0, 0); 4]);
+    assert_eq!(misses_of(&own, 4), vec![(0, 0); 4]);
     // 160 ms of work per 100 ms tick on one core: under fair every call
     // takes 160 ms, so every command is late and no robot moves.
-    let one = go(
+    let one = run_quietly(
         &dir,
         &crossing("count = 1", timing, 3.0),
         "one",
         &["--transport", "inproc"],
     );
     assert!(
-        misses(&one).iter().all(|&(m, l)| m == 30 && l > 0),
+        misses_of(&one, 4).iter().all(|&(m, l)| m == 30 && l > 0),
         "{:?}",
-        misses(&one)
+        misses_of(&one, 4)
     );
     // Under fifo the two of highest priority keep their deadlines (40 +
     // 40 ms), the other two miss; rate-monotonic at equal periods is by
     // name.
-    let fifo = go(
+    let fifo = run_quietly(
         &dir,
         &crossing("count = 1\nscheduler = \"fifo\"", timing, 3.0),
         "fifo",
         &["--transport", "inproc"],
     );
-    let m = misses(&fifo);
+    let m = misses_of(&fifo, 4);
     assert_eq!((m[0].0, m[1].0), (0, 0), "{m:?}");
     assert!(m[2].0 > 0 && m[3].0 > 0, "{m:?}");
+    // Per robot, the CPU of a call is its 40 ms wherever it ran; the
+    // response time is 40 ms on a core of its own, 40 and 80 ms for the
+    // first two under fifo on one core, and past the deadline for all
+    // under fair (the first call's 160 ms, then longer: a call that ends
+    // inside a tick reads that tick's snapshot late).
+    let p50 = |dir: &Path, robot: &str, key: &str| {
+        let m = metrics(dir);
+        m["robots"][robot][key]["p50"].as_f64().expect(key) / 1000.0
+    };
+    let near = |got: f64, want: f64| (got - want).abs() <= 0.01 * want;
+    for r in ["r0", "r1", "r2", "r3"] {
+        for d in [&own, &one, &fifo] {
+            assert!(
+                near(p50(d, r, "cpu_us"), 40.0),
+                "{r} {}",
+                p50(d, r, "cpu_us")
+            );
+        }
+        assert!(near(p50(&own, r, "response_us"), 40.0), "{r}");
+        assert!(p50(&one, r, "response_us") >= 160.0, "{r}");
+    }
+    assert!(near(p50(&fifo, "r0", "response_us"), 40.0));
+    assert!(near(p50(&fifo, "r1", "response_us"), 80.0));
+    assert!(timing_rows(&fifo).iter().all(|r| r.4 == 40_000_000));
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -226,7 +174,7 @@ fn rerun_replays_recorded_times_and_another_scheduler_re_decides_them_from_the_m
     // record has the times the machine gave them.
     let text = crossing("count = 1", "compute = { ms = 40, cpu = true }", 3.0)
         .replace("seed = 7", "seed = 7\nmode = \"realtime\"");
-    let rec = go(&dir, &text, "realtime", &[]);
+    let rec = run_quietly(&dir, &text, "realtime", &[]);
     let again = dir.join("again");
     let out = rerun(&rec, &again, &[]);
     assert_ok(&out);
@@ -234,8 +182,8 @@ fn rerun_replays_recorded_times_and_another_scheduler_re_decides_them_from_the_m
     assert!(said.contains("rerun (recorded times)"), "{said}");
     assert!(!said.contains("modelled"), "{said}");
     assert_eq!(
-        bytes(&rec, "trajectory.csv"),
-        bytes(&again, "trajectory.csv")
+        file_bytes(&rec, "trajectory.csv"),
+        file_bytes(&again, "trajectory.csv")
     );
     // Another scheduler: the model decides, as a lockstep run of it would.
     let cf = dir.join("fifo");
@@ -249,12 +197,12 @@ fn rerun_replays_recorded_times_and_another_scheduler_re_decides_them_from_the_m
         "compute = { ms = 40, cpu = true }",
         3.0,
     );
-    let direct = go(&dir, &lockstep, "lockstep", &["--transport", "inproc"]);
-    assert_eq!(misses(&cf), misses(&direct));
+    let direct = run_quietly(&dir, &lockstep, "lockstep", &["--transport", "inproc"]);
+    assert_eq!(misses_of(&cf, 4), misses_of(&direct, 4));
     assert_eq!(calls(&cf), calls(&direct));
     assert_eq!(
-        bytes(&cf, "trajectory.csv"),
-        bytes(&direct, "trajectory.csv")
+        file_bytes(&cf, "trajectory.csv"),
+        file_bytes(&direct, "trajectory.csv")
     );
     let _ = std::fs::remove_dir_all(&dir);
 }

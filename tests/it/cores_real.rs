@@ -76,17 +76,6 @@ fn write(dir: &Path, text: &str) -> std::path::PathBuf {
     f
 }
 
-/// Runs `text` into `dir/tag`; the run folder.
-fn go(dir: &Path, text: &str, tag: &str, extra: &[&str]) -> std::path::PathBuf {
-    let f = dir.join(format!("{tag}.toml"));
-    std::fs::write(&f, text).expect("write scenario");
-    let out = dir.join(tag);
-    let mut args = vec!["--quiet", "--no-report"];
-    args.extend(extra);
-    assert_ok(&run(&f, &out, &run_id(tag), &args));
-    out
-}
-
 /// Deadline misses over every robot's ticks.
 fn miss_rate(m: &serde_json::Value) -> f64 {
     let robots = m["robots"].as_object().expect("robots");
@@ -102,13 +91,13 @@ fn miss_rate(m: &serde_json::Value) -> f64 {
 /// on two cores, and the lockstep model's of the same scenario.
 fn measured_and_modelled(n: usize, scheduler: &str, tag: &str) -> (f64, f64) {
     let dir = fresh_dir(tag);
-    let real = go(
+    let real = run_quietly(
         &dir,
         &circle(n, "realtime", 3.0, 2, scheduler),
         &format!("{tag}-rt"),
         &["--cpus", "0,1"],
     );
-    let model = go(
+    let model = run_quietly(
         &dir,
         &circle(n, "lockstep", 3.0, 2, scheduler),
         &format!("{tag}-ls"),
@@ -283,7 +272,7 @@ reservation = {{ runtime_ms = 30.0, period_ms = 100.0 }}
         count = cpus()
     );
     let dir = fresh_dir("cores-reserved");
-    let out = go(&dir, &text, "reserved", &[]);
+    let out = run_quietly(&dir, &text, "reserved", &[]);
     let m = metrics(&out);
     for r in ["r1", "r2", "r3"] {
         assert_eq!(

@@ -8,41 +8,14 @@ use std::path::Path;
 use std::process::Stdio;
 
 /// Four robots crossing in realtime for far longer than the test waits.
-const SCENARIO: &str = r#"name = "cut-crossing"
-[world]
-dt = 0.1
-substeps = 10
-duration = 120.0
-mode = "realtime"
-seed = 7
-stall_timeout = 30.0
-
-[defaults]
-radius = 0.3
-max_speed = 1.0
-max_accel = 4.0
-planner = "orca"
-
-[[robot]]
-name = "r0"
-start = [0.0, 0.0]
-goal = [6.0, 0.0]
-
-[[robot]]
-name = "r1"
-start = [6.0, 0.3]
-goal = [0.0, 0.3]
-
-[[robot]]
-name = "r2"
-start = [3.0, -3.0]
-goal = [3.0, 3.0]
-
-[[robot]]
-name = "r3"
-start = [3.2, 3.0]
-goal = [3.2, -3.0]
-"#;
+fn scenario() -> String {
+    four_crossing(
+        "cut-crossing",
+        "duration = 120.0\nmode = \"realtime\"\nstall_timeout = 30.0",
+        "",
+        false,
+    )
+}
 
 /// Ticks in one simulated second (dt 0.1): the most a kill may lose.
 const TICKS_PER_SECOND: u64 = 10;
@@ -73,7 +46,7 @@ fn a_realtime_run_sigkilled_keeps_every_row_up_to_the_bound_and_rerun_and_report
     let _heavy = heavy();
     let dir = fresh_dir("cut");
     let file = dir.join("scenario.toml");
-    std::fs::write(&file, SCENARIO).expect("write scenario");
+    std::fs::write(&file, scenario()).expect("write scenario");
     let out = dir.join("run");
     let id = run_id("cut");
     let mut launcher = launcher(&file, &out, &id, &["--no-report"], Stdio::null());

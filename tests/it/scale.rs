@@ -401,7 +401,7 @@ fn a_million_robot_scene_is_checked_and_a_run_past_the_memory_available_is_refus
     // Refused only where it does not fit: on a machine with the memory the
     // run would start, which this test does not do. Every robot senses the
     // whole scene (no `sensing_range`), so each keeps room for every other.
-    use mrsim_runtime::memory::{BASE, PER_ROBOT, SENSED};
+    use mrsim_runtime::{BASE, PER_ROBOT, SENSED};
     let n: u64 = 1_000_000;
     let need = BASE + n * PER_ROBOT + n * (n - 1) * SENSED;
     let available = std::fs::read_to_string("/proc/meminfo")

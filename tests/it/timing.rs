@@ -9,105 +9,12 @@ use std::path::Path;
 /// model for every robot given by `timing` (the body of
 /// `[defaults.timing]`), `mode` and `duration` seconds.
 fn crossing(timing: &str, mode: &str, duration: f64) -> String {
-    format!(
-        r#"name = "timed-crossing"
-[world]
-dt = 0.1
-substeps = 10
-duration = {duration}
-mode = "{mode}"
-seed = 7
-stall_timeout = 10.0
-
-[defaults]
-radius = 0.3
-max_speed = 1.0
-max_accel = 4.0
-planner = "orca"
-
-[defaults.timing]
-{timing}
-
-[[robot]]
-name = "r0"
-start = [0.0, 0.0]
-goal = [6.0, 0.0]
-
-[[robot]]
-name = "r1"
-start = [6.0, 0.3]
-goal = [0.0, 0.3]
-
-[[robot]]
-name = "r2"
-start = [3.0, -3.0]
-goal = [3.0, 3.0]
-
-[[robot]]
-name = "r3"
-start = [3.2, 3.0]
-goal = [3.2, -3.0]
-
-[[obstacle]]
-name = "o1"
-start = [1.5, 2.0]
-radius = 0.3
-motion = {{ model = "random", accel_sigma = 0.5, alpha1 = 0.8, beta1 = 0.5, max_speed = 0.4 }}
-"#
+    four_crossing(
+        "timed-crossing",
+        &format!("duration = {duration}\nmode = \"{mode}\"\nstall_timeout = 10.0"),
+        &format!("[defaults.timing]\n{timing}"),
+        true,
     )
-}
-
-/// Writes `text` as a scenario file in `dir`.
-fn file(dir: &Path, text: &str) -> std::path::PathBuf {
-    let f = dir.join("scenario.toml");
-    std::fs::write(&f, text).expect("write scenario");
-    f
-}
-
-/// Runs `text` into `dir/out` with `extra` arguments; the run folder.
-fn go(dir: &Path, text: &str, tag: &str, extra: &[&str]) -> std::path::PathBuf {
-    let f = file(dir, text);
-    let out = dir.join(tag);
-    let mut args = vec!["--quiet", "--no-report"];
-    args.extend(extra);
-    assert_ok(&run(&f, &out, &run_id(tag), &args));
-    out
-}
-
-fn bytes(dir: &Path, name: &str) -> Vec<u8> {
-    std::fs::read(dir.join(name)).unwrap_or_else(|e| panic!("{}: {e}", dir.join(name).display()))
-}
-
-/// Per robot: (deadline_misses, commands_late).
-fn misses(dir: &Path) -> Vec<(u64, u64)> {
-    let m = metrics(dir);
-    (0..4)
-        .map(|i| {
-            let r = &m["robots"][format!("r{i}")];
-            (
-                r["deadline_misses"].as_u64().expect("misses"),
-                r["commands_late"].as_u64().expect("late"),
-            )
-        })
-        .collect()
-}
-
-/// timing.csv's rows: (tick, robot, sent_ns, status).
-fn calls(dir: &Path) -> Vec<(u64, String, u64, String)> {
-    let text = std::fs::read_to_string(dir.join("timing.csv")).expect("timing.csv");
-    let mut lines = text.lines();
-    assert_eq!(lines.next(), Some("tick,robot,sent_ns,status"));
-    lines
-        .map(|l| {
-            let f: Vec<&str> = l.split(',').collect();
-            (
-                f[0].parse().expect("tick"),
-                f[1].to_string(),
-                f[2].parse().expect("sent_ns"),
-                f[3].to_string(),
-            )
-        })
-        .collect()
 }
 
 const EVERYTHING: &str = r#"compute = { model = "uniform", min_ms = 20.0, max_ms = 160.0 }
@@ -120,24 +27,27 @@ command_loss = 0.05"#;
 fn a_lockstep_run_with_timing_models_run_twice_gives_identical_trajectories_and_miss_counts() {
     let dir = fresh_dir("timing-twice");
     let text = crossing(EVERYTHING, "lockstep", 8.0);
-    let a = go(&dir, &text, "a", &["--transport", "inproc"]);
-    let b = go(&dir, &text, "b", &["--transport", "inproc"]);
-    let c = go(&dir, &text, "c", &[]);
-    let ma = misses(&a);
+    let a = run_quietly(&dir, &text, "a", &["--transport", "inproc"]);
+    let b = run_quietly(&dir, &text, "b", &["--transport", "inproc"]);
+    let c = run_quietly(&dir, &text, "c", &[]);
+    let ma = misses_of(&a, 4);
     assert!(
         ma.iter().all(|&(m, l)| m > 0 && l > 0),
         "the model makes misses: {ma:?}"
     );
     for other in [&b, &c] {
-        assert_eq!(bytes(&a, "trajectory.csv"), bytes(other, "trajectory.csv"));
+        assert_eq!(
+            file_bytes(&a, "trajectory.csv"),
+            file_bytes(other, "trajectory.csv")
+        );
         // The same calls; within a tick in the order the world heard them.
         let sorted = |d: &Path| {
-            let mut c = calls(d);
+            let mut c = timing_rows(d);
             c.sort();
             c
         };
         assert_eq!(sorted(&a), sorted(other));
-        assert_eq!(ma, misses(other));
+        assert_eq!(ma, misses_of(other, 4));
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -150,10 +60,10 @@ fn compute_above_the_deadline_makes_every_tick_a_miss() {
         "lockstep",
         3.0,
     );
-    let out = go(&dir, &text, "slow", &["--transport", "inproc"]);
+    let out = run_quietly(&dir, &text, "slow", &["--transport", "inproc"]);
     let ticks = metrics(&out)["ticks"].as_u64().expect("ticks");
     assert_eq!(ticks, 30);
-    for (m, late) in misses(&out) {
+    for (m, late) in misses_of(&out, 4) {
         assert_eq!(m, ticks, "every tick a miss");
         // Planning on ticks 0, 1, 3, 4, 6, ...: two of every three.
         assert_eq!(late, 20);
@@ -170,15 +80,15 @@ fn compute_above_the_deadline_makes_every_tick_a_miss() {
 fn period_ticks_2_plans_every_other_tick_without_misses() {
     let dir = fresh_dir("timing-period");
     let text = crossing("period_ticks = 2", "lockstep", 3.0);
-    let out = go(&dir, &text, "period", &["--transport", "inproc"]);
-    let rows = calls(&out);
+    let out = run_quietly(&dir, &text, "period", &["--transport", "inproc"]);
+    let rows = timing_rows(&out);
     for i in 0..4 {
         let robot = format!("r{i}");
         let ticks: Vec<u64> = rows.iter().filter(|r| r.1 == robot).map(|r| r.0).collect();
         assert_eq!(ticks, (0..30).step_by(2).collect::<Vec<u64>>(), "{robot}");
     }
     assert!(rows.iter().all(|r| r.3 == "accepted"));
-    assert_eq!(misses(&out), vec![(0, 0); 4]);
+    assert_eq!(misses_of(&out, 4), vec![(0, 0); 4]);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -186,9 +96,9 @@ fn period_ticks_2_plans_every_other_tick_without_misses() {
 fn losses_at_rate_p_lose_about_p() {
     let dir = fresh_dir("timing-loss");
     let text = crossing("snapshot_loss = 0.3\ncommand_loss = 0.2", "lockstep", 60.0);
-    let out = go(&dir, &text, "loss", &["--transport", "inproc"]);
+    let out = run_quietly(&dir, &text, "loss", &["--transport", "inproc"]);
     let ticks = metrics(&out)["ticks"].as_u64().expect("ticks") as f64;
-    let rows = calls(&out);
+    let rows = timing_rows(&out);
     let n = rows.len() as f64;
     // Snapshots read: (1 - 0.3) of 4 robots' ticks; commands lost: 0.2 of
     // those. Four standard errors.
@@ -203,7 +113,7 @@ fn losses_at_rate_p_lose_about_p() {
     assert!((lost - 0.2).abs() < 4.0 * se, "lost {lost} of the commands");
     // Every tick without an applied command is a miss.
     let accepted = rows.iter().filter(|r| r.3 == "accepted").count() as u64;
-    let missed: u64 = misses(&out).iter().map(|m| m.0).sum();
+    let missed: u64 = misses_of(&out, 4).iter().map(|m| m.0).sum();
     assert_eq!(missed, 4 * ticks as u64 - accepted);
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -226,20 +136,20 @@ fn a_command_takes_effect_from_the_physics_substep_it_arrives_in() {
             .map(|r| r.x)
             .expect("tick 1")
     };
-    let plain = go(&dir, &one(""), "plain", &["--transport", "inproc"]);
-    let none = go(
+    let plain = run_quietly(&dir, &one(""), "plain", &["--transport", "inproc"]);
+    let none = run_quietly(
         &dir,
         &one("[defaults.timing]\ncompute = { model = \"none\" }"),
         "none",
         &["--transport", "inproc"],
     );
-    let slow = go(
+    let slow = run_quietly(
         &dir,
         &one("[defaults.timing]\ncompute = { model = \"fixed\", ms = 50.0 }"),
         "slow",
         &["--transport", "inproc"],
     );
-    let delayed = go(
+    let delayed = run_quietly(
         &dir,
         &one(
             "[defaults.timing]\ncompute = { model = \"fixed\", ms = 30.0 }\nactuation_delay_ms = 41.0",
@@ -249,8 +159,8 @@ fn a_command_takes_effect_from_the_physics_substep_it_arrives_in() {
     );
     assert!((x1(&plain) - 0.1).abs() < 1e-6, "{}", x1(&plain));
     assert_eq!(
-        bytes(&plain, "trajectory.csv"),
-        bytes(&none, "trajectory.csv")
+        file_bytes(&plain, "trajectory.csv"),
+        file_bytes(&none, "trajectory.csv")
     );
     assert!((x1(&slow) - 0.05).abs() < 1e-6, "{}", x1(&slow));
     // Sent at 30 ms, in effect at 71 ms: from the substep at 80 ms.
@@ -281,8 +191,21 @@ fn a_realtime_run_with_misses_rerun_in_lockstep_gives_the_same_trajectory_byte_f
         "realtime",
         4.0,
     );
-    let rec = go(&dir, &text, "realtime", &[]);
-    let recorded = misses(&rec);
+    let rec = run_quietly(&dir, &text, "realtime", &[]);
+    // Realtime: every call's CPU measured on the agent's thread clock (the
+    // planner's own; this compute model is a wait), and its response time.
+    assert!(timing_rows(&rec).iter().all(|r| r.4 > 0));
+    let m = metrics(&rec);
+    for r in ["r0", "r1", "r2", "r3"] {
+        let cpu = &m["robots"][r]["cpu_us"];
+        let response = &m["robots"][r]["response_us"];
+        assert!(cpu["count"].as_u64() > Some(0), "{r}: {cpu}");
+        assert!(
+            response["p50"].as_f64() > cpu["p50"].as_f64(),
+            "{r}: {response}"
+        );
+    }
+    let recorded = misses_of(&rec, 4);
     assert!(
         recorded.iter().any(|&(m, _)| m > 0),
         "no misses: {recorded:?}"
@@ -291,14 +214,14 @@ fn a_realtime_run_with_misses_rerun_in_lockstep_gives_the_same_trajectory_byte_f
     let out = rerun(&rec, &again, &[]);
     assert_ok(&out);
     assert_eq!(
-        bytes(&rec, "trajectory.csv"),
-        bytes(&again, "trajectory.csv")
+        file_bytes(&rec, "trajectory.csv"),
+        file_bytes(&again, "trajectory.csv")
     );
     // Misses alike (a command more than a tick late is counted as
     // rejected in realtime, as late in the rerun: the totals of late
     // answers may differ, what they did may not).
     let m = |v: Vec<(u64, u64)>| v.iter().map(|x| x.0).collect::<Vec<_>>();
-    assert_eq!(m(recorded), m(misses(&again)));
+    assert_eq!(m(recorded), m(misses_of(&again, 4)));
 
     // A counterfactual: r1 plans with social-force under the same timing.
     // Nothing can differ before r1's first command takes effect.
@@ -308,7 +231,7 @@ fn a_realtime_run_with_misses_rerun_in_lockstep_gives_the_same_trajectory_byte_f
         &cf,
         &["--set", "robot.r1.planner=social-force"],
     ));
-    let first = calls(&rec)
+    let first = timing_rows(&rec)
         .iter()
         .filter(|r| r.1 == "r1" && r.3 == "accepted")
         .map(|r| r.0)
@@ -332,7 +255,7 @@ fn a_realtime_run_recorded_as_parquet_writes_timing_parquet_and_reruns_byte_for_
         "realtime",
         2.0,
     );
-    let rec = go(
+    let rec = run_quietly(
         &dir,
         &text,
         "realtime",
@@ -344,15 +267,15 @@ fn a_realtime_run_recorded_as_parquet_writes_timing_parquet_and_reruns_byte_for_
         "timing.csv beside the Parquet file"
     );
     assert!(
-        misses(&rec).iter().any(|&(m, _)| m > 0),
+        misses_of(&rec, 4).iter().any(|&(m, _)| m > 0),
         "no misses to replay"
     );
     let again = dir.join("again");
     assert_ok(&rerun(&rec, &again, &[]));
     assert!(again.join("timing.parquet").is_file());
     assert_eq!(
-        bytes(&rec, "trajectory.parquet"),
-        bytes(&again, "trajectory.parquet")
+        file_bytes(&rec, "trajectory.parquet"),
+        file_bytes(&again, "trajectory.parquet")
     );
     let _ = std::fs::remove_dir_all(&dir);
 }

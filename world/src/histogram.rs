@@ -199,6 +199,9 @@ pub struct RobotTimings {
     wake: DurationHistogram,
     compute: DurationHistogram,
     pending: Vec<[u64; 3]>,
+    /// The planner calls' response time and CPU (timing.csv's rows), if
+    /// the run records them.
+    calls: Option<Box<[DurationHistogram; 2]>>,
 }
 
 impl Default for RobotTimings {
@@ -208,6 +211,7 @@ impl Default for RobotTimings {
             wake: DurationHistogram::per_robot(),
             compute: DurationHistogram::per_robot(),
             pending: Vec::with_capacity(TIMING_BATCH),
+            calls: None,
         }
     }
 }
@@ -227,6 +231,24 @@ impl RobotTimings {
             self.wake.record_ns(w);
             self.compute.record_ns(c);
         }
+    }
+
+    /// Records one planner call's response time and CPU, ns.
+    pub fn record_call_ns(&mut self, response: u64, cpu: u64) {
+        let h = self.calls.get_or_insert_with(|| {
+            Box::new([
+                DurationHistogram::per_robot(),
+                DurationHistogram::per_robot(),
+            ])
+        });
+        h[0].record_ns(response);
+        h[1].record_ns(cpu);
+    }
+
+    /// The planner calls' response time and CPU histograms, if any call
+    /// was recorded.
+    pub fn calls(&self) -> Option<&[DurationHistogram; 2]> {
+        self.calls.as_deref()
     }
 
     /// Latency, wake-up and compute histograms, with every sample recorded.

@@ -35,6 +35,9 @@ pub struct RobotAccumulator {
     pub rejected: u64,
     /// Commands that came after their tick's deadline.
     pub late: u64,
+    /// Realtime under SCHED_DEADLINE: the most reservation overruns its
+    /// agent's commands reported (a running count).
+    pub overruns: Option<u32>,
     /// Distance to its goal at its last progress (infinity before the
     /// first tick).
     pub progress_distance: f64,

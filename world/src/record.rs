@@ -79,6 +79,8 @@ pub struct Call {
     pub sent_ns: u64,
     /// What became of it.
     pub status: Status,
+    /// The CPU the call took, ns.
+    pub cpu_ns: u64,
 }
 
 enum Msg {
@@ -481,7 +483,7 @@ fn write_calls(sink: &mut Option<TimingSink>, names: &[String], calls: &[Call]) 
     let Some(w) = sink else { return };
     for c in calls {
         let name = names.get(c.robot as usize).map_or("", String::as_str);
-        if let Err(e) = w.row(c.tick, name, c.sent_ns, c.status) {
+        if let Err(e) = w.row(c.tick, name, c.sent_ns, c.status, c.cpu_ns) {
             eprintln!("world: {e}; {} stops here", w.file_name());
             *sink = None;
             return;

@@ -2,7 +2,9 @@
 //!
 //! Every accepted command brings three durations: its round trip
 //! (snapshot published -> command received), the agent's wake-up
-//! (published -> awake) and the planner's compute time. The world keeps a
+//! (published -> awake) and the planner's compute time; every planner
+//! call of a run that records timing.csv (accepted, late or lost) two more:
+//! its response time (published -> command sent) and its CPU. The world keeps a
 //! histogram of each per robot and for the whole run. Recorded on the tick
 //! loop, that would be six histogram records per robot and tick, each in
 //! memory of its own (BENCHMARKS.md, "Realtime over iceoryx2", has the numbers).
@@ -33,11 +35,20 @@ pub const BATCH_AGE: Duration = Duration::from_millis(100);
 /// statistics are published: [`crate::live::LiveStats::PERIOD`]).
 pub const LIVE_PERIOD: Duration = crate::live::LiveStats::PERIOD;
 
-/// One command's timings: round trip, wake-up and compute, ns.
+/// One command's timings: round trip, wake-up and compute, ns; or one
+/// planner call's response time and CPU ([`Sample::CALL`]).
 #[derive(Debug, Clone, Copy)]
 struct Sample {
     robot: u32,
+    kind: u8,
     ns: [u64; 3],
+}
+
+impl Sample {
+    /// A command's round trip, wake-up and compute.
+    const COMMAND: u8 = 0;
+    /// A planner call's response time and CPU (the third unused).
+    const CALL: u8 = 1;
 }
 
 /// A robot's round trip as the live view shows it.
@@ -71,14 +82,17 @@ impl Timings {
 
     fn record(&mut self, batch: &[Sample]) {
         for s in batch {
-            let [l, w, c] = s.ns;
+            let [a, b, c] = s.ns;
             if let Some(r) = self.robots.get_mut(s.robot as usize) {
-                r.record_ns(l, w, c);
+                match s.kind {
+                    Sample::COMMAND => r.record_ns(a, b, c),
+                    _ => r.record_call_ns(a, b),
+                }
             }
         }
         // One histogram at a time: each stays in cache for the batch.
         for (k, h) in self.all.iter_mut().enumerate() {
-            for s in batch {
+            for s in batch.iter().filter(|s| s.kind == Sample::COMMAND) {
                 h.record_ns(s.ns[k]);
             }
         }
@@ -149,7 +163,23 @@ impl TimingRecorder {
         let pending = self.batches.pending();
         pending.push(Sample {
             robot: robot as u32,
+            kind: Sample::COMMAND,
             ns: [latency, wake, compute],
+        });
+        if pending.len() >= BATCH {
+            self.batches.send();
+        }
+    }
+
+    /// Records one planner call of robot `robot` (a row of timing.csv):
+    /// its response time (snapshot published -> command sent) and the CPU
+    /// it took, ns.
+    pub fn call(&mut self, robot: usize, response: u64, cpu: u64) {
+        let pending = self.batches.pending();
+        pending.push(Sample {
+            robot: robot as u32,
+            kind: Sample::CALL,
+            ns: [response, cpu, 0],
         });
         if pending.len() >= BATCH {
             self.batches.send();
@@ -198,34 +228,48 @@ mod tests {
             let robot = (k % robots as u64) as u32;
             let s = Sample {
                 robot,
+                kind: Sample::COMMAND,
                 ns: [k * 1000, 2 * k * 1777, 3 * k * 9000],
             };
             rec.record(robot as usize, s.ns[0], s.ns[1], s.ns[2]);
             samples.push(s);
+            if k % 7 == 0 {
+                let c = Sample {
+                    robot,
+                    kind: Sample::CALL,
+                    ns: [k * 500, k * 300, 0],
+                };
+                rec.call(robot as usize, c.ns[0], c.ns[1]);
+                samples.push(c);
+            }
             if k % 1000 == 0 {
                 rec.send_if_due();
             }
         }
         direct.record(&samples);
+        let commands = samples.iter().filter(|s| s.kind == Sample::COMMAND).count() as u64;
         let mut got = rec.finish().expect("finished");
         for (g, d) in got.all.iter().zip(&direct.all) {
             assert_eq!(g.percentiles(), d.percentiles());
-            assert_eq!(g.percentiles().count, samples.len() as u64);
+            assert_eq!(g.percentiles().count, commands);
         }
+        let mut calls = 0;
         for (g, d) in got.robots.iter_mut().zip(direct.robots.iter_mut()) {
             for (a, b) in g.histograms().into_iter().zip(d.histograms()) {
                 assert_eq!(a.percentiles(), b.percentiles());
             }
+            let (a, b) = (g.calls().expect("calls"), d.calls().expect("calls"));
+            assert_eq!(a[0].percentiles(), b[0].percentiles());
+            assert_eq!(a[1].percentiles(), b[1].percentiles());
+            calls += a[0].percentiles().count;
         }
+        assert_eq!(calls + commands, samples.len() as u64);
         // The live summary is the final one.
         let live = rec.live(|l| l.to_vec());
         let mut expect = Vec::new();
         direct.summarize(&mut expect);
         assert_eq!(live, expect);
-        assert_eq!(
-            live.iter().map(|l| l.commands).sum::<u64>(),
-            samples.len() as u64
-        );
+        assert_eq!(live.iter().map(|l| l.commands).sum::<u64>(), commands);
         assert!(rec.finish().is_err(), "finishing twice is an error");
     }
 }

@@ -14,55 +14,7 @@ use crate::cdr::{Reader, Writer};
 use crate::msgs::{Twist, Vector3};
 use proptest::prelude::*;
 
-/// The largest single allocation a thread makes while measured: a global
-/// allocator that notes each request's size on the requesting thread.
-mod largest {
-    use std::alloc::{GlobalAlloc, Layout, System};
-    use std::cell::Cell;
-
-    struct Noting;
-
-    thread_local! {
-        static LARGEST: Cell<usize> = const { Cell::new(0) };
-    }
-
-    fn note(n: usize) {
-        let _ = LARGEST.try_with(|c| c.set(c.get().max(n)));
-    }
-
-    // SAFETY: every call is passed on to the system allocator unchanged.
-    unsafe impl GlobalAlloc for Noting {
-        unsafe fn alloc(&self, l: Layout) -> *mut u8 {
-            note(l.size());
-            // SAFETY: the caller's layout, as GlobalAlloc::alloc requires.
-            unsafe { System.alloc(l) }
-        }
-        unsafe fn alloc_zeroed(&self, l: Layout) -> *mut u8 {
-            note(l.size());
-            // SAFETY: as above.
-            unsafe { System.alloc_zeroed(l) }
-        }
-        unsafe fn realloc(&self, p: *mut u8, l: Layout, n: usize) -> *mut u8 {
-            note(n);
-            // SAFETY: a block of this allocator (the system's) and its layout.
-            unsafe { System.realloc(p, l, n) }
-        }
-        unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
-            // SAFETY: as above.
-            unsafe { System.dealloc(p, l) }
-        }
-    }
-
-    #[global_allocator]
-    static NOTING: Noting = Noting;
-
-    /// `f`'s result and the largest allocation it asked for, bytes.
-    pub fn measure<T>(f: impl FnOnce() -> T) -> (T, usize) {
-        LARGEST.with(|c| c.set(0));
-        let r = f();
-        (r, LARGEST.with(Cell::get))
-    }
-}
+use mrsim_fuzzkit as largest;
 
 /// What decoding `len` bytes may allocate at once.
 fn allowance(len: usize) -> usize {

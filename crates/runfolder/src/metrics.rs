@@ -60,6 +60,21 @@ pub struct RobotMetrics {
     pub wake_us: Percentiles,
     /// Planner compute time, µs.
     pub compute_us: Percentiles,
+    /// Every planner call's response time: its snapshot published ->
+    /// its command sent (timing.csv's `sent_ns`), accepted or late, µs.
+    /// Present when the run records timing.csv (realtime, or a timing
+    /// model in lockstep).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub response_us: Option<Percentiles>,
+    /// Every planner call's CPU (timing.csv's `cpu_ns`: measured on the
+    /// agent's thread clock in realtime; the modelled CPU work in lockstep,
+    /// 0 for a `cpu = false` wait), µs. Present with `response_us`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cpu_us: Option<Percentiles>,
+    /// Realtime under SCHED_DEADLINE: the reservation overruns its agent
+    /// counted (SIGXCPU on `SCHED_FLAG_DL_OVERRUN`); absent when none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub overruns: Option<u32>,
     /// Process id of the agent that last drove it.
     pub agent_pid: Option<u32>,
     /// Times its agent was lost.

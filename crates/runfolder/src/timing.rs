@@ -6,7 +6,13 @@
 //! sent, ns after that snapshot was published: whole nanoseconds, so a
 //! rerun applies it at exactly the same physics substep) and `status`:
 //! `accepted` (in by the deadline, applied), `late` (after it: a miss) or
-//! `lost` (lost on its way by the robot's `command_loss`: a miss). A tick
+//! `lost` (lost on its way by the robot's `command_loss`: a miss), and
+//! `cpu_ns`: the CPU the call took. In realtime that is the agent's thread
+//! CPU clock over the call (planner and any `cpu = true` work); in lockstep
+//! it is the model's: the drawn compute time of a `cpu = true` robot, 0 for
+//! a wait (`cpu = false`); a rerun writes what it replays. `sent_ns` is the
+//! call's response time. Files of older runs, without the column, read with
+//! `cpu_ns` 0. A tick
 //! of a robot with no row had no answer (a miss, or not a tick of its
 //! `period_ticks`). Written by every realtime run and by every lockstep run
 //! with a timing model; `mrsim rerun` reads it back.
@@ -40,7 +46,9 @@ pub const TIMING_JOURNAL_FILE: &str = "timing.journal.csv";
 /// Rows per Parquet row group.
 const ROW_GROUP_ROWS: usize = 1 << 16;
 /// Its header line.
-pub const HEADER: &str = "tick,robot,sent_ns,status";
+pub const HEADER: &str = "tick,robot,sent_ns,status,cpu_ns";
+/// The header of files written before the `cpu_ns` column.
+const HEADER_WITHOUT_CPU: &str = "tick,robot,sent_ns,status";
 
 /// What became of a command.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -85,6 +93,8 @@ pub struct Row {
     pub sent_ns: u64,
     /// What became of it.
     pub status: Status,
+    /// The CPU the call took, ns (0 in files without the column).
+    pub cpu_ns: u64,
 }
 
 /// Why timing.csv could not be written or read.
@@ -163,12 +173,16 @@ impl TimingWriter {
         robot: &str,
         sent_ns: u64,
         status: Status,
+        cpu_ns: u64,
     ) -> Result<(), TimingFileError> {
-        writeln!(self.out, "{tick},{robot},{sent_ns},{}", status.as_str()).map_err(|source| {
-            TimingFileError::Io {
-                path: self.path.clone(),
-                source,
-            }
+        writeln!(
+            self.out,
+            "{tick},{robot},{sent_ns},{},{cpu_ns}",
+            status.as_str()
+        )
+        .map_err(|source| TimingFileError::Io {
+            path: self.path.clone(),
+            source,
         })
     }
 
@@ -191,6 +205,7 @@ pub struct ParquetTimingWriter {
     robot: Vec<ByteArray>,
     sent_ns: Vec<i64>,
     status: Vec<ByteArray>,
+    cpu_ns: Vec<i64>,
 }
 
 /// The Parquet file's schema.
@@ -199,6 +214,7 @@ const PARQUET_SCHEMA: &str = "message timing {
     REQUIRED BYTE_ARRAY robot (UTF8);
     REQUIRED INT64 sent_ns;
     REQUIRED BYTE_ARRAY status (UTF8);
+    REQUIRED INT64 cpu_ns;
 }";
 
 impl ParquetTimingWriter {
@@ -224,6 +240,7 @@ impl ParquetTimingWriter {
             robot: Vec::new(),
             sent_ns: Vec::new(),
             status: Vec::new(),
+            cpu_ns: Vec::new(),
         })
     }
 
@@ -234,12 +251,14 @@ impl ParquetTimingWriter {
         robot: &str,
         sent_ns: u64,
         status: Status,
+        cpu_ns: u64,
     ) -> Result<(), TimingFileError> {
-        self.journal.row(tick, robot, sent_ns, status)?;
+        self.journal.row(tick, robot, sent_ns, status, cpu_ns)?;
         self.tick.push(tick as i64);
         self.robot.push(ByteArray::from(robot));
         self.sent_ns.push(sent_ns as i64);
         self.status.push(ByteArray::from(status.as_str()));
+        self.cpu_ns.push(cpu_ns as i64);
         if self.tick.len() >= ROW_GROUP_ROWS {
             self.write_group()?;
         }
@@ -257,6 +276,7 @@ impl ParquetTimingWriter {
                 Column::Bytes(&self.robot),
                 Column::Int64(&self.sent_ns),
                 Column::Bytes(&self.status),
+                Column::Int64(&self.cpu_ns),
             ],
         )
         .map_err(|source| TimingFileError::Parquet {
@@ -267,6 +287,7 @@ impl ParquetTimingWriter {
         self.robot.clear();
         self.sent_ns.clear();
         self.status.clear();
+        self.cpu_ns.clear();
         Ok(())
     }
 
@@ -331,10 +352,11 @@ impl TimingSink {
         robot: &str,
         sent_ns: u64,
         status: Status,
+        cpu_ns: u64,
     ) -> Result<(), TimingFileError> {
         match self {
-            TimingSink::Csv(w) => w.row(tick, robot, sent_ns, status),
-            TimingSink::Parquet(w) => w.row(tick, robot, sent_ns, status),
+            TimingSink::Csv(w) => w.row(tick, robot, sent_ns, status, cpu_ns),
+            TimingSink::Parquet(w) => w.row(tick, robot, sent_ns, status, cpu_ns),
         }
     }
 
@@ -432,6 +454,8 @@ fn read_parquet_timing(path: &Path) -> Result<Vec<Row>, TimingFileError> {
         find("sent_ns")?,
         find("status")?,
     ];
+    // Absent in files written before the column.
+    let cpu_at = find("cpu_ns").ok();
     let mut rows = Vec::new();
     for g in 0..meta.num_row_groups() {
         let group = reader.get_row_group(g).map_err(pq)?;
@@ -450,7 +474,20 @@ fn read_parquet_timing(path: &Path) -> Result<Vec<Row>, TimingFileError> {
                 _ => return Err(bad(0, format!("column {k} has the wrong type"))),
             }
         }
-        if ints.iter().any(|c| c.len() != n) || texts.iter().any(|c| c.len() != n) {
+        let mut cpu = Vec::new();
+        match cpu_at
+            .map(|i| group.get_column_reader(i))
+            .transpose()
+            .map_err(pq)?
+        {
+            Some(C::Int64ColumnReader(mut r)) => {
+                r.read_records(n, None, None, &mut cpu).map_err(pq)?;
+            }
+            Some(_) => return Err(bad(0, "column cpu_ns has the wrong type".into())),
+            None => cpu = vec![0; n],
+        }
+        if ints.iter().any(|c| c.len() != n) || texts.iter().any(|c| c.len() != n) || cpu.len() != n
+        {
             return Err(bad(
                 0,
                 format!("row group {g}: columns of different lengths"),
@@ -477,6 +514,7 @@ fn read_parquet_timing(path: &Path) -> Result<Vec<Row>, TimingFileError> {
                         format!("unknown status `{status}` (accepted, late, lost)"),
                     )
                 })?,
+                cpu_ns: whole(cpu[j], "cpu_ns")?,
             });
         }
     }
@@ -497,6 +535,7 @@ fn read_csv_timing(path: &Path) -> Result<Timing, TimingFileError> {
     })?;
     let path = path.to_path_buf();
     let mut rows = Vec::new();
+    let mut fields = 5;
     for (i, line) in text.lines().enumerate() {
         let bad = |reason: String| TimingFileError::Malformed {
             path: path.clone(),
@@ -504,17 +543,21 @@ fn read_csv_timing(path: &Path) -> Result<Timing, TimingFileError> {
             reason,
         };
         if i == 0 {
-            if line != HEADER {
-                return Err(bad(format!("expected the header `{HEADER}`")));
-            }
+            fields = match line {
+                HEADER => 5,
+                HEADER_WITHOUT_CPU => 4,
+                _ => return Err(bad(format!("expected the header `{HEADER}`"))),
+            };
             continue;
         }
         if line.is_empty() {
             continue;
         }
         let f: Vec<&str> = line.split(',').collect();
-        let [tick, robot, sent, status] = f.as_slice() else {
-            return Err(bad(format!("expected 4 fields, got {}", f.len())));
+        let (tick, robot, sent, status, cpu) = match (fields, f.as_slice()) {
+            (5, [tick, robot, sent, status, cpu]) => (tick, robot, sent, status, Some(cpu)),
+            (4, [tick, robot, sent, status]) => (tick, robot, sent, status, None),
+            _ => return Err(bad(format!("expected {fields} fields, got {}", f.len()))),
         };
         let num = |s: &str, what: &str| {
             s.parse::<u64>()
@@ -527,6 +570,7 @@ fn read_csv_timing(path: &Path) -> Result<Timing, TimingFileError> {
             robot: robot.to_string(),
             sent_ns: num(sent, "sent_ns")?,
             status,
+            cpu_ns: cpu.map_or(Ok(0), |c| num(c, "cpu_ns"))?,
         });
     }
     Ok(Timing { rows, cut })
@@ -541,9 +585,10 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("mrsim-timing-csv-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let mut w = TimingWriter::create(&dir).unwrap();
-        w.row(0, "r0", 150_000_000, Status::Late).unwrap();
-        w.row(1, "r1", 12, Status::Accepted).unwrap();
-        w.row(2, "r0", 0, Status::Lost).unwrap();
+        w.row(0, "r0", 150_000_000, Status::Late, 20_000_000)
+            .unwrap();
+        w.row(1, "r1", 12, Status::Accepted, 7).unwrap();
+        w.row(2, "r0", 0, Status::Lost, 0).unwrap();
         w.finish().unwrap();
         let rows = read_timing(&dir).unwrap().rows;
         assert_eq!(rows.len(), 3);
@@ -553,10 +598,11 @@ mod tests {
                 tick: 1,
                 robot: "r1".into(),
                 sent_ns: 12,
-                status: Status::Accepted
+                status: Status::Accepted,
+                cpu_ns: 7,
             }
         );
-        std::fs::write(dir.join(TIMING_FILE), format!("{HEADER}\n1,r0,x,late\n")).unwrap();
+        std::fs::write(dir.join(TIMING_FILE), format!("{HEADER}\n1,r0,x,late,0\n")).unwrap();
         let e = read_timing(&dir).unwrap_err().to_string();
         assert!(
             e.ends_with("timing.csv:2: sent_ns `x` is not a whole number"),
@@ -570,7 +616,7 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("mrsim-timing-pq-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let mut csv = TimingSink::create(&dir, false).unwrap();
-        csv.row(7, "old", 1, Status::Accepted).unwrap();
+        csv.row(7, "old", 1, Status::Accepted, 0).unwrap();
         csv.finish().unwrap();
         let mut w = TimingSink::create(&dir, true).unwrap();
         assert_eq!(w.file_name(), TIMING_PARQUET_FILE);
@@ -580,10 +626,12 @@ mod tests {
                 robot: format!("r{}", t % 3),
                 sent_ns: t * 1_000_003,
                 status: [Status::Accepted, Status::Late, Status::Lost][(t % 3) as usize],
+                cpu_ns: t * 17,
             })
             .collect();
         for r in &written {
-            w.row(r.tick, &r.robot, r.sent_ns, r.status).unwrap();
+            w.row(r.tick, &r.robot, r.sent_ns, r.status, r.cpu_ns)
+                .unwrap();
         }
         w.finish().unwrap();
         assert!(
@@ -603,14 +651,18 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("mrsim-timing-cut-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join(TIMING_FILE);
-        std::fs::write(&path, format!("{HEADER}\n0,r0,5,accepted\n1,r0,6,acc")).unwrap();
+        std::fs::write(&path, format!("{HEADER}\n0,r0,5,accepted,0\n1,r0,6,acc")).unwrap();
         let t = read_timing(&dir).unwrap();
         assert_eq!(t.rows.len(), 1);
         let cut = t.cut.expect("reported as cut");
         assert_eq!((cut.path.as_path(), cut.line), (path.as_path(), 3));
-        std::fs::write(&path, format!("{HEADER}\n0,r0,5\n1,r0,6,accepted\n")).unwrap();
+        std::fs::write(
+            &path,
+            format!("{HEADER}\n0,r0,5,accepted\n1,r0,6,accepted,0\n"),
+        )
+        .unwrap();
         let e = read_timing(&dir).unwrap_err().to_string();
-        assert!(e.ends_with("timing.csv:2: expected 4 fields, got 3"), "{e}");
+        assert!(e.ends_with("timing.csv:2: expected 5 fields, got 4"), "{e}");
         let _ = std::fs::remove_dir_all(&dir);
     }
 
@@ -619,8 +671,8 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("mrsim-timing-journal-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let mut w = TimingSink::create(&dir, true).unwrap();
-        w.row(0, "r0", 10, Status::Accepted).unwrap();
-        w.row(0, "r1", 20, Status::Late).unwrap();
+        w.row(0, "r0", 10, Status::Accepted, 0).unwrap();
+        w.row(0, "r1", 20, Status::Late, 0).unwrap();
         w.flush().unwrap();
         // The run is killed here: no footer, the journal on the disk.
         std::mem::forget(w);
@@ -629,6 +681,20 @@ mod tests {
         assert_eq!(t.rows[1].status, Status::Late);
         let cut = t.cut.expect("reported as cut");
         assert!(cut.to_string().contains("no Parquet footer"), "{cut}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_file_written_before_the_cpu_column_reads_with_no_cpu() {
+        let dir = std::env::temp_dir().join(format!("mrsim-timing-old-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(
+            dir.join(TIMING_FILE),
+            format!("{HEADER_WITHOUT_CPU}\n0,r0,5,accepted\n"),
+        )
+        .unwrap();
+        let t = read_timing(&dir).unwrap();
+        assert_eq!((t.rows[0].sent_ns, t.rows[0].cpu_ns), (5, 0));
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -162,6 +162,7 @@ pub fn rerun(req: &Rerun) -> Result<Rerunning, RerunError> {
                 Status::Late => CallStatus::Late,
                 Status::Lost => CallStatus::Lost,
             },
+            cpu_ns: r.cpu_ns,
         });
     }
     let not_deterministic = validated

@@ -10,11 +10,13 @@
 //!   every core): the `c` runnable jobs of highest priority run. Priority:
 //!   the higher [`Priority::Level`] first; equal levels by robot name. A
 //!   robot without a level, or with [`Priority::RateMonotonic`], is
-//!   rate-monotonic: its level is `99 - r`, `r` the rank of its
-//!   `period_ticks` among the rate-monotonic robots' distinct periods
-//!   (shortest 0), at least 1 ([`fifo_levels`]): shorter periods first,
-//!   equal periods by name. (Linux orders equal SCHED_FIFO levels by
-//!   arrival instead; the model's order by name keeps it deterministic.)
+//!   rate-monotonic: its level is `99 - r`, `r` its rank among the
+//!   rate-monotonic robots by `period_ticks` (shortest 0), equal periods
+//!   by name, at least 1 ([`fifo_levels`]): a level of its own, so that
+//!   the kernel, which runs equal SCHED_FIFO levels in the order they
+//!   became runnable, runs them in the model's order too (for the first
+//!   98; the rest share level 1). Equal levels given by hand are ordered
+//!   by name in the model, by arrival in the kernel.
 //! - `deadline`: global EDF over constant-bandwidth servers, as
 //!   SCHED_DEADLINE (Abeni & Buttazzo 1998; the kernel's
 //!   Documentation/scheduler/sched-deadline.rst): each robot's server has a
@@ -34,15 +36,16 @@
 //!   start (see [`Cores::world_tick`]) above every agent: while it runs it
 //!   takes one of the cores (`c = m - 1`).
 //!
-//! Cost: under `fair` each event (a job's end, the world's work done)
-//! costs O(log n); under `fifo` and `deadline` each event (a release, a
-//! completion, a budget used up, a replenishment) costs O(n) in the tasks
-//! the model holds; no allocation once its buffers have grown.
+//! Cost: each event (a release, a completion, a budget used up, a
+//! replenishment, the world's work done) costs O(log n) in the tasks the
+//! model holds (O(m + log n) under `fifo` and `deadline`, whose `m` first
+//! ready jobs run); the ready queue's nodes aside, no allocation once its
+//! buffers have grown.
 
 use crate::timing::{Priority, Reservation};
 use crate::types::{Cpus, Scheduler};
 use std::cmp::Reverse;
-use std::collections::BinaryHeap;
+use std::collections::{BTreeSet, BinaryHeap};
 
 /// One robot's part in the model.
 #[derive(Debug, Clone, PartialEq)]
@@ -106,6 +109,8 @@ struct Slot {
     level: u8,
     server: Option<Server>,
     job: Option<Job>,
+    /// fifo and deadline: its key in the ready queue while it is there.
+    ready: Option<u64>,
 }
 
 /// The model: the cores, every task's job and server, and the time.
@@ -117,9 +122,14 @@ pub struct Cores {
     world_left: u64,
     now: u64,
     slots: Vec<Slot>,
-    /// Reused: the indices of the jobs that run, and candidates.
+    /// Reused: the indices of the jobs that run.
     running: Vec<usize>,
-    candidates: Vec<usize>,
+    /// fifo and deadline: the runnable jobs by (key, rank, index), the
+    /// first running; the throttled servers by the deadline they wait for;
+    /// the tasks released with no demand since the last completions.
+    ready: BTreeSet<(u64, u32, usize)>,
+    throttled: BinaryHeap<Reverse<(u64, usize)>>,
+    zero: Vec<usize>,
     /// `fair`: the service every runnable job has had since time 0 (all
     /// progress alike), and each job's end in that service, earliest
     /// first (ties by task index).
@@ -132,24 +142,25 @@ pub struct Cores {
 /// [`Priority::Level`], or rate-monotonic (see the module's doc).
 pub fn fifo_levels(tasks: &[Task]) -> Vec<u8> {
     let is_rm = |t: &Task| !matches!(t.priority, Some(Priority::Level(_)));
-    let mut periods: Vec<u32> = tasks
-        .iter()
-        .filter(|t| is_rm(t))
-        .map(|t| t.period_ticks)
-        .collect();
-    periods.sort_unstable();
-    periods.dedup();
-    tasks
+    // The rate-monotonic tasks by period, equal periods by name: each a
+    // level of its own, so the kernel runs them in the model's order.
+    let mut rm: Vec<usize> = (0..tasks.len()).filter(|&i| is_rm(&tasks[i])).collect();
+    rm.sort_by(|&a, &b| {
+        (tasks[a].period_ticks, &tasks[a].name, a).cmp(&(tasks[b].period_ticks, &tasks[b].name, b))
+    });
+    let mut levels: Vec<u8> = tasks
         .iter()
         .map(|t| match t.priority {
             Some(Priority::Level(l)) => l,
-            _ => {
-                let r = periods.partition_point(|&p| p < t.period_ticks);
-                99u8.saturating_sub(u8::try_from(r).unwrap_or(u8::MAX))
-                    .max(1)
-            }
+            _ => 1,
         })
-        .collect()
+        .collect();
+    for (r, &i) in rm.iter().enumerate() {
+        levels[i] = 99u8
+            .saturating_sub(u8::try_from(r).unwrap_or(u8::MAX))
+            .max(1);
+    }
+    levels
 }
 
 impl Cores {
@@ -185,6 +196,7 @@ impl Cores {
                 level: levels[i],
                 server,
                 job: None,
+                ready: None,
             });
         }
         Ok(Self {
@@ -195,7 +207,9 @@ impl Cores {
             now: 0,
             slots,
             running: Vec::new(),
-            candidates: Vec::new(),
+            ready: BTreeSet::new(),
+            throttled: BinaryHeap::new(),
+            zero: Vec::new(),
             service: 0,
             ends: BinaryHeap::new(),
             ended: Vec::new(),
@@ -248,6 +262,16 @@ impl Cores {
                 s.budget = s.runtime;
             }
         }
+        if self.scheduler != Scheduler::Fair {
+            // A job replaced keeps no place in the queue of the one before.
+            self.unready(task);
+            if self.slots[task].server.is_none_or(|v| !v.throttled) {
+                self.make_ready(task);
+            }
+            if demand_ns == 0 {
+                self.zero.push(task);
+            }
+        }
     }
 
     /// The cores free for agents now.
@@ -256,97 +280,84 @@ impl Cores {
         if self.world_left > 0 { m - 1 } else { m }
     }
 
-    /// Fills `running` with the jobs that run now; returns the number of
-    /// runnable jobs (fair shares the cores among them all).
-    fn choose(&mut self) -> usize {
-        let c = self.agent_cores();
-        self.running.clear();
-        self.candidates.clear();
-        for (i, s) in self.slots.iter().enumerate() {
-            if s.job.is_some() && s.server.is_none_or(|v| !v.throttled) {
-                self.candidates.push(i);
-            }
+    /// fifo and deadline: the order of slot `i` among the runnable, the
+    /// first running first: its server's deadline, or 99 minus its level;
+    /// equal keys by the rank of the name.
+    fn key(&self, i: usize) -> (u64, u32) {
+        let s = &self.slots[i];
+        match s.server {
+            Some(v) => (v.deadline, s.rank),
+            None => (u64::from(99 - s.level.min(99)), s.rank),
         }
-        let n = self.candidates.len();
-        match self.scheduler {
-            Scheduler::Fair => self.running.extend_from_slice(&self.candidates),
-            Scheduler::Fifo | Scheduler::Deadline => {
-                let slots = &self.slots;
-                let key = |i: usize| {
-                    let s = &slots[i];
-                    match s.server {
-                        Some(v) => (v.deadline, s.rank),
-                        None => (u64::from(99 - s.level.min(99)), s.rank),
-                    }
-                };
-                if n > c && c > 0 {
-                    self.candidates
-                        .select_nth_unstable_by_key(c - 1, |&i| key(i));
-                }
-                let take = n.min(c);
-                self.running.extend_from_slice(&self.candidates[..take]);
-            }
+    }
+
+    /// fifo and deadline: slot `i` becomes runnable (a job, its server not
+    /// throttled) and joins the ready queue.
+    fn make_ready(&mut self, i: usize) {
+        if self.scheduler == Scheduler::Fair || self.slots[i].ready.is_some() {
+            return;
         }
-        n
+        let (key, rank) = self.key(i);
+        self.slots[i].ready = Some(key);
+        self.ready.insert((key, rank, i));
+    }
+
+    /// fifo and deadline: slot `i` leaves the ready queue (its job ended,
+    /// or its server was throttled).
+    fn unready(&mut self, i: usize) {
+        if let Some(key) = self.slots[i].ready.take() {
+            self.ready.remove(&(key, self.slots[i].rank, i));
+        }
     }
 
     /// Runs the model to `until_ns` (not past it). Each job that ends is
     /// handed to `done`, at its time; `done` may answer a new job for the
     /// same task (demand, tag), released then, without a wake-up (the
     /// planner goes straight on to its next snapshot).
+    ///
+    /// fifo and deadline: the runnable jobs are held in order (a
+    /// [`BTreeSet`] of their keys) and the throttled servers by deadline
+    /// (a heap), so an event costs O(m + log n): the `c` first of the
+    /// queue run, the next event is the earliest of their ends and budgets
+    /// and the first replenishment, and only they can end or use up their
+    /// budget. It decides exactly as the scan over every task it replaces
+    /// (a test holds the two together).
     pub fn run_until(&mut self, until_ns: u64, mut done: impl FnMut(Done) -> Option<(u64, u64)>) {
         if self.scheduler == Scheduler::Fair {
             return self.run_fair(until_ns, done);
         }
         loop {
-            let n = self.choose();
+            // The c first of the ready queue run.
             let c = self.agent_cores();
-            let fair_shared = self.scheduler == Scheduler::Fair && n > c;
+            self.running.clear();
+            self.running
+                .extend(self.ready.iter().take(c).map(|&(_, _, i)| i));
             // The next event, as time from now.
             let mut step = until_ns.saturating_sub(self.now);
             if self.world_left > 0 {
                 step = step.min(self.world_left);
             }
+            if !self.zero.is_empty() {
+                step = 0;
+            }
             for &i in &self.running {
                 let s = &self.slots[i];
-                let Some(job) = s.job else { continue };
-                let to_end = if fair_shared {
-                    if c == 0 {
-                        u64::MAX
-                    } else {
-                        let t = (u128::from(job.left) * n as u128).div_ceil(c as u128);
-                        u64::try_from(t).unwrap_or(u64::MAX)
-                    }
-                } else {
-                    job.left
-                };
-                step = step.min(to_end);
+                if let Some(job) = s.job {
+                    step = step.min(job.left);
+                }
                 if let Some(v) = s.server {
                     step = step.min(v.budget);
                 }
             }
-            for s in &self.slots {
-                if let Some(v) = s.server
-                    && v.throttled
-                {
-                    step = step.min(v.deadline.saturating_sub(self.now));
-                }
+            if let Some(&Reverse((d, _))) = self.throttled.peek() {
+                step = step.min(d.saturating_sub(self.now));
             }
             // Advance.
-            let served = if fair_shared {
-                if c == 0 {
-                    0
-                } else {
-                    u64::try_from(u128::from(step) * c as u128 / n as u128).unwrap_or(u64::MAX)
-                }
-            } else {
-                step
-            };
             self.world_left -= step.min(self.world_left);
             for &i in &self.running {
                 let s = &mut self.slots[i];
                 if let Some(job) = s.job.as_mut() {
-                    job.left -= served.min(job.left);
+                    job.left -= step.min(job.left);
                 }
                 if let Some(v) = s.server.as_mut() {
                     v.budget -= step.min(v.budget);
@@ -355,47 +366,61 @@ impl Cores {
             self.now += step;
             let now = self.now;
             // Replenishments.
-            for s in &mut self.slots {
-                if let Some(v) = s.server.as_mut()
-                    && v.throttled
-                    && v.deadline <= now
-                {
+            while let Some(&Reverse((d, i))) = self.throttled.peek()
+                && d <= now
+            {
+                self.throttled.pop();
+                if let Some(v) = self.slots[i].server.as_mut() {
                     v.throttled = false;
                     v.deadline += v.period;
                     v.budget = v.runtime;
                 }
+                if self.slots[i].job.is_some() {
+                    self.make_ready(i);
+                }
             }
             // Budgets used up by running: throttled until the deadline
             // (even if the job ends now, as the kernel does).
-            for &i in &self.running {
-                if let Some(v) = self.slots[i].server.as_mut()
+            for k in 0..self.running.len() {
+                let i = self.running[k];
+                if let Some(v) = self.slots[i].server
                     && v.budget == 0
+                    && !v.throttled
                 {
-                    v.throttled = true;
+                    self.unready(i);
+                    if let Some(v) = self.slots[i].server.as_mut() {
+                        v.throttled = true;
+                    }
+                    self.throttled.push(Reverse((v.deadline, i)));
                 }
             }
-            // Completions, in task order.
-            for i in 0..self.slots.len() {
-                let Some(job) = self.slots[i].job else {
+            // Completions, in task order: the running jobs done, and the
+            // jobs of no demand (which end at once, running or not).
+            self.ended.clear();
+            self.ended.append(&mut self.zero);
+            for &i in &self.running {
+                if self.slots[i].job.is_some_and(|j| j.left == 0) {
+                    self.ended.push(i);
+                }
+            }
+            self.ended.sort_unstable();
+            self.ended.dedup();
+            for k in 0..self.ended.len() {
+                let i = self.ended[k];
+                let Some(job) = self.slots[i].job.filter(|j| j.left == 0) else {
                     continue;
                 };
-                if job.left == 0 {
-                    self.slots[i].job = None;
-                    if let Some((demand, tag)) = done(Done {
-                        task: i,
-                        tag: job.tag,
-                        at_ns: now,
-                    }) {
-                        self.arrive(i, demand, tag, false);
-                    }
+                self.slots[i].job = None;
+                self.unready(i);
+                if let Some((demand, tag)) = done(Done {
+                    task: i,
+                    tag: job.tag,
+                    at_ns: now,
+                }) {
+                    self.arrive(i, demand, tag, false);
                 }
             }
-            if now >= until_ns
-                && !self
-                    .slots
-                    .iter()
-                    .any(|s| s.job.is_some_and(|j| j.left == 0))
-            {
+            if now >= until_ns && self.zero.is_empty() {
                 return;
             }
         }

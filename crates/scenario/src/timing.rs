@@ -319,6 +319,9 @@ pub struct Sent {
     pub sent_ns: u64,
     /// Lost on its way (`command_loss`).
     pub lost: bool,
+    /// The CPU the call took in the model: its compute time if that is CPU
+    /// work (`cpu = true`), else 0 (a wait).
+    pub cpu_ns: u64,
 }
 
 /// One robot's planner in modelled time (lockstep): when it reads which
@@ -374,6 +377,7 @@ impl Clerk {
         Sent {
             sent_ns,
             lost: self.timing.command_lost(self.seed, self.robot, tick),
+            cpu_ns: if self.timing.cpu { compute } else { 0 },
         }
     }
 }
@@ -401,6 +405,9 @@ pub struct RecordedCall {
     pub sent_ns: u64,
     /// What became of it.
     pub status: CallStatus,
+    /// The CPU it took, ns (0 in a record without it).
+    #[serde(default)]
+    pub cpu_ns: u64,
 }
 
 #[cfg(test)]

@@ -5,8 +5,8 @@
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use mrsim_runtime::ScenarioSource;
-use mrsim_runtime::launch::Transport;
-use mrsim_runtime::sched::Sched;
+use mrsim_runtime::Sched;
+use mrsim_runtime::Transport;
 use mrsim_transport::zenoh::ZenohOptions;
 use std::ffi::OsString;
 use std::path::PathBuf;
@@ -74,7 +74,7 @@ impl ScenarioArgs {
         }
         if let Some(m) = source.mode {
             v.push("--mode".into());
-            v.push(mrsim_runtime::validate::mode_name(m).into());
+            v.push(mrsim_runtime::mode_name(m).into());
         }
         v
     }

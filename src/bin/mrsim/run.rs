@@ -7,7 +7,7 @@ use crate::watch::RunWatch;
 use anyhow::Result;
 use clap::Args;
 use mrsim_runtime::Validated;
-use mrsim_runtime::launch::{Event, MAX_RESTARTS, RunRequest};
+use mrsim_runtime::{Event, MAX_RESTARTS, RunRequest};
 
 /// `mrsim run` options.
 #[derive(Debug, Clone, Default, Args)]
@@ -94,7 +94,7 @@ pub fn main(args: &RunArgs) -> Result<i32> {
             )
         })
         .collect();
-    let prepared = mrsim_runtime::launch::prepare(
+    let prepared = mrsim_runtime::prepare(
         validated,
         RunRequest {
             run_id: args.run.clone(),
@@ -105,7 +105,7 @@ pub fn main(args: &RunArgs) -> Result<i32> {
             restart_agents: args.restart_agents,
             zenoh: args.zenoh.options(args.listen.clone()),
             plan_timeout: None,
-            ros2: mrsim_runtime::launch::Ros2Side {
+            ros2: mrsim_runtime::Ros2Side {
                 connect: args.ros2_connect.clone(),
                 domain: args.ros2_domain.unwrap_or(0),
             },

@@ -2,7 +2,7 @@
 //! for each process's spec by the subcommand that runs it (`world`,
 //! `agent`, `ros2`), which spells its own options.
 
-use mrsim_runtime::launch::{ProcessSpec, Starter};
+use mrsim_runtime::{ProcessSpec, Starter};
 use std::ffi::OsString;
 use std::process::Command;
 

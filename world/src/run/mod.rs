@@ -290,11 +290,17 @@ impl<'a> Loop<'a> {
         if !self.timed.recorded() || self.timed.cored(robot) {
             return;
         }
-        self.recording.rec.call(crate::record::Call {
+        let sent_ns = cmd.sent_ns.saturating_sub(self.window.published_ns);
+        if cmd.overruns > 0 {
+            let o = &mut self.recording.acc[robot].overruns;
+            *o = Some(o.unwrap_or(0).max(cmd.overruns));
+        }
+        self.recording.call(crate::record::Call {
             tick: cmd.tick,
             robot: robot as u32,
-            sent_ns: cmd.sent_ns.saturating_sub(self.window.published_ns),
+            sent_ns,
             status,
+            cpu_ns: cmd.cpu_ns,
         });
     }
 
@@ -769,11 +775,12 @@ impl Loop<'_> {
                 } else {
                     Status::Accepted
                 };
-                self.recording.rec.call(crate::record::Call {
+                self.recording.call(crate::record::Call {
                     tick: c.tick,
                     robot: c.robot as u32,
                     sent_ns: c.sent_ns,
                     status,
+                    cpu_ns: c.cpu_ns,
                 });
             }
         }

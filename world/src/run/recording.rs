@@ -194,6 +194,14 @@ impl Recording {
         );
     }
 
+    /// Writes a planner call's row of timing.csv and records its response
+    /// time and CPU for metrics.json.
+    pub fn call(&mut self, call: crate::record::Call) {
+        self.timings
+            .call(call.robot as usize, call.sent_ns, call.cpu_ns);
+        self.rec.call(call);
+    }
+
     /// Counts a command that came after its deadline.
     pub fn late(&mut self, robot: usize) {
         self.counts.late += 1;
@@ -483,6 +491,9 @@ impl Summary<'_> {
             .zip(tracker.robots())
             .zip(tracker.interaction().robots())
             .map(|((((spec, a), t), m), x)| {
+                let calls = t
+                    .calls()
+                    .map(|[response, cpu]| (response.percentiles(), cpu.percentiles()));
                 let [latency, wake, compute] = t.histograms();
                 let min_clearance = m.min_clearance.min(a.min_contact_gap);
                 let spl = m.spl(a.reached_goal);
@@ -501,6 +512,9 @@ impl Summary<'_> {
                         latency_us: latency.percentiles(),
                         wake_us: wake.percentiles(),
                         compute_us: compute.percentiles(),
+                        response_us: calls.map(|c| c.0),
+                        cpu_us: calls.map(|c| c.1),
+                        overruns: a.overruns,
                         agent_pid: a.agent_pid,
                         lost: a.lost,
                         commands_rejected: a.rejected,

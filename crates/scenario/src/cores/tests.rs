@@ -139,6 +139,17 @@ fn a_rate_monotonic_set_under_the_liu_and_layland_bound_never_misses() {
 }
 
 #[test]
+fn rate_monotonic_robots_of_equal_periods_take_a_level_each_in_name_order() {
+    // The kernel runs equal SCHED_FIFO levels by arrival; distinct levels
+    // make it run them in the model's order (period, then name).
+    let tasks = [task("g2", 1), task("g0", 1), task("g1", 1), task("slow", 2)];
+    assert_eq!(fifo_levels(&tasks), vec![97, 99, 98, 96]);
+    let mut fixed = task("fixed", 1);
+    fixed.priority = Some(Priority::Level(50));
+    assert_eq!(fifo_levels(&[fixed, task("a", 1)]), vec![50, 99]);
+}
+
+#[test]
 fn a_set_above_the_cores_capacity_misses_under_every_scheduler() {
     // Three tasks of 80 ms every 100 ms on two cores: U = 2.4 > 2.
     let set = [Periodic {
@@ -437,4 +448,148 @@ fn a_scenario_without_cpus_or_without_cpu_robots_has_no_contention() {
     assert!(Contention::of(&s).unwrap().is_some());
     s.world.cpus = None;
     assert!(Contention::of(&s).unwrap().is_none());
+}
+
+/// The scan over every task that the ready queue of [`Cores::run_until`]
+/// replaced (fifo and deadline, jobs of some demand): each event picks the
+/// `c` runnable jobs of smallest key from all the tasks, and every task is
+/// looked at for its replenishment and its end. Kept to hold the two
+/// together.
+fn run_until_scan(
+    model: &mut Cores,
+    until_ns: u64,
+    mut done: impl FnMut(Done) -> Option<(u64, u64)>,
+) {
+    loop {
+        let c = model.agent_cores();
+        let mut candidates: Vec<usize> = (0..model.slots.len())
+            .filter(|&i| {
+                let s = &model.slots[i];
+                s.job.is_some() && s.server.is_none_or(|v| !v.throttled)
+            })
+            .collect();
+        candidates.sort_by_key(|&i| model.key(i));
+        candidates.truncate(c);
+        let running = candidates;
+        let mut step = until_ns.saturating_sub(model.now);
+        if model.world_left > 0 {
+            step = step.min(model.world_left);
+        }
+        for &i in &running {
+            let s = &model.slots[i];
+            if let Some(job) = s.job {
+                step = step.min(job.left);
+            }
+            if let Some(v) = s.server {
+                step = step.min(v.budget);
+            }
+        }
+        for s in &model.slots {
+            if let Some(v) = s.server
+                && v.throttled
+            {
+                step = step.min(v.deadline.saturating_sub(model.now));
+            }
+        }
+        model.world_left -= step.min(model.world_left);
+        for &i in &running {
+            let s = &mut model.slots[i];
+            if let Some(job) = s.job.as_mut() {
+                job.left -= step.min(job.left);
+            }
+            if let Some(v) = s.server.as_mut() {
+                v.budget -= step.min(v.budget);
+            }
+        }
+        model.now += step;
+        let now = model.now;
+        for s in &mut model.slots {
+            if let Some(v) = s.server.as_mut()
+                && v.throttled
+                && v.deadline <= now
+            {
+                v.throttled = false;
+                v.deadline += v.period;
+                v.budget = v.runtime;
+            }
+        }
+        for &i in &running {
+            if let Some(v) = model.slots[i].server.as_mut()
+                && v.budget == 0
+            {
+                v.throttled = true;
+            }
+        }
+        for i in 0..model.slots.len() {
+            let Some(job) = model.slots[i].job else {
+                continue;
+            };
+            if job.left == 0 {
+                model.slots[i].job = None;
+                if let Some((demand, tag)) = done(Done {
+                    task: i,
+                    tag: job.tag,
+                    at_ns: now,
+                }) {
+                    model.arrive(i, demand, tag, false);
+                }
+            }
+        }
+        if now >= until_ns
+            && !model
+                .slots
+                .iter()
+                .any(|s| s.job.is_some_and(|j| j.left == 0))
+        {
+            return;
+        }
+    }
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+
+    #[test]
+    fn the_ready_queue_decides_every_end_as_the_scan_over_every_task(
+        deadline in proptest::bool::ANY,
+        count in 1u32..4,
+        world_ms in 0u32..3,
+        tasks in proptest::collection::vec((1u64..40, 1u64..5, 1u8..99, 1u64..30), 1..12),
+        chain in proptest::bool::ANY,
+    ) {
+        let scheduler = if deadline { Scheduler::Deadline } else { Scheduler::Fifo };
+        let set: Vec<Task> = tasks
+            .iter()
+            .enumerate()
+            .map(|(i, &(_, period, level, runtime))| Task {
+                name: format!("r{}", i % 5),
+                period_ticks: period as u32,
+                priority: (level % 3 != 0).then_some(Priority::Level(level)),
+                reservation: Some(Reservation {
+                    runtime_ms: runtime as f64,
+                    period_ms: (period * 10) as f64,
+                }),
+            })
+            .collect();
+        let c = Cpus { count, scheduler, world_ms: f64::from(world_ms) };
+        let mut fast = Cores::new(&c, &set).expect("model");
+        let mut slow = fast.clone();
+        let mut ends = (Vec::new(), Vec::new());
+        for tick in 0..60u64 {
+            for (i, &(demand_ms, period, _, _)) in tasks.iter().enumerate() {
+                if tick % period == 0 && !fast.busy(i) {
+                    fast.release(i, demand_ms * MS / 4, tick);
+                    slow.release(i, demand_ms * MS / 4, tick);
+                }
+            }
+            fast.world_tick();
+            slow.world_tick();
+            let until = (tick + 1) * 10 * MS;
+            let again = |d: Done| (chain && d.task % 2 == 0 && d.tag % 3 == 0)
+                .then_some((2 * MS, d.tag + 1000));
+            fast.run_until(until, |d| { ends.0.push(d); again(d) });
+            run_until_scan(&mut slow, until, |d| { ends.1.push(d); again(d) });
+            proptest::prop_assert_eq!(&ends.0, &ends.1, "tick {}", tick);
+        }
+    }
 }
