@@ -35,6 +35,14 @@
 //! - `world_ms`: the world's own CPU each tick, released at the tick's
 //!   start (see [`Cores::world_tick`]) above every agent: while it runs it
 //!   takes one of the cores (`c = m - 1`).
+//! - Real-time throttling (`fifo`): Linux lets SCHED_FIFO tasks use at most
+//!   `sched_rt_runtime_us` of every `sched_rt_period_us` on each core (95 %
+//!   of each second by default), then runs none of them until the window
+//!   ends, so a set that keeps both cores busy loses 50 ms a second. The
+//!   model does the same with the defaults ([`RT_RUNTIME_NS`] per core
+//!   every [`RT_PERIOD_NS`], windows from time 0; the kernel's are aligned
+//!   to its own clock), over the agents' and the world's work summed over
+//!   the cores. SCHED_DEADLINE and SCHED_OTHER tasks are not throttled so.
 //!
 //! Cost: each event (a release, a completion, a budget used up, a
 //! replenishment, the world's work done) costs O(log n) in the tasks the
@@ -46,6 +54,13 @@ use crate::timing::{Priority, Reservation};
 use crate::types::{Cpus, Scheduler};
 use std::cmp::Reverse;
 use std::collections::{BTreeSet, BinaryHeap};
+
+/// Linux's real-time bandwidth window (`/proc/sys/kernel/sched_rt_period_us`
+/// by default), ns: under `fifo` the model throttles as the kernel does.
+pub const RT_PERIOD_NS: u64 = 1_000_000_000;
+/// What SCHED_FIFO tasks may use of each core per window
+/// (`sched_rt_runtime_us` by default: 95 %), ns.
+pub const RT_RUNTIME_NS: u64 = 950_000_000;
 
 /// One robot's part in the model.
 #[derive(Debug, Clone, PartialEq)]
@@ -130,6 +145,10 @@ pub struct Cores {
     ready: BTreeSet<(u64, u32, usize)>,
     throttled: BinaryHeap<Reverse<(u64, usize)>>,
     zero: Vec<usize>,
+    /// fifo: the real-time bandwidth left in the current window (summed
+    /// over the cores), and the window's end ([`RT_PERIOD_NS`]).
+    rt_left: u64,
+    rt_window_end: u64,
     /// `fair`: the service every runnable job has had since time 0 (all
     /// progress alike), and each job's end in that service, earliest
     /// first (ties by task index).
@@ -210,6 +229,8 @@ impl Cores {
             ready: BTreeSet::new(),
             throttled: BinaryHeap::new(),
             zero: Vec::new(),
+            rt_left: u64::from(cpus.count) * RT_RUNTIME_NS,
+            rt_window_end: RT_PERIOD_NS,
             service: 0,
             ends: BinaryHeap::new(),
             ended: Vec::new(),
@@ -326,16 +347,37 @@ impl Cores {
         if self.scheduler == Scheduler::Fair {
             return self.run_fair(until_ns, done);
         }
+        let fifo = self.scheduler == Scheduler::Fifo;
         loop {
+            // fifo: a new window of real-time bandwidth.
+            if fifo && self.now >= self.rt_window_end {
+                while self.rt_window_end <= self.now {
+                    self.rt_window_end += RT_PERIOD_NS;
+                }
+                self.rt_left = u64::from(self.cores) * RT_RUNTIME_NS;
+            }
+            // Throttled (fifo, the window's bandwidth used up): nothing of
+            // the world's or the agents' runs until the window ends.
+            let throttled = fifo && self.rt_left == 0;
             // The c first of the ready queue run.
             let c = self.agent_cores();
             self.running.clear();
-            self.running
-                .extend(self.ready.iter().take(c).map(|&(_, _, i)| i));
+            if !throttled {
+                self.running
+                    .extend(self.ready.iter().take(c).map(|&(_, _, i)| i));
+            }
+            let world_runs = self.world_left > 0 && !throttled;
             // The next event, as time from now.
             let mut step = until_ns.saturating_sub(self.now);
-            if self.world_left > 0 {
+            if world_runs {
                 step = step.min(self.world_left);
+            }
+            let in_use = (self.running.len() + usize::from(world_runs)) as u64;
+            if fifo {
+                step = step.min(self.rt_window_end - self.now);
+                if in_use > 0 {
+                    step = step.min(self.rt_left.div_ceil(in_use));
+                }
             }
             if !self.zero.is_empty() {
                 step = 0;
@@ -353,7 +395,12 @@ impl Cores {
                 step = step.min(d.saturating_sub(self.now));
             }
             // Advance.
-            self.world_left -= step.min(self.world_left);
+            if world_runs {
+                self.world_left -= step.min(self.world_left);
+            }
+            if fifo {
+                self.rt_left = self.rt_left.saturating_sub(step.saturating_mul(in_use));
+            }
             for &i in &self.running {
                 let s = &mut self.slots[i];
                 if let Some(job) = s.job.as_mut() {

@@ -593,3 +593,28 @@ proptest::proptest! {
         }
     }
 }
+
+#[test]
+fn under_fifo_a_core_kept_busy_is_throttled_for_the_last_50_ms_of_every_second() {
+    // One job of 2 s of CPU on one core: 0.95 s of it in each of the first
+    // two windows, the last 0.1 s in the third: it ends at 2.1 s. Under
+    // deadline (a reservation of the whole core) and fair it ends at 2 s.
+    let end = |scheduler: Scheduler| {
+        let mut t = task("a", 1);
+        t.reservation = Some(Reservation {
+            runtime_ms: 3000.0,
+            period_ms: 3000.0,
+        });
+        let mut model = Cores::new(&cpus(1, scheduler), &[t]).unwrap();
+        model.release(0, 2000 * MS, 0);
+        let mut at = None;
+        model.run_until(5000 * MS, |d| {
+            at = Some(d.at_ns);
+            None
+        });
+        at.expect("ended")
+    };
+    assert_eq!(end(Scheduler::Fifo), 2100 * MS);
+    assert_eq!(end(Scheduler::Deadline), 2000 * MS);
+    assert_eq!(end(Scheduler::Fair), 2000 * MS);
+}
