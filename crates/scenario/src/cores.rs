@@ -351,9 +351,8 @@ impl Cores {
         loop {
             // fifo: a new window of real-time bandwidth.
             if fifo && self.now >= self.rt_window_end {
-                while self.rt_window_end <= self.now {
-                    self.rt_window_end += RT_PERIOD_NS;
-                }
+                let behind = (self.now - self.rt_window_end) / RT_PERIOD_NS + 1;
+                self.rt_window_end += behind * RT_PERIOD_NS;
                 self.rt_left = u64::from(self.cores) * RT_RUNTIME_NS;
             }
             // Throttled (fifo, the window's bandwidth used up): nothing of
@@ -373,7 +372,9 @@ impl Cores {
                 step = step.min(self.world_left);
             }
             let in_use = (self.running.len() + usize::from(world_runs)) as u64;
-            if fifo {
+            // The window's end matters only to work that runs or waits
+            // for it: idle cores step straight to the next event.
+            if fifo && (in_use > 0 || throttled) {
                 step = step.min(self.rt_window_end - self.now);
                 if in_use > 0 {
                     step = step.min(self.rt_left.div_ceil(in_use));

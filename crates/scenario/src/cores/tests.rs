@@ -618,3 +618,22 @@ fn under_fifo_a_core_kept_busy_is_throttled_for_the_last_50_ms_of_every_second()
     assert_eq!(end(Scheduler::Deadline), 2000 * MS);
     assert_eq!(end(Scheduler::Fair), 2000 * MS);
 }
+
+#[test]
+fn under_fifo_idle_cores_step_over_the_throttling_windows_to_the_next_job() {
+    // Idle from 0 to 100 s (no job): the model steps straight to the job
+    // released at 100.5 s, which finds the window's whole bandwidth: its
+    // 0.9 s of CPU ends at 101.4 s, inside the window of 100-101 s plus
+    // 0.4 s of the next (0.5 s of window left, less than 0.95 s used).
+    let mut model = Cores::new(&cpus(1, Scheduler::Fifo), &[task("a", 1)]).unwrap();
+    model.run_until(100_500 * MS, |_| None);
+    model.release(0, 900 * MS, 0);
+    let mut at = None;
+    model.run_until(200_000 * MS, |d| {
+        at = Some(d.at_ns);
+        None
+    });
+    assert_eq!(at, Some(101_400 * MS));
+    // And a drain to the end of time returns (an idle model has no events).
+    model.run_until(u64::MAX / 4, |_| None);
+}
