@@ -32,6 +32,7 @@ pub fn sweep_jobs<'py>(
         x: None,
         metrics: Vec::new(),
         sched: Default::default(),
+        resume: false,
     };
     let checked = check(&plan).map_err(|e| match e.refused() {
         Some(i) => PyValueError::new_err(i.to_string()),

@@ -106,6 +106,72 @@ fn a_sweep_of_two_values_and_two_seeds_writes_four_rows_and_repeats_exactly() {
 }
 
 #[test]
+fn a_resumed_sweep_keeps_the_whole_runs_and_runs_again_only_the_missing_and_the_foreign() {
+    let dir = fresh_dir("sweep-resume");
+    let scenario = dir.join("tiny.toml");
+    std::fs::write(&scenario, SCENARIO).expect("write scenario");
+    let out = sweep(&dir.join("a"), &scenario);
+    assert_ok(&out);
+    let csv = std::fs::read_to_string(dir.join("a/sweep.csv")).expect("sweep.csv");
+    let runs: Vec<String> = csv
+        .lines()
+        .skip(1)
+        .filter_map(|l| l.split(',').next_back().map(str::to_string))
+        .collect();
+    assert_eq!(runs.len(), 4, "{csv}");
+    // A run cut before its metrics were written, and a folder holding
+    // another run (other overrides) than the sweep's.
+    std::fs::remove_file(dir.join("a").join(&runs[0]).join("metrics.json")).expect("rm");
+    let source = dir.join("a").join(&runs[3]).join("source.json");
+    let text = std::fs::read_to_string(&source).expect("source.json");
+    std::fs::write(&source, text.replace("max_speed=1.5", "max_speed=0.7")).expect("write");
+    let again = mrsim()
+        .arg("sweep")
+        .arg(&scenario)
+        .args([
+            "--set",
+            "robot.r0.max_speed=0.5,1.5",
+            "--seeds",
+            "2",
+            "--jobs",
+            "2",
+        ])
+        .args(["--resume", "--out"])
+        .arg(dir.join("a"))
+        .output()
+        .expect("start mrsim");
+    assert_ok(&again);
+    let said = String::from_utf8_lossy(&again.stderr);
+    assert!(said.contains("kept 2 of 4 runs"), "{said}");
+    for (i, run) in runs.iter().enumerate() {
+        let kept = said.contains(&format!("{run} (kept)"));
+        assert_eq!(kept, i == 1 || i == 2, "{run}: {said}");
+    }
+    assert!(dir.join("a").join(&runs[0]).join("metrics.json").exists());
+    let text = std::fs::read_to_string(&source).expect("source.json");
+    assert!(text.contains("max_speed=1.5"), "{text}");
+    // The same table as the sweep run whole.
+    let csv2 = std::fs::read_to_string(dir.join("a/sweep.csv")).expect("sweep.csv");
+    assert_eq!(csv, csv2);
+}
+
+#[test]
+fn a_resume_without_an_output_folder_is_refused() {
+    let dir = fresh_dir("sweep-resume-no-out");
+    let scenario = dir.join("tiny.toml");
+    std::fs::write(&scenario, SCENARIO).expect("write scenario");
+    let o = mrsim()
+        .arg("sweep")
+        .arg(&scenario)
+        .args(["--set", "robot.r0.max_speed=0.5,1.5", "--resume"])
+        .output()
+        .expect("start mrsim");
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--out"), "{err}");
+}
+
+#[test]
 fn a_sweep_with_a_bad_value_is_refused_before_any_run() {
     let dir = fresh_dir("sweep-bad");
     let scenario = dir.join("tiny.toml");

@@ -66,6 +66,11 @@ pub struct SweepArgs {
     /// lockstep runs are not pinned).
     #[command(flatten)]
     pub sched: crate::cli::SchedArgs,
+    /// Keep every run whose folder under --out already holds it whole
+    /// (the same scenario file, overrides and mode, its metrics.json
+    /// written): a sweep cut short goes on where it stopped
+    #[arg(long, requires = "out")]
+    pub resume: bool,
 }
 
 /// How a sweep's runs keep time.
@@ -106,6 +111,7 @@ pub fn main(args: &SweepArgs) -> Result<i32> {
         x: args.x.clone(),
         metrics: args.metrics.clone(),
         sched: (&args.sched).into(),
+        resume: args.resume,
     })
     .map_err(fail)?;
     let (axes, combos, jobs, dir) = (&sweep.axes, &sweep.combos, &sweep.jobs, &sweep.dir);
@@ -137,8 +143,12 @@ pub fn main(args: &SweepArgs) -> Result<i32> {
         jobs.len(),
         dir.display()
     );
+    let kept_runs = std::sync::atomic::AtomicUsize::new(0);
     let results = sweep
         .run(&|d: JobDone<'_>| {
+            if d.kept {
+                kept_runs.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            }
             if let Some(e) = d.error {
                 let msg = format!("{}: {e}", d.job.folder);
                 match &bar {
@@ -146,14 +156,23 @@ pub fn main(args: &SweepArgs) -> Result<i32> {
                     None => eprintln!("{msg}"),
                 }
             }
+            let kept = if d.kept { " (kept)" } else { "" };
             match &bar {
                 Some(b) => b.set_position(d.done as u64),
-                None => eprintln!("sweep: {}/{} {}", d.done, jobs.len(), d.job.folder),
+                None => eprintln!("sweep: {}/{} {}{kept}", d.done, jobs.len(), d.job.folder),
             }
         })
         .map_err(fail)?;
     if let Some(b) = &bar {
         b.finish_and_clear();
+    }
+    let kept_runs = kept_runs.into_inner();
+    if kept_runs > 0 {
+        eprintln!(
+            "sweep: kept {kept_runs} of {} runs that {} already held (--resume)",
+            jobs.len(),
+            dir.display()
+        );
     }
     if mrsim_runtime::sweep::seeds_change_nothing(jobs, &results) {
         eprintln!(

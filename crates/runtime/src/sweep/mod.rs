@@ -69,6 +69,13 @@ pub struct SweepPlan {
     /// to each realtime run; lockstep runs are not pinned, since the model
     /// decides their timing).
     pub sched: crate::sched::Sched,
+    /// Keep a run whose folder already holds a whole run of the same
+    /// scenario file, overrides and mode (its `source.json` says so and its
+    /// `metrics.json`, written last, reads), instead of running it again:
+    /// a sweep cut short (SIGKILL, a cluster's time limit) and started
+    /// again with the same command and `--out` goes on where it stopped.
+    /// The realtime runs' `--cpus`/`--rt` are not recorded, so not compared.
+    pub resume: bool,
 }
 
 /// How a sweep's runs keep time.
@@ -185,6 +192,8 @@ pub struct JobDone<'a> {
     pub job: &'a Job,
     /// Why it failed, if it did.
     pub error: Option<&'a str>,
+    /// It was not run: its folder already held it ([`SweepPlan::resume`]).
+    pub kept: bool,
 }
 
 /// A checked plan: every combination valid, the runs listed, nothing
@@ -437,12 +446,16 @@ impl Sweep {
                 s.spawn(|| {
                     while let Some(&i) = batch.get(next.fetch_add(1, Ordering::SeqCst)) {
                         let job = &self.jobs[i];
-                        let r = self.run_one(exe, job);
+                        let (r, kept) = match self.kept(job) {
+                            Some(row) => (Ok(row), true),
+                            None => (self.run_one(exe, job), false),
+                        };
                         let n = done.fetch_add(1, Ordering::SeqCst) + 1;
                         on_done(JobDone {
                             done: n,
                             job,
                             error: r.as_ref().err().map(String::as_str),
+                            kept,
                         });
                         if let Ok(mut res) = results.lock() {
                             res[i] = Some(r);
@@ -451,6 +464,26 @@ impl Sweep {
                 });
             }
         });
+    }
+
+    /// Under [`SweepPlan::resume`], the metrics of `job`'s folder if it
+    /// already holds that very run, whole.
+    fn kept(&self, job: &Job) -> Option<SweepRow> {
+        if !self.plan.resume {
+            return None;
+        }
+        let out = self.dir.join(&job.folder);
+        let text = std::fs::read_to_string(out.join(mrsim_runfolder::SOURCE_FILE)).ok()?;
+        let doc: mrsim_runfolder::SourceDoc = serde_json::from_str(&text).ok()?;
+        let file = std::fs::canonicalize(&self.plan.scenario).ok()?;
+        let set = sets(&self.axes, &self.combos[job.combo], job.seed);
+        let same = doc.file.as_deref() == Some(file.as_path())
+            && doc.set == set
+            && doc.mode.as_deref() == Some(job.mode.to_string().as_str());
+        if !same {
+            return None;
+        }
+        read_run(&out).ok()
     }
 
     fn run_one(&self, exe: &Path, job: &Job) -> JobResult {
