@@ -585,7 +585,7 @@ proptest::proptest! {
             fast.world_tick();
             slow.world_tick();
             let until = (tick + 1) * 10 * MS;
-            let again = |d: Done| (chain && d.task % 2 == 0 && d.tag % 3 == 0)
+            let again = |d: Done| (chain && d.task.is_multiple_of(2) && d.tag.is_multiple_of(3))
                 .then_some((2 * MS, d.tag + 1000));
             fast.run_until(until, |d| { ends.0.push(d); again(d) });
             run_until_scan(&mut slow, until, |d| { ends.1.push(d); again(d) });
