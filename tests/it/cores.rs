@@ -79,7 +79,21 @@ fn a_core_per_robot_gives_what_the_timing_model_gives_alone() {
         file_bytes(&a, "trajectory.csv"),
         file_bytes(&b, "trajectory.csv")
     );
-    assert_eq!(calls(&a), calls(&b));
+    // The same calls at the same times; a wait takes no CPU, CPU work its
+    // drawn time.
+    let no_cpu = |rows: Vec<CallRow>| -> Vec<CallRow> {
+        rows.into_iter()
+            .map(|mut r| {
+                r.4 = 0;
+                r
+            })
+            .collect()
+    };
+    assert_eq!(calls(&a), no_cpu(calls(&b)));
+    assert!(
+        calls(&b).iter().all(|r| r.4 == r.2),
+        "the CPU is the time drawn"
+    );
     assert_eq!(misses_of(&a, 4), misses_of(&b, 4));
     // Without [world.cpus], cpu = true is a core of its own per agent too.
     let own = crossing("", VARIED, 6.0);
@@ -88,6 +102,7 @@ fn a_core_per_robot_gives_what_the_timing_model_gives_alone() {
         file_bytes(&a, "trajectory.csv"),
         file_bytes(&c, "trajectory.csv")
     );
+    assert_eq!(calls(&b), calls(&c));
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -115,8 +130,10 @@ fn four_planners_of_40_ms_on_one_core_miss_where_each_on_its_own_core_does_not()
         "{:?}",
         misses_of(&one, 4)
     );
-    // Under fifo the two of highest priority keep their deadlines (40 +
-    // 40 ms), the other two miss; rate-monotonic at equal periods is by
+    // Under fifo the highest priority keeps its deadlines; the second
+    // (40 + 40 ms) keeps them but where Linux's real-time throttling holds
+    // the busy core for the last 50 ms of a second (at most twice a
+    // second); the other two starve. Rate-monotonic at equal periods is by
     // name.
     let fifo = run_quietly(
         &dir,
@@ -125,8 +142,9 @@ fn four_planners_of_40_ms_on_one_core_miss_where_each_on_its_own_core_does_not()
         &["--transport", "inproc"],
     );
     let m = misses_of(&fifo, 4);
-    assert_eq!((m[0].0, m[1].0), (0, 0), "{m:?}");
-    assert!(m[2].0 > 0 && m[3].0 > 0, "{m:?}");
+    assert_eq!(m[0].0, 0, "{m:?}");
+    assert!(m[1].0 > 0 && m[1].0 <= 2 * 3, "{m:?}");
+    assert!(m[2].0 == 30 && m[3].0 == 30, "{m:?}");
     // Per robot, the CPU of a call is its 40 ms wherever it ran; the
     // response time is 40 ms on a core of its own, 40 and 80 ms for the
     // first two under fifo on one core, and past the deadline for all

@@ -55,12 +55,20 @@ fn two_cores_carry_eight_robots_of_twenty_ms_but_not_twelve() {
     for scheduler in ["fair", "fifo", "deadline"] {
         let set = format!("world.cpus.scheduler={scheduler}");
         let eight = check("cores/circle-8.toml", &["--set", &set]);
+        // The world's 0.2 ms above the robots leaves the fifo bound (a
+        // sufficient test) unable to clear the last of eight, which the
+        // model keeps.
+        let none = if scheduler == "fifo" {
+            "predicted to miss: 1 of 8 (g07)"
+        } else {
+            "predicted to miss: none"
+        };
         assert_eq!(
             line_with(&eight, "predicted to miss: "),
-            "predicted to miss: none",
+            none,
             "{scheduler}: {eight}"
         );
-        assert!(eight.contains("U = 1.600 <= 2"), "{eight}");
+        assert!(eight.contains("U = 1.602 <= 2"), "{eight}");
         let twelve = check("cores/circle-12.toml", &["--set", &set]);
         assert!(twelve.contains("fails: some robot must miss"), "{twelve}");
         assert_ne!(
@@ -70,10 +78,10 @@ fn two_cores_carry_eight_robots_of_twenty_ms_but_not_twelve() {
         );
     }
     // Under fair every one of the twelve shares the cores: 12 x 20 / 2 =
-    // 120 ms a call.
+    // 120 ms a call, and the world's 0.2 ms.
     let fair = check("cores/circle-12.toml", &[]);
     assert!(fair.contains("predicted to miss: 12 of 12"), "{fair}");
-    assert!(fair.contains("120 ms > D = 100 ms"), "{fair}");
+    assert!(fair.contains("120.1 ms > D = 100 ms"), "{fair}");
 }
 
 #[test]
@@ -265,8 +273,14 @@ fn the_cores_model_misses_where_the_verdict_predicts_and_the_verdict_is_never_th
             "{r} missed, not predicted: {predicted}"
         );
     }
-    assert!(last.contains("robots predicted to miss 5"), "{last}");
-    // Twelve robots under fifo: the two lowest priorities starve.
+    // U = 2.44 > 0.95 m: the real-time throttling may make any robot late.
+    assert!(last.contains("robots predicted to miss 9"), "{last}");
+    // Twelve robots under fifo: the lowest priorities starve, the middle
+    // ones are late where the throttling holds the cores; the first four
+    // keep every deadline.
     let (missing, _) = missing_in_model("circle-12.toml", "fifo");
-    assert_eq!(missing, ["g10", "g11"]);
+    assert_eq!(
+        missing,
+        ["g04", "g05", "g06", "g07", "g08", "g09", "g10", "g11"]
+    );
 }

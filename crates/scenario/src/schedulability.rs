@@ -443,6 +443,27 @@ pub fn fifo(set: &TaskSet) -> Verdict {
             },
         });
     }
+    // Linux's real-time throttling (`sched_rt_runtime_us` of
+    // `sched_rt_period_us`, 0.95 of each core by default, as the cores'
+    // model applies it): beyond it the real-time work of a second cannot
+    // be done in that second, and the calls caught in a throttled window
+    // wait for the next, whatever their priority.
+    let rt_cap =
+        f64::from(m) * crate::cores::RT_RUNTIME_NS as f64 / crate::cores::RT_PERIOD_NS as f64;
+    let throttled = u > rt_cap + 1e-12;
+    set_tests.push(SetTest {
+        name: "Linux's real-time throttling (sched_rt_runtime_us / sched_rt_period_us = 0.95 a core), U <= 0.95 m"
+            .into(),
+        detail: format!(
+            "U = {u:.3} {} {rt_cap:.3}",
+            if throttled { ">" } else { "<=" }
+        ),
+        conclusion: if throttled {
+            Conclusion::Fails
+        } else {
+            Conclusion::Holds
+        },
+    });
     // Priority order: the world first, then by priority (stable: ties in
     // the tasks' order).
     let mut order: Vec<(usize, &Task)> = cpu.clone();
@@ -476,6 +497,12 @@ pub fn fifo(set: &TaskSet) -> Verdict {
                 return wait_verdict(t);
             }
             match r {
+                Some(r) if throttled => RobotVerdict {
+                    name: t.name.clone(),
+                    response_ns: Some(*r),
+                    may_miss: true,
+                    why: format!("R <= {} ms on whole cores, but throttled", ms(*r)),
+                },
                 Some(r) => RobotVerdict {
                     name: t.name.clone(),
                     response_ns: Some(*r),
@@ -1080,10 +1107,11 @@ mod tests {
 
     #[test]
     fn a_lower_priority_task_that_cannot_finish_by_its_deadline_is_predicted_to_miss() {
-        // b: 40 + 2 x 30 = 100 > D = 90 (its deadline shortened).
+        // b: 40 + 2 x 30 = 100 > D = 90 (its deadline shortened); U = 0.9,
+        // under the real-time throttling's 0.95.
         let mut b = task("b", 40, 100, 1);
         b.deadline_ns = 90 * MS;
-        let s = set(1, vec![task("a", 30, 50, 2), b]);
+        let s = set(1, vec![task("a", 30, 60, 2), b]);
         let v = fifo(&s);
         assert_eq!(v.predicted_misses(), vec!["b"]);
     }
@@ -1141,9 +1169,14 @@ mod tests {
         let v = fair(&s);
         assert_eq!(v.predicted_misses().len(), 12);
         assert_eq!(response(&v, "g00"), Some(120 * MS));
-        // Under fifo the first robots in priority order still keep theirs.
+        // Under fifo the response-time bound still clears the first robots
+        // in priority order on whole cores, but U > 0.95 m: Linux's
+        // real-time throttling may make any of them late.
         let v = fifo(&s);
-        assert!(!v.robots[0].may_miss && v.robots[11].may_miss);
+        assert!(v.robots[0].response_ns.is_some() && v.robots[11].response_ns.is_none());
+        assert!(v.robots.iter().all(|r| r.may_miss));
+        let throttling = v.set_tests.iter().find(|t| t.name.contains("throttling"));
+        assert_eq!(throttling.map(|t| t.conclusion), Some(Conclusion::Fails));
     }
 
     #[test]
