@@ -110,11 +110,12 @@ mod tests {
             Policy::Fifo { priority } => priority,
             other => panic!("{other}"),
         };
-        // Period 1 is rate-monotonic's first level (99 in the model, 98
-        // for real: the world is at 99), period 2 the next; "d" keeps the
-        // order of its own level.
-        assert_eq!([level(1), level(2), level(4)], [98, 98, 98]);
-        assert_eq!(level(0), 97);
+        // Period 1 comes first in rate-monotonic order (99 in the model, 98
+        // for real: the world is at 99), its robots a level each by name
+        // ("b", "c", "e"), then period 2 ("a"); "d" keeps the order of its
+        // own level.
+        assert_eq!([level(2), level(1), level(4)], [98, 97, 96]);
+        assert_eq!(level(0), 95);
         assert_eq!(level(3), 39);
         let first = timing(1, Some(Priority::Level(1)));
         let second = timing(1, Some(Priority::Level(2)));
