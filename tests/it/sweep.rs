@@ -23,6 +23,15 @@ motion = { model = "random", accel_sigma = 1.0, max_speed = 0.5 }
 "#;
 
 fn sweep(dir: &std::path::Path, scenario: &std::path::Path) -> std::process::Output {
+    sweep_with(dir, scenario, &[])
+}
+
+/// The sweep of two values and two seeds, with `extra` arguments.
+fn sweep_with(
+    dir: &std::path::Path,
+    scenario: &std::path::Path,
+    extra: &[&str],
+) -> std::process::Output {
     mrsim()
         .arg("sweep")
         .arg(scenario)
@@ -34,6 +43,7 @@ fn sweep(dir: &std::path::Path, scenario: &std::path::Path) -> std::process::Out
             "--jobs",
             "2",
         ])
+        .args(extra)
         .arg("--out")
         .arg(dir)
         .output()
@@ -125,21 +135,7 @@ fn a_resumed_sweep_keeps_the_whole_runs_and_runs_again_only_the_missing_and_the_
     let source = dir.join("a").join(&runs[3]).join("source.json");
     let text = std::fs::read_to_string(&source).expect("source.json");
     std::fs::write(&source, text.replace("max_speed=1.5", "max_speed=0.7")).expect("write");
-    let again = mrsim()
-        .arg("sweep")
-        .arg(&scenario)
-        .args([
-            "--set",
-            "robot.r0.max_speed=0.5,1.5",
-            "--seeds",
-            "2",
-            "--jobs",
-            "2",
-        ])
-        .args(["--resume", "--out"])
-        .arg(dir.join("a"))
-        .output()
-        .expect("start mrsim");
+    let again = sweep_with(&dir.join("a"), &scenario, &["--resume"]);
     assert_ok(&again);
     let said = String::from_utf8_lossy(&again.stderr);
     assert!(said.contains("kept 2 of 4 runs"), "{said}");

@@ -497,17 +497,19 @@ pub fn fifo(set: &TaskSet) -> Verdict {
                 return wait_verdict(t);
             }
             match r {
-                Some(r) if throttled => RobotVerdict {
-                    name: t.name.clone(),
-                    response_ns: Some(*r),
-                    may_miss: true,
-                    why: format!("R <= {} ms on whole cores, but throttled", ms(*r)),
-                },
                 Some(r) => RobotVerdict {
                     name: t.name.clone(),
                     response_ns: Some(*r),
-                    may_miss: false,
-                    why: format!("R <= {} ms", ms(*r)),
+                    may_miss: throttled,
+                    why: format!(
+                        "R <= {} ms{}",
+                        ms(*r),
+                        if throttled {
+                            " on whole cores, but throttled"
+                        } else {
+                            ""
+                        }
+                    ),
                 },
                 None => RobotVerdict {
                     name: t.name.clone(),

@@ -473,8 +473,8 @@ impl Sweep {
             return None;
         }
         let out = self.dir.join(&job.folder);
-        let text = std::fs::read_to_string(out.join(mrsim_runfolder::SOURCE_FILE)).ok()?;
-        let doc: mrsim_runfolder::SourceDoc = serde_json::from_str(&text).ok()?;
+        let doc: mrsim_runfolder::SourceDoc =
+            mrsim_runfolder::read_json(&out, mrsim_runfolder::SOURCE_FILE).ok()?;
         let file = std::fs::canonicalize(&self.plan.scenario).ok()?;
         let set = sets(&self.axes, &self.combos[job.combo], job.seed);
         let same = doc.file.as_deref() == Some(file.as_path())
