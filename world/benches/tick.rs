@@ -120,7 +120,7 @@ fn ticks(c: &mut Criterion) {
         g.bench_with_input(BenchmarkId::new("world_tick", n), &n, |b, _| {
             b.iter(|| {
                 world.step(&mut contacts);
-                grid.clearances_below(world.states(), n, |i| least[i], &mut clear);
+                grid.clearances_below(world.states(), &[], n, |i| least[i], &mut clear);
                 for (l, c) in least.iter_mut().zip(&clear) {
                     *l = l.min(*c);
                 }

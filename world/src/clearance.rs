@@ -2,6 +2,7 @@
 //! robot's smallest surface distance to any other body per tick, on the
 //! grids of [`mrsim_spatial`].
 
+use mrsim_shape::{Pose, Shape};
 use mrsim_spatial::{BoundedGrid as Cells, Buckets, Disc, HashedGrid as Fine, bounds};
 
 /// `p` minus the point of segment `w` nearest to it.
@@ -86,12 +87,20 @@ trait Nearest {
     fn nearest_in_box(
         &self,
         states: &[mrsim_proto::BodyState],
+        shapes: &[Shape],
         i: usize,
         reach: f64,
         cell: impl Fn(f64, usize) -> i64,
         bucket: impl Fn(i64, i64) -> usize,
     ) -> f64;
-    fn nearest_in(&self, states: &[mrsim_proto::BodyState], i: usize, c: usize, best: f64) -> f64;
+    fn nearest_in(
+        &self,
+        states: &[mrsim_proto::BodyState],
+        shapes: &[Shape],
+        i: usize,
+        c: usize,
+        best: f64,
+    ) -> f64;
 }
 
 impl Nearest for Buckets {
@@ -102,6 +111,7 @@ impl Nearest for Buckets {
     fn nearest_in_box(
         &self,
         states: &[mrsim_proto::BodyState],
+        shapes: &[Shape],
         i: usize,
         reach: f64,
         cell: impl Fn(f64, usize) -> i64,
@@ -113,7 +123,7 @@ impl Nearest for Buckets {
         let mut best = f64::INFINITY;
         for y in y0..=y1 {
             for x in x0..=x1 {
-                best = self.nearest_in(states, i, bucket(x, y), best);
+                best = self.nearest_in(states, shapes, i, bucket(x, y), best);
             }
         }
         best
@@ -124,6 +134,7 @@ impl Nearest for Buckets {
     fn nearest_in(
         &self,
         states: &[mrsim_proto::BodyState],
+        shapes: &[Shape],
         i: usize,
         c: usize,
         mut best: f64,
@@ -140,10 +151,32 @@ impl Nearest for Buckets {
             if clearly_beyond(d2, best + qr + s.radius) {
                 continue;
             }
-            // As `centre_distance(q, s)`, the same expression as `brute`.
-            best = best.min(d2.sqrt() - qr - s.radius);
+            // As `centre_distance(q, s)`, the same expression as `brute`;
+            // the true gap where a body is not a disc (never below the
+            // discs' gap, so the discs rule bodies out as before).
+            let g = d2.sqrt() - qr - s.radius;
+            best = best.min(shape_gap(states, shapes, i, j as usize, g));
         }
         best
+    }
+}
+
+/// The gap of bodies `i` and `j` whose circumscribed discs are `disc_gap`
+/// apart: that, unless one of them has another shape (`shapes`, by body
+/// id; empty when every body is a disc).
+fn shape_gap(
+    states: &[mrsim_proto::BodyState],
+    shapes: &[Shape],
+    i: usize,
+    j: usize,
+    disc_gap: f64,
+) -> f64 {
+    match (shapes.get(i), shapes.get(j)) {
+        (Some(a), Some(b)) if !(a.is_disc() && b.is_disc()) => {
+            let pose = |s: &mrsim_proto::BodyState| Pose::new(s.position, s.heading);
+            mrsim_shape::gap(a, pose(&states[i]), b, pose(&states[j]))
+        }
+        _ => disc_gap,
     }
 }
 
@@ -161,10 +194,11 @@ impl ClearanceGrid {
     pub fn clearances(
         &mut self,
         states: &[mrsim_proto::BodyState],
+        shapes: &[Shape],
         robots: usize,
         out: &mut Vec<f64>,
     ) {
-        self.clearances_below(states, robots, |_| f64::INFINITY, out);
+        self.clearances_below(states, shapes, robots, |_| f64::INFINITY, out);
     }
 
     /// As [`clearances`](Self::clearances), but robot `i` only needs its
@@ -174,6 +208,7 @@ impl ClearanceGrid {
     pub fn clearances_below(
         &mut self,
         states: &[mrsim_proto::BodyState],
+        shapes: &[Shape],
         robots: usize,
         bound: impl Fn(usize) -> f64,
         out: &mut Vec<f64>,
@@ -187,7 +222,7 @@ impl ClearanceGrid {
         let Some((lo, hi, rmax)) = bounds(states.iter().map(disc)) else {
             // Non-finite positions: fall back to all pairs.
             for (i, o) in out.iter_mut().enumerate() {
-                *o = brute(states, i);
+                *o = brute(states, shapes, i);
             }
             return;
         };
@@ -206,6 +241,7 @@ impl ClearanceGrid {
             if let Some(f) = fine.filter(|f| reach <= f.cell) {
                 *o = self.fine.nearest_in_box(
                     states,
+                    shapes,
                     i,
                     reach,
                     |v, k| f.at(v, k),
@@ -228,6 +264,7 @@ impl ClearanceGrid {
             if reach.is_finite() && reach <= g.cell {
                 *o = self.coarse.nearest_in_box(
                     states,
+                    shapes,
                     i,
                     reach,
                     |v, k| g.at(v, k) as i64,
@@ -236,7 +273,7 @@ impl ClearanceGrid {
                 continue;
             }
             // Unbounded (or a bound wider than a cell): rings outwards.
-            *o = self.rings(states, i, g, bound(i), rmax);
+            *o = self.rings(states, shapes, i, g, bound(i), rmax);
         }
     }
 
@@ -281,6 +318,7 @@ impl ClearanceGrid {
     fn rings(
         &self,
         states: &[mrsim_proto::BodyState],
+        shapes: &[Shape],
         i: usize,
         g: Cells,
         bound: f64,
@@ -307,6 +345,7 @@ impl ClearanceGrid {
                     if x >= 0 && x < g.nx as isize {
                         best = self.coarse.nearest_in(
                             states,
+                            shapes,
                             i,
                             g.bucket(x as usize, y as usize),
                             best,
@@ -324,13 +363,13 @@ impl ClearanceGrid {
     }
 }
 
-fn brute(states: &[mrsim_proto::BodyState], i: usize) -> f64 {
+fn brute(states: &[mrsim_proto::BodyState], shapes: &[Shape], i: usize) -> f64 {
     let s = &states[i];
     let mut clear = f64::INFINITY;
     for (j, o) in states.iter().enumerate() {
         if j != i {
             let d = centre_distance(o, s);
-            clear = clear.min(d - o.radius - s.radius);
+            clear = clear.min(shape_gap(states, shapes, i, j, d - o.radius - s.radius));
         }
     }
     clear
@@ -359,6 +398,51 @@ mod tests {
     }
 
     #[test]
+    fn with_shapes_the_grid_gives_the_all_pairs_minimum_of_the_true_gaps() {
+        let mut grid = ClearanceGrid::default();
+        let mut out = Vec::new();
+        for (n, spread) in [(17, 5.0), (300, 40.0), (1000, 60.0)] {
+            let mut states = scatter(n, n as u64 + 7, spread);
+            // Every third body a rectangle, every third a triangle, each
+            // turned; their radii the circumscribed ones.
+            let shapes: Vec<Shape> = states
+                .iter_mut()
+                .enumerate()
+                .map(|(k, s)| {
+                    s.heading = k as f64 * 0.7;
+                    let shape = match k % 3 {
+                        0 => Shape::disc(s.radius),
+                        1 => Shape::Polygon(
+                            mrsim_shape::Polygon::rectangle(2.0 * s.radius, s.radius).unwrap(),
+                        ),
+                        _ => Shape::Polygon(
+                            mrsim_shape::Polygon::new(&[
+                                [-s.radius, -s.radius],
+                                [s.radius, 0.0],
+                                [-s.radius, s.radius],
+                            ])
+                            .unwrap(),
+                        ),
+                    };
+                    s.radius = shape.circumradius();
+                    shape
+                })
+                .collect();
+            grid.clearances(&states, &shapes, n, &mut out);
+            for (i, c) in out.iter().enumerate() {
+                let exact = (0..n)
+                    .filter(|&j| j != i)
+                    .map(|j| {
+                        let p = |k: usize| Pose::new(states[k].position, states[k].heading);
+                        mrsim_shape::gap(&shapes[i], p(i), &shapes[j], p(j))
+                    })
+                    .fold(f64::INFINITY, f64::min);
+                assert!((c - exact).abs() < 1e-12, "n {n} robot {i}: {c} vs {exact}");
+            }
+        }
+    }
+
+    #[test]
     fn the_grid_gives_exactly_the_all_pairs_minimum_clearance() {
         let mut grid = ClearanceGrid::default();
         let mut out = Vec::new();
@@ -371,10 +455,14 @@ mod tests {
         ] {
             let states = scatter(n, n as u64, spread);
             let robots = n * 3 / 4;
-            grid.clearances(&states, robots, &mut out);
+            grid.clearances(&states, &[], robots, &mut out);
             assert_eq!(out.len(), robots);
             for (i, c) in out.iter().enumerate() {
-                assert_eq!(c.to_bits(), brute(&states, i).to_bits(), "n {n} robot {i}");
+                assert_eq!(
+                    c.to_bits(),
+                    brute(&states, &[], i).to_bits(),
+                    "n {n} robot {i}"
+                );
             }
         }
     }
@@ -412,11 +500,11 @@ mod tests {
                 1 => -1.0,
                 2 => 0.05 * (i % 7) as f64,
                 3 => spread / 10.0,
-                _ => brute(&states, i) + 1e-9,
+                _ => brute(&states, &[], i) + 1e-9,
             };
-            grid.clearances_below(&states, n, bound, &mut out);
+            grid.clearances_below(&states, &[], n, bound, &mut out);
             for (i, c) in out.iter().enumerate() {
-                let exact = brute(&states, i);
+                let exact = brute(&states, &[], i);
                 assert_eq!(
                     c.min(bound(i)).to_bits(),
                     exact.min(bound(i)).to_bits(),
@@ -456,12 +544,12 @@ mod tests {
                 (1, _) => 40.0,
                 (_, 0) => -1.0,
                 (_, 1) => 0.05 * (i % 7) as f64,
-                (_, 2) => brute(states, i) + 1e-9,
-                _ => brute(states, i) - 1e-9,
+                (_, 2) => brute(states, &[], i) + 1e-9,
+                _ => brute(states, &[], i) - 1e-9,
             };
-            grid.clearances_below(states, n, bound, &mut out);
+            grid.clearances_below(states, &[], n, bound, &mut out);
             for (i, c) in out.iter().enumerate() {
-                let exact = brute(states, i);
+                let exact = brute(states, &[], i);
                 assert_eq!(
                     c.min(bound(i)).to_bits(),
                     exact.min(bound(i)).to_bits(),
@@ -479,11 +567,11 @@ mod tests {
         let mut grid = ClearanceGrid::default();
         let mut out = Vec::new();
         let one = scatter(1, 1, 1.0);
-        grid.clearances(&one, 1, &mut out);
+        grid.clearances(&one, &[], 1, &mut out);
         assert_eq!(out, vec![f64::INFINITY]);
         let mut two = scatter(2, 2, 1.0);
         two[1].position = two[0].position;
-        grid.clearances(&two, 2, &mut out);
+        grid.clearances(&two, &[], 2, &mut out);
         assert!(out.iter().all(|c| *c < 0.0));
     }
 }

@@ -152,6 +152,11 @@ pub fn time_to_collision(a: &BodyState, b: &BodyState) -> f64 {
     (-dv - disc.sqrt()) / vv
 }
 
+/// A body's pose for its shape.
+fn pose(s: &BodyState) -> mrsim_shape::Pose {
+    mrsim_shape::Pose::new(s.position, s.heading)
+}
+
 /// Surface gap between two discs (negative: overlap).
 fn gap(a: &BodyState, b: &BodyState) -> f64 {
     let (dx, dy) = (a.position[0] - b.position[0], a.position[1] - b.position[1]);
@@ -171,6 +176,8 @@ pub struct Interaction {
     /// Per robot, this tick's smallest gap and time to collision.
     smallest: Vec<f64>,
     ttc: Vec<f64>,
+    /// Every body's shape by id, empty when every body is a disc.
+    shapes: Vec<mrsim_shape::Shape>,
     open: HashMap<(u32, u32), Open>,
     /// Encounters ended and not yet taken.
     closed: Vec<(u32, u32, Open)>,
@@ -198,6 +205,11 @@ impl Interaction {
             near: Vec::new(),
             smallest: Vec::new(),
             ttc: Vec::new(),
+            shapes: if scenario.has_shapes() {
+                scenario.body_shapes()
+            } else {
+                Vec::new()
+            },
             open: HashMap::new(),
             closed: Vec::new(),
         }
@@ -286,12 +298,29 @@ impl Interaction {
             for &j in &near {
                 let j = j as usize;
                 let q = &states[j];
-                let g = gap(s, q);
+                let shapes = (self.shapes.get(i), self.shapes.get(j));
+                let shaped = match shapes {
+                    (Some(a), Some(b)) if !(a.is_disc() && b.is_disc()) => Some((a, b)),
+                    _ => None,
+                };
+                let g = match shaped {
+                    Some((a, b)) => mrsim_shape::gap(a, pose(s), b, pose(q)),
+                    None => gap(s, q),
+                };
                 // Farther than the social distance, or not a number.
                 if g.partial_cmp(&reach) != Some(std::cmp::Ordering::Less) {
                     continue;
                 }
-                let t = time_to_collision(s, q);
+                let t = match shaped {
+                    // The circumscribed discs touch first: from there, the
+                    // true shapes' time.
+                    Some((a, b)) => {
+                        let v = [q.velocity[0] - s.velocity[0], q.velocity[1] - s.velocity[1]];
+                        let from = time_to_collision(s, q);
+                        mrsim_shape::time_to_contact(a, pose(s), b, pose(q), v, from)
+                    }
+                    None => time_to_collision(s, q),
+                };
                 for k in [i, j] {
                     if k < n {
                         smallest[k] = smallest[k].min(g);

@@ -28,7 +28,7 @@
 
 use crate::motion::{Body, MotionError, MotionSetup, MotionState};
 use mrsim_proto::{BodyState, body_kind};
-use mrsim_scenario::{Kinematics, RobotSpec, Scenario};
+use mrsim_scenario::{Kinematics, RobotSpec, Scenario, ShapeSpec};
 use rapier2d::prelude::*;
 
 /// A command as the world applies it.
@@ -137,6 +137,8 @@ pub struct World {
     headings: Vec<f64>,
     /// Each robot's turn rate, rad/s.
     turn_rates: Vec<f64>,
+    /// Every body's shape by body id (robots, then obstacles).
+    shapes: Vec<mrsim_shape::Shape>,
     states: Vec<BodyState>,
     /// Pairs in contact after the last substep, sorted.
     touching: Vec<(Owner, Owner)>,
@@ -239,14 +241,20 @@ fn initial_states(scenario: &Scenario) -> Vec<BodyState> {
         .collect()
 }
 
-/// A unicycle's heading at its start: towards its goal (0 if they
-/// coincide); 0 for a holonomic robot.
-fn initial_heading(r: &RobotSpec) -> f64 {
-    let d = [r.goal[0] - r.start[0], r.goal[1] - r.start[1]];
-    if r.kinematics == Kinematics::Unicycle && (d[0] != 0.0 || d[1] != 0.0) {
-        d[1].atan2(d[0])
-    } else {
-        0.0
+/// The collider of a body's shape: a ball (a point body's the small
+/// `min_radius`), a cuboid for a rectangle, a convex polygon for a polygon
+/// (the scenario validated it; should rapier refuse one, the disc that
+/// holds it).
+fn collider_of(shape: &ShapeSpec, radius: f64, min_radius: f64) -> ColliderBuilder {
+    match shape {
+        ShapeSpec::Disc => ColliderBuilder::ball(radius.max(min_radius) as f32),
+        ShapeSpec::Rectangle { length, width } => {
+            ColliderBuilder::cuboid((length / 2.0) as f32, (width / 2.0) as f32)
+        }
+        ShapeSpec::Polygon { points } => {
+            ColliderBuilder::convex_polyline(points.iter().map(|p| v2(*p)).collect())
+                .unwrap_or_else(|| ColliderBuilder::ball(radius.max(min_radius) as f32))
+        }
     }
 }
 
@@ -310,14 +318,17 @@ impl World {
         let mut owners = Vec::new();
         let mut robots = Vec::with_capacity(scenario.robots.len());
         for (i, r) in scenario.robots.iter().enumerate() {
-            let body = RigidBodyBuilder::dynamic()
+            let mut body = RigidBodyBuilder::dynamic()
                 .translation(v2(r.start))
                 .lock_rotations()
                 .linear_damping(0.0)
                 .can_sleep(false)
                 .ccd_enabled(true);
+            if !r.shape.is_disc() {
+                body = body.rotation(r.start_heading() as f32);
+            }
             let h = phys.insert_body(body);
-            let collider = ColliderBuilder::ball(r.radius.max(min_radius) as f32)
+            let collider = collider_of(&r.shape, r.radius, min_radius)
                 .mass(r.mass as f32)
                 .friction(0.0);
             let c = phys.insert_collider(collider, Some(h));
@@ -339,8 +350,8 @@ impl World {
             } else {
                 RigidBodyBuilder::kinematic_position_based()
             };
-            let h = phys.insert_body(builder.translation(v2(o.start)));
-            let collider = ColliderBuilder::ball(o.radius.max(min_radius) as f32);
+            let h = phys.insert_body(builder.translation(v2(o.start)).rotation(o.heading as f32));
+            let collider = collider_of(&o.shape, o.radius, min_radius);
             let c = phys.insert_collider(collider, Some(h));
             set_owner(&mut owners, c, Owner::Obstacle(i));
             obstacles.push(h);
@@ -367,7 +378,12 @@ impl World {
             commands: vec![Applied::BRAKE; scenario.robots.len()],
             pending: vec![Default::default(); scenario.robots.len()],
             any_pending: false,
-            headings: scenario.robots.iter().map(initial_heading).collect(),
+            headings: scenario
+                .robots
+                .iter()
+                .map(RobotSpec::start_heading)
+                .collect(),
+            shapes: scenario.body_shapes(),
             turn_rates: vec![0.0; scenario.robots.len()],
             states: initial_states(scenario),
             touching: Vec::new(),
@@ -501,6 +517,11 @@ impl World {
                     self.headings[i] = theta;
                     self.turn_rates[i] = omega;
                     body.set_linvel(v2(nv), true);
+                    // A disc is the same at any angle; another shape's
+                    // collider turns with the heading.
+                    if !self.shapes[i].is_disc() {
+                        body.set_rotation(Rotation::new(theta as f32), true);
+                    }
                     continue;
                 }
                 // The actuator model: acceleration from the command.
@@ -616,7 +637,31 @@ impl World {
         }
     }
 
+    /// `o`'s shape and pose (`None` for a wall).
+    fn owner_pose(&self, o: Owner) -> Option<(mrsim_shape::Shape, mrsim_shape::Pose)> {
+        let p = self.owner_position(o)?;
+        let (id, heading) = match o {
+            Owner::Robot(i) => (i, self.headings[i]),
+            Owner::Obstacle(i) => (self.robots.len() + i, self.scenario.obstacles[i].heading),
+            Owner::Wall(_) => return None,
+        };
+        Some((self.shapes[id], mrsim_shape::Pose::new(p, heading)))
+    }
+
     fn owner_gap(&self, a: Owner, b: Owner) -> f64 {
+        if let (Some((sa, pa)), Some((sb, pb))) = (self.owner_pose(a), self.owner_pose(b))
+            && !(sa.is_disc() && sb.is_disc())
+        {
+            return mrsim_shape::gap(&sa, pa, &sb, pb);
+        }
+        match (a, b) {
+            (Owner::Wall(w), o) | (o, Owner::Wall(w)) => {
+                if let Some((s, p)) = self.owner_pose(o).filter(|(s, _)| !s.is_disc()) {
+                    return mrsim_shape::gap_to_segment(&s, p, self.walls[w]);
+                }
+            }
+            _ => {}
+        }
         let r = self.owner_radius(a) + self.owner_radius(b);
         match (self.owner_position(a), self.owner_position(b), a, b) {
             (Some(p), Some(q), _, _) => (p[0] - q[0]).hypot(p[1] - q[1]) - r,
@@ -661,9 +706,14 @@ impl World {
             s.heading = *th;
             s.angular_velocity = *w;
         }
-        for (s, m) in self.states[n..].iter_mut().zip(&self.motions) {
+        for ((s, m), o) in self.states[n..]
+            .iter_mut()
+            .zip(&self.motions)
+            .zip(&self.scenario.obstacles)
+        {
             s.position = m.position;
             s.velocity = m.velocity;
+            s.heading = o.heading;
         }
     }
 }

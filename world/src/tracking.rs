@@ -62,6 +62,8 @@ pub struct Tracker {
     prev: Option<Vec<[f64; 2]>>,
     grid: ClearanceGrid,
     clearance: Vec<f64>,
+    /// Every body's shape by id, empty when every body is a disc.
+    shapes: Vec<mrsim_shape::Shape>,
     interaction: Interaction,
 }
 
@@ -85,6 +87,11 @@ impl Tracker {
             prev: None,
             grid: ClearanceGrid::default(),
             clearance: Vec::new(),
+            shapes: if scenario.has_shapes() {
+                scenario.body_shapes()
+            } else {
+                Vec::new()
+            },
             interaction: Interaction::new(scenario),
         }
     }
@@ -116,8 +123,13 @@ impl Tracker {
         };
         // Only a clearance below the smallest one recorded changes anything.
         let robots = &self.robots;
-        self.grid
-            .clearances_below(states, n, |i| robots[i].min_clearance, &mut self.clearance);
+        self.grid.clearances_below(
+            states,
+            &self.shapes,
+            n,
+            |i| robots[i].min_clearance,
+            &mut self.clearance,
+        );
         for (i, (s, p)) in states[..n].iter().zip(prev.iter_mut()).enumerate() {
             let m = &mut self.robots[i];
             // Plain square roots: `hypot`'s overflow guard is a libm call per
@@ -137,7 +149,13 @@ impl Tracker {
                 ) {
                     continue;
                 }
-                clear = clear.min(segment_distance(*w, s.position) - s.radius);
+                clear = clear.min(match self.shapes.get(i).filter(|b| !b.is_disc()) {
+                    Some(b) => {
+                        let pose = mrsim_shape::Pose::new(s.position, s.heading);
+                        mrsim_shape::gap_to_segment(b, pose, *w)
+                    }
+                    None => segment_distance(*w, s.position) - s.radius,
+                });
             }
             m.min_clearance = m.min_clearance.min(clear);
             if let Some(path) = &mut m.path {

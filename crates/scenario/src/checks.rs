@@ -4,7 +4,8 @@
 //! which both use it: it uses neither.
 
 use crate::error::Fail;
-use crate::raw::{P, Pt, S};
+use crate::raw::{P, Pt, RawShape, S};
+use crate::types::ShapeSpec;
 
 /// Built-in robot defaults (metres).
 pub(crate) mod builtin {
@@ -100,4 +101,80 @@ pub(crate) fn points(v: &S<Vec<Pt>>, key: &str, what: &str) -> Result<Vec<P>, Fa
 /// Turns a TOML deserialization error into a `Fail`.
 pub(crate) fn de_fail(e: toml::de::Error, what: &str) -> Fail {
     Fail::new(e.span(), what, e.message().to_string())
+}
+
+/// A `shape` table: `kind` disc (no other key), rectangle (`length`,
+/// `width`, both > 0) or polygon (`points`, convex, counter-clockwise, 3 to
+/// [`mrsim_shape::MAX_VERTICES`]); the error points at the key at fault.
+pub(crate) fn shape(v: &S<RawShape>, what: &str) -> Result<ShapeSpec, Fail> {
+    const KINDS: &str = "disc | rectangle | polygon";
+    let raw = v.get_ref();
+    let Some(kind) = &raw.kind else {
+        return Err(Fail::new(
+            Some(v.span()),
+            what,
+            format!("shape needs a `kind`: {KINDS}"),
+        ));
+    };
+    let allowed: &[&str] = match kind.get_ref().as_str() {
+        "disc" => &[],
+        "rectangle" => &["length", "width"],
+        "polygon" => &["points"],
+        other => {
+            return Err(Fail::new(
+                Some(kind.span()),
+                what,
+                format!("unknown shape kind `{other}`; expected {KINDS}"),
+            ));
+        }
+    };
+    let present = [
+        ("length", raw.length.as_ref().map(|x| x.span())),
+        ("width", raw.width.as_ref().map(|x| x.span())),
+        ("points", raw.points.as_ref().map(|x| x.span())),
+    ];
+    for (key, span) in present {
+        if let Some(span) = span
+            && !allowed.contains(&key)
+        {
+            let takes = if allowed.is_empty() {
+                "nothing: its size is the body's `radius`".to_string()
+            } else {
+                allowed.join(", ")
+            };
+            return Err(Fail::new(
+                Some(span),
+                what,
+                format!(
+                    "`{key}` does not apply to shape kind `{}` (it takes {takes})",
+                    kind.get_ref()
+                ),
+            ));
+        }
+    }
+    let need = |key: &str| {
+        Fail::new(
+            Some(v.span()),
+            what,
+            format!("shape kind `{}` needs `{key}`", kind.get_ref()),
+        )
+    };
+    Ok(match kind.get_ref().as_str() {
+        "rectangle" => {
+            let length = raw.length.as_ref().ok_or_else(|| need("length"))?;
+            let width = raw.width.as_ref().ok_or_else(|| need("width"))?;
+            ShapeSpec::Rectangle {
+                length: check(length, "shape length", Rule::Pos, what)?,
+                width: check(width, "shape width", Rule::Pos, what)?,
+            }
+        }
+        "polygon" => {
+            let p = raw.points.as_ref().ok_or_else(|| need("points"))?;
+            let pts = points(p, "shape points", what)?;
+            mrsim_shape::Polygon::new(&pts)
+                .map_err(|e| Fail::new(Some(p.span()), what, format!("shape points: {e}")))?;
+            ShapeSpec::Polygon { points: pts }
+        }
+        _ => ShapeSpec::Disc,
+    })
 }

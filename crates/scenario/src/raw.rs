@@ -112,6 +112,7 @@ pub(crate) struct RawRobot {
     pub planner: Option<S<String>>,
     pub params: Option<S<RawParams>>,
     pub radius: Option<S<f64>>,
+    pub shape: Option<S<RawShape>>,
     pub mass: Option<S<f64>>,
     pub damping: Option<S<f64>>,
     pub max_speed: Option<S<f64>>,
@@ -199,7 +200,20 @@ pub(crate) struct RawObstacle {
     pub name: Option<S<String>>,
     pub start: Option<S<Pt>>,
     pub radius: Option<S<f64>>,
+    pub shape: Option<S<RawShape>>,
+    pub heading_deg: Option<S<f64>>,
     pub motion: Option<S<RawMotion>>,
+}
+
+/// `shape = { kind = ..., ... }`: the union of every kind's keys; which
+/// apply is checked per kind.
+#[derive(Debug, Default, Clone, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub(crate) struct RawShape {
+    pub kind: Option<S<String>>,
+    pub length: Option<S<f64>>,
+    pub width: Option<S<f64>>,
+    pub points: Option<S<Vec<Pt>>>,
 }
 
 /// `motion = { model = ..., ... }`: the union of every model's keys; which

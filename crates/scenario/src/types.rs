@@ -290,8 +290,13 @@ pub struct RobotSpec {
     pub planner: String,
     /// Planner parameters.
     pub params: BTreeMap<String, ParamValue>,
-    /// Disc radius, >= 0 (0 = point robot).
+    /// Disc radius, >= 0 (0 = point robot); for another shape the radius
+    /// of the smallest disc about its origin that holds it (what planners
+    /// that see discs take it for).
     pub radius: f64,
+    /// The body's shape (default a disc of `radius`).
+    #[serde(default, skip_serializing_if = "ShapeSpec::is_disc")]
+    pub shape: ShapeSpec,
     /// Mass, > 0.
     pub mass: f64,
     /// Linear damping b, >= 0.
@@ -443,10 +448,112 @@ pub struct ObstacleSpec {
     pub name: String,
     /// Start position.
     pub start: [f64; 2],
-    /// Disc radius, >= 0.
+    /// Disc radius, >= 0; for another shape its circumscribed radius, as
+    /// a robot's.
     pub radius: f64,
+    /// The body's shape (default a disc of `radius`).
+    #[serde(default, skip_serializing_if = "ShapeSpec::is_disc")]
+    pub shape: ShapeSpec,
+    /// Heading, rad (the `heading_deg` key): the body frame's x axis. An
+    /// obstacle never turns (its motion moves it, not its heading).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub heading: f64,
     /// How it moves.
     pub motion: Motion,
+}
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
+}
+
+/// A body's shape as the scenario gives it (`shape = { kind = ... }`),
+/// in the body frame: x along the heading.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum ShapeSpec {
+    /// A disc of the body's `radius` (default).
+    #[default]
+    Disc,
+    /// A rectangle centred on the body's position, `length` along the
+    /// heading and `width` across it.
+    Rectangle {
+        /// Along the heading, > 0.
+        length: f64,
+        /// Across the heading, > 0.
+        width: f64,
+    },
+    /// A convex polygon: 3 to 8 points, counter-clockwise, in the body
+    /// frame (non-convex ones are refused).
+    Polygon {
+        /// The vertices.
+        points: Vec<[f64; 2]>,
+    },
+}
+
+impl ShapeSpec {
+    /// Is it the default disc (left out of scenario.json)?
+    pub fn is_disc(&self) -> bool {
+        matches!(self, ShapeSpec::Disc)
+    }
+
+    /// The shape for geometry, a disc taking `radius`. A spec that does
+    /// not make a polygon (never one the scenario validated) is taken for
+    /// the disc of `radius`, which holds it.
+    pub fn shape(&self, radius: f64) -> mrsim_shape::Shape {
+        use mrsim_shape::{Polygon, Shape};
+        match self {
+            ShapeSpec::Disc => Shape::disc(radius),
+            ShapeSpec::Rectangle { length, width } => {
+                Polygon::rectangle(*length, *width).map_or(Shape::disc(radius), Shape::Polygon)
+            }
+            ShapeSpec::Polygon { points } => {
+                Polygon::new(points).map_or(Shape::disc(radius), Shape::Polygon)
+            }
+        }
+    }
+}
+
+impl RobotSpec {
+    /// The robot's shape for geometry.
+    pub fn body_shape(&self) -> mrsim_shape::Shape {
+        self.shape.shape(self.radius)
+    }
+
+    /// The robot's heading at its start, rad: a unicycle faces its goal (0
+    /// if they coincide); a holonomic robot has heading 0 (its body never
+    /// turns).
+    pub fn start_heading(&self) -> f64 {
+        let d = [self.goal[0] - self.start[0], self.goal[1] - self.start[1]];
+        if self.kinematics == Kinematics::Unicycle && (d[0] != 0.0 || d[1] != 0.0) {
+            d[1].atan2(d[0])
+        } else {
+            0.0
+        }
+    }
+}
+
+impl Scenario {
+    /// Every body's shape, robots first, then obstacles (the world's body
+    /// ids).
+    pub fn body_shapes(&self) -> Vec<mrsim_shape::Shape> {
+        let robots = self.robots.iter().map(RobotSpec::body_shape);
+        robots
+            .chain(self.obstacles.iter().map(ObstacleSpec::body_shape))
+            .collect()
+    }
+
+    /// Is some body not a disc?
+    pub fn has_shapes(&self) -> bool {
+        self.robots.iter().any(|r| !r.shape.is_disc())
+            || self.obstacles.iter().any(|o| !o.shape.is_disc())
+    }
+}
+
+impl ObstacleSpec {
+    /// The obstacle's shape for geometry.
+    pub fn body_shape(&self) -> mrsim_shape::Shape {
+        self.shape.shape(self.radius)
+    }
 }
 
 /// A static wall segment.

@@ -4,4 +4,5 @@
 
 mod dynamics;
 mod obstacles;
+mod shapes;
 mod unicycle;

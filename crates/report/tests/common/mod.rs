@@ -56,6 +56,7 @@ fn robot(name: &str, start: [f64; 2], goal: [f64; 2]) -> RobotSpec {
         planner: "homing".into(),
         params: BTreeMap::new(),
         radius: 0.3,
+        shape: Default::default(),
         mass: 1.0,
         damping: 0.0,
         max_speed: 2.0,
@@ -144,6 +145,8 @@ pub fn scenario(n: usize) -> Scenario {
             name: "o1".into(),
             start: obstacle_at(0),
             radius: 0.4,
+            shape: Default::default(),
+            heading: 0.0,
             motion: Motion::ConstantVelocity {
                 velocity: [0.0, -0.5],
             },

@@ -2,7 +2,7 @@
 //! waypoints, random, intentional): which keys each model takes, which it
 //! needs, and their defaults.
 
-use crate::checks::{Rule, builtin, check, opt, point, points};
+use crate::checks::{Rule, builtin, check, opt, point, points, shape};
 use crate::error::Fail;
 use crate::raw::{RawMotion, RawObstacle, S};
 use crate::types::*;
@@ -231,16 +231,36 @@ pub(super) fn resolve_obstacle(o: &S<RawObstacle>, index: usize) -> Result<Obsta
     let Some(start) = &raw.start else {
         return Err(Fail::new(Some(o.span()), what, "missing `start`"));
     };
+    let radius = opt(
+        &raw.radius,
+        "radius",
+        Rule::NonNeg,
+        &what,
+        builtin::OBSTACLE_RADIUS,
+    )?;
+    let body = match &raw.shape {
+        Some(v) => shape(v, &what)?,
+        None => ShapeSpec::Disc,
+    };
+    let radius = match (&body, &raw.radius) {
+        (ShapeSpec::Disc, _) => radius,
+        (_, Some(r)) => {
+            return Err(Fail::new(
+                Some(r.span()),
+                what,
+                "radius is the size of a disc; a rectangle or polygon is sized by its own \
+                 keys (its circumscribed radius is computed): leave radius out",
+            ));
+        }
+        (_, None) => body.shape(radius).circumradius(),
+    };
+    let heading = opt(&raw.heading_deg, "heading_deg", Rule::Finite, &what, 0.0)?.to_radians();
     Ok(ObstacleSpec {
         name: name.get_ref().clone(),
         start: point(start, "start", &what)?,
-        radius: opt(
-            &raw.radius,
-            "radius",
-            Rule::NonNeg,
-            &what,
-            builtin::OBSTACLE_RADIUS,
-        )?,
+        radius,
+        shape: body,
+        heading,
         motion: match &raw.motion {
             Some(m) => resolve_motion(m, &what)?,
             None => Motion::Static,

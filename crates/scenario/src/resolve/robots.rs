@@ -2,7 +2,7 @@
 //! select it, `[generate]`, `[defaults]`, the built-in defaults): pick each
 //! field from the highest layer that has it, check it in every layer.
 
-use crate::checks::{Rule, builtin, check, de_fail, point, points};
+use crate::checks::{Rule, builtin, check, de_fail, point, points, shape};
 use crate::error::{Fail, Spans};
 use crate::overrides::{RobotPatch, set_path};
 use crate::raw::{P, RawParams, RawRobot, RawSensor, S};
@@ -167,6 +167,7 @@ pub(super) fn resolve_robot(
         None => None,
     };
     let timing = super::timing::resolve_timing(layers)?;
+    let (body, radius) = body_shape(layers)?;
     let spec = RobotSpec {
         name,
         start,
@@ -174,13 +175,8 @@ pub(super) fn resolve_robot(
         planner: pick(layers, |r| &r.planner)
             .map_or(builtin::PLANNER.to_string(), |(p, _)| p.get_ref().clone()),
         params,
-        radius: pick_num(
-            layers,
-            |r| &r.radius,
-            "radius",
-            Rule::NonNeg,
-            builtin::RADIUS,
-        )?,
+        radius,
+        shape: body,
         mass: pick_num(layers, |r| &r.mass, "mass", Rule::Pos, builtin::MASS)?,
         damping: pick_num(
             layers,
@@ -291,6 +287,45 @@ pub(super) fn resolve_robot(
         cpu,
     };
     Ok((spec, spans, placed))
+}
+
+/// The robot's shape and radius: a disc takes `radius` (checked in every
+/// layer); another shape's radius is the circumscribed one, and a `radius`
+/// in the layer that gives the shape, or a higher one, is refused (it would
+/// say two sizes). A lower layer's radius (`[defaults]`) is for discs.
+fn body_shape(layers: &[Layer]) -> Result<(ShapeSpec, f64), Fail> {
+    let radius = pick_num(
+        layers,
+        |r| &r.radius,
+        "radius",
+        Rule::NonNeg,
+        builtin::RADIUS,
+    )?;
+    let mut chosen = None;
+    for (i, l) in layers.iter().enumerate() {
+        if let Some(v) = &l.raw.shape {
+            let s = shape(v, &l.what)?;
+            chosen.get_or_insert((i, s));
+        }
+    }
+    let Some((at, spec)) = chosen else {
+        return Ok((ShapeSpec::Disc, radius));
+    };
+    if spec.is_disc() {
+        return Ok((spec, radius));
+    }
+    if let Some((l, r)) = layers[..=at]
+        .iter()
+        .find_map(|l| l.raw.radius.as_ref().map(|r| (l, r)))
+    {
+        return Err(Fail::new(
+            Some(r.span()),
+            &l.what,
+            "radius is the size of a disc; a rectangle or polygon is sized by its own keys              (its circumscribed radius is computed): leave radius out",
+        ));
+    }
+    let r = spec.shape(radius).circumradius();
+    Ok((spec, r))
 }
 
 /// The robot's `lookahead`: as given, which on a unicycle must be below

@@ -25,6 +25,70 @@ pub(crate) fn dist_to_segment(p: P, [a, b]: [P; 2]) -> f64 {
     dist(p, [a[0] + t * dx, a[1] + t * dy])
 }
 
+/// How far two bodies' starts overlap (> 0), by their true shapes; two
+/// discs as mrsim always compared them (centre distance below the radii).
+fn overlap(a: (P, f64, mrsim_shape::Shape, f64), b: (P, f64, mrsim_shape::Shape, f64)) -> f64 {
+    use mrsim_shape::{Pose, gap};
+    if a.2.is_disc() && b.2.is_disc() {
+        let d = dist(a.0, b.0);
+        return if d < a.1 + b.1 { a.1 + b.1 - d } else { 0.0 };
+    }
+    (-gap(&a.2, Pose::new(a.0, a.3), &b.2, Pose::new(b.0, b.3))).max(0.0)
+}
+
+fn robot_body(r: &RobotSpec) -> (P, f64, mrsim_shape::Shape, f64) {
+    (r.start, r.radius, r.body_shape(), r.start_heading())
+}
+
+fn obstacle_body(o: &ObstacleSpec) -> (P, f64, mrsim_shape::Shape, f64) {
+    (o.start, o.radius, o.body_shape(), o.heading)
+}
+
+/// Why two starts overlap, in words: two discs by their distance and
+/// radii, other shapes by the depth of the overlap.
+fn overlap_reason(
+    kind: &str,
+    name: &str,
+    a: (P, f64, mrsim_shape::Shape, f64),
+    b: (P, f64, mrsim_shape::Shape, f64),
+) -> String {
+    if a.2.is_disc() && b.2.is_disc() {
+        let d = dist(a.0, b.0);
+        format!(
+            "starts overlapping {kind} `{name}`: distance {d:.4} < {} + {}",
+            a.1, b.1
+        )
+    } else {
+        format!(
+            "starts overlapping {kind} `{name}`: their shapes overlap by {:.4}",
+            overlap(a, b)
+        )
+    }
+}
+
+/// The bounding box of a body's start, [min, max].
+fn start_box(r: &RobotSpec) -> [P; 2] {
+    let p = r.start;
+    match r
+        .body_shape()
+        .placed(mrsim_shape::Pose::new(p, r.start_heading()))
+    {
+        None => [
+            [p[0] - r.radius, p[1] - r.radius],
+            [p[0] + r.radius, p[1] + r.radius],
+        ],
+        Some(poly) => poly.points().iter().fold(
+            [[f64::INFINITY; 2], [f64::NEG_INFINITY; 2]],
+            |[lo, hi], q| {
+                [
+                    [lo[0].min(q[0]), lo[1].min(q[1])],
+                    [hi[0].max(q[0]), hi[1].max(q[1])],
+                ]
+            },
+        ),
+    }
+}
+
 /// Checks that need every body: names, overlaps, arena, targets.
 pub(super) fn check_scene(
     s: &Scenario,
@@ -82,30 +146,39 @@ pub(super) fn check_scene(
         let what = format!("robot `{}`", r.name);
         if let Some(other) = starts.first_overlap(&s.robots, i) {
             let other = &s.robots[other];
-            let d = dist(r.start, other.start);
             return Err(Fail::new(
                 sp.start.clone(),
                 what,
-                format!(
-                    "starts overlapping robot `{}`: distance {d:.4} < {} + {}",
-                    other.name, r.radius, other.radius
-                ),
+                overlap_reason("robot", &other.name, robot_body(r), robot_body(other)),
             ));
         }
         for o in &s.obstacles {
-            let d = dist(r.start, o.start);
-            if d < r.radius + o.radius {
+            if overlap(robot_body(r), obstacle_body(o)) > 0.0 {
                 return Err(Fail::new(
                     sp.start.clone(),
                     what,
-                    format!(
-                        "starts overlapping obstacle `{}`: distance {d:.4} < {} + {}",
-                        o.name, r.radius, o.radius
-                    ),
+                    overlap_reason("obstacle", &o.name, robot_body(r), obstacle_body(o)),
                 ));
             }
         }
+        let body = r.body_shape();
         for (k, w) in s.walls.iter().enumerate() {
+            if !body.is_disc() {
+                let pose = mrsim_shape::Pose::new(r.start, r.start_heading());
+                let g = mrsim_shape::gap_to_segment(&body, pose, w.segment);
+                if g < 0.0 {
+                    return Err(Fail::new(
+                        sp.start.clone(),
+                        what,
+                        format!(
+                            "starts overlapping wall #{}: the wall reaches {:.4} into its shape",
+                            k + 1,
+                            -g
+                        ),
+                    ));
+                }
+                continue;
+            }
             let d = dist_to_segment(r.start, w.segment);
             if d < r.radius {
                 return Err(Fail::new(
@@ -121,10 +194,9 @@ pub(super) fn check_scene(
         }
         if let Some(a) = s.world.arena {
             let p = r.start;
-            let fits = p[0] - r.radius >= a.min[0]
-                && p[0] + r.radius <= a.max[0]
-                && p[1] - r.radius >= a.min[1]
-                && p[1] + r.radius <= a.max[1];
+            let [lo, hi] = start_box(r);
+            let fits =
+                lo[0] >= a.min[0] && hi[0] <= a.max[0] && lo[1] >= a.min[1] && hi[1] <= a.max[1];
             if !fits {
                 return Err(Fail::new(
                     sp.start.clone(),
@@ -233,7 +305,7 @@ impl StartGrid {
                     let other = &robots[j];
                     if j < i
                         && first.is_none_or(|f| j < f)
-                        && dist(r.start, other.start) < r.radius + other.radius
+                        && overlap(robot_body(r), robot_body(other)) > 0.0
                     {
                         first = Some(j);
                     }

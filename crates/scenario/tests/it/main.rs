@@ -11,5 +11,6 @@ mod maps;
 mod output;
 mod overrides;
 mod robots;
+mod shapes;
 mod timing;
 mod validation;
