@@ -104,10 +104,7 @@ impl Extras {
     /// What `scenario` asks for, scan.csv created in `dir` if needed.
     pub fn of(dir: &Path, scenario: &mrsim_scenario::Scenario) -> std::io::Result<Self> {
         Ok(Self {
-            theta: scenario
-                .robots
-                .iter()
-                .any(|r| r.kinematics == mrsim_scenario::Kinematics::Unicycle),
+            theta: scenario.has_headings(),
             scans: crate::scan::ScanWriter::create(dir, scenario)?,
             calls: None,
         })

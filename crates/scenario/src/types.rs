@@ -542,6 +542,13 @@ impl Scenario {
             .collect()
     }
 
+    /// Do the bodies' headings matter, so that trajectory.csv carries
+    /// them (`theta`)? When some robot turns (a unicycle) or some body is
+    /// not a disc (a turned rectangle is not the same body).
+    pub fn has_headings(&self) -> bool {
+        self.robots.iter().any(|r| r.kinematics == Kinematics::Unicycle) || self.has_shapes()
+    }
+
     /// Is some body not a disc?
     pub fn has_shapes(&self) -> bool {
         self.robots.iter().any(|r| !r.shape.is_disc())
