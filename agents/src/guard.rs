@@ -118,6 +118,7 @@ mod tests {
                 position: Vec2::zeros(),
                 velocity: Vec2::zeros(),
                 radius: 0.0,
+                shape: mrsim_planners::Shape::disc(0.0),
                 mass: 1.0,
                 damping: 0.0,
                 max_speed: 1.0,

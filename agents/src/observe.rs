@@ -545,6 +545,7 @@ impl Observer {
                 position,
                 velocity,
                 radius: spec.radius,
+                shape: spec.body_shape(),
                 mass: spec.mass,
                 damping: spec.damping,
                 max_speed: spec.max_speed,

@@ -57,6 +57,7 @@ pub mod unicycle;
 pub mod vdf;
 
 pub use lidar::LaserScan;
+pub use mrsim_shape::{Polygon, Pose, Shape};
 pub use params::{ParamError, ParamReader, ParamValue, Params};
 pub use registry::{
     BuildError, EXTERNAL, Entry, Factory, FromParams, PLANNERS, PlannerInfo, ROS2, RegisterError,
@@ -119,8 +120,12 @@ pub struct SelfState {
     pub position: Vec2,
     /// Velocity.
     pub velocity: Vec2,
-    /// Disc radius (0 for a point robot).
+    /// Disc radius (0 for a point robot); for another shape the radius of
+    /// the smallest disc about the robot's position that holds it.
     pub radius: f64,
+    /// The robot's shape in its body frame (x along `heading`): a disc of
+    /// `radius`, or a rectangle or convex polygon.
+    pub shape: Shape,
     /// Mass m of m r'' + b r' = f.
     pub mass: f64,
     /// Damping b of m r'' + b r' = f.

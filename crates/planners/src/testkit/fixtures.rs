@@ -53,6 +53,7 @@ impl RobotModel {
             position,
             velocity,
             radius: self.radius,
+            shape: crate::Shape::disc(self.radius),
             mass: self.mass,
             damping: self.damping,
             max_speed: self.max_speed,

@@ -99,6 +99,7 @@ impl Sim {
                 position: start,
                 velocity: Vec2::zeros(),
                 radius,
+                shape: crate::Shape::disc(radius),
                 mass,
                 damping,
                 max_speed,
