@@ -293,11 +293,11 @@ mod tests {
             [
                 Piece {
                     steer: Steer::Left,
-                    length: PI / 2.0,
+                    length: PI,
                 },
                 Piece {
                     steer: Steer::Left,
-                    length: PI / 2.0,
+                    length: PI,
                 },
                 Piece {
                     steer: Steer::Straight,
@@ -316,7 +316,7 @@ mod tests {
         assert!((e.position[1] - 5.0).abs() < 1e-12, "{e:?}");
         assert!((e.heading - PI).abs() < 1e-12);
         assert_eq!(p.gear_changes(), 1);
-        assert!((p.length() - (PI + 3.0)).abs() < 1e-12);
+        assert!((p.length() - (2.0 * PI + 3.0)).abs() < 1e-12);
         let poses = p.poses(0.1);
         assert_drivable(&poses, r);
         assert!(poses.windows(2).all(|w| w[1].s - w[0].s <= 0.1 + 1e-12));

@@ -68,10 +68,11 @@
 //! PhD thesis, 1996): a footprint whose gap to everything is g moves no
 //! point farther than `s (1 + rho / R)` when its reference point drives
 //! `s` along an arc (rho the circumradius), so the next pose checked is
-//! `g / (1 + rho / R)` on, and never less than an eighth of a cell. With a
-//! [`Search::margin`] of at least `(1 + rho / R)` eighths of a cell, the
-//! whole swept footprint is proved clear by at least nothing and every
-//! checked pose by the margin.
+//! `g / (1 + rho / R)` on (along a straight, `g` on), and never less than
+//! an eighth of a cell. With a [`Search::margin`] of at least
+//! `(1 + rho / R)` eighths of a cell every step is the full bound, so the
+//! swept footprint is clear all along the path, not only at the poses
+//! checked, and those keep the margin.
 
 use crate::drive::{CarPath, Gear, Piece, Steer, wrap};
 use crate::grid::{Clearance, Scene};
@@ -363,10 +364,11 @@ impl CarMap {
         &self.grid
     }
 
-    /// The signed gap between `shape` at `pose` and the nearest wall or
-    /// disc, exact where it is less than `reach` and else a lower bound of
-    /// at least `reach`... or, where the grid settles it, a lower bound
-    /// (when clear) or a negative number (when not). `-inf` outside the
+    /// A lower bound on the signed gap between the footprint at `pose` and
+    /// every wall and disc (module documentation, "The footprint"): the
+    /// grid's bound when that is at least `reach`, a negative number when
+    /// the grid shows a wall inside the inscribed disc, else the exact gap
+    /// to what lies within `reach` (at most `reach`); `-inf` outside the
     /// grid.
     fn gap(&self, f: &Footprint, pose: Pose, reach: f64) -> f64 {
         let Some((i, j)) = self.grid.cell(pose.position) else {
@@ -541,19 +543,20 @@ impl<'a> Planner<'a> {
                 return bad(&format!("{name} {v} (must be >= 1)"));
             }
         }
-        if !(search.gear_change.is_finite() && search.gear_change >= 0.0)
-            || !(search.margin.is_finite() && search.margin >= 0.0)
-            || !(search.shot_range.is_finite() && search.shot_range >= 0.0)
+        let at_least_0 = |v: f64| v.is_finite() && v >= 0.0;
+        if ![search.gear_change, search.margin, search.shot_range]
+            .into_iter()
+            .all(at_least_0)
         {
             return bad("gear_change, margin and shot_range must be finite and >= 0");
         }
         let finite = |p: P| p[0].is_finite() && p[1].is_finite();
-        if !finite(start.position)
-            || !start.heading.is_finite()
-            || !finite(goal.position)
-            || !goal.heading.is_none_or(f64::is_finite)
-            || !(goal.heading_tolerance.is_finite() && goal.heading_tolerance >= 0.0)
-        {
+        let usable = finite(start.position)
+            && start.heading.is_finite()
+            && finite(goal.position)
+            && goal.heading.is_none_or(f64::is_finite)
+            && at_least_0(goal.heading_tolerance);
+        if !usable {
             return bad("the start and the goal must be finite");
         }
         let grid = &map.grid;

@@ -120,8 +120,8 @@ fn tau_omega(u: f64, v: f64, xi: f64, eta: f64, phi: f64) -> (f64, f64) {
 }
 
 /// Formula 8.1: L+ S+ L+.
-fn lp_sp_lp(x: f64, y: f64, phi: f64) -> Option<[f64; 3]> {
-    let (u, t) = polar(x - phi.sin(), y - 1.0 + phi.cos());
+fn lp_sp_lp(x: f64, y: f64, phi: f64, sp: f64, cp: f64) -> Option<[f64; 3]> {
+    let (u, t) = polar(x - sp, y - 1.0 + cp);
     if t >= -ZERO {
         let v = mod2pi(phi - t);
         if v >= -ZERO {
@@ -132,8 +132,8 @@ fn lp_sp_lp(x: f64, y: f64, phi: f64) -> Option<[f64; 3]> {
 }
 
 /// Formula 8.2: L+ S+ R+.
-fn lp_sp_rp(x: f64, y: f64, phi: f64) -> Option<[f64; 3]> {
-    let (u1, t1) = polar(x + phi.sin(), y - 1.0 - phi.cos());
+fn lp_sp_rp(x: f64, y: f64, phi: f64, sp: f64, cp: f64) -> Option<[f64; 3]> {
+    let (u1, t1) = polar(x + sp, y - 1.0 - cp);
     let u1 = u1 * u1;
     if u1 >= 4.0 {
         let u = (u1 - 4.0).sqrt();
@@ -148,8 +148,8 @@ fn lp_sp_rp(x: f64, y: f64, phi: f64) -> Option<[f64; 3]> {
 }
 
 /// Formulas 8.3 and 8.4: L+ R- L (the last arc of either sign).
-fn lp_rm_l(x: f64, y: f64, phi: f64) -> Option<[f64; 3]> {
-    let (u1, theta) = polar(x - phi.sin(), y - 1.0 + phi.cos());
+fn lp_rm_l(x: f64, y: f64, phi: f64, sp: f64, cp: f64) -> Option<[f64; 3]> {
+    let (u1, theta) = polar(x - sp, y - 1.0 + cp);
     if u1 <= 4.0 {
         let u = -2.0 * (0.25 * u1).asin();
         let t = mod2pi(theta + 0.5 * u + PI);
@@ -162,9 +162,9 @@ fn lp_rm_l(x: f64, y: f64, phi: f64) -> Option<[f64; 3]> {
 }
 
 /// Formula 8.7: L+ R+u L-u R-.
-fn lp_rup_lum_rm(x: f64, y: f64, phi: f64) -> Option<[f64; 3]> {
-    let xi = x + phi.sin();
-    let eta = y - 1.0 - phi.cos();
+fn lp_rup_lum_rm(x: f64, y: f64, phi: f64, sp: f64, cp: f64) -> Option<[f64; 3]> {
+    let xi = x + sp;
+    let eta = y - 1.0 - cp;
     let rho = 0.25 * (2.0 + xi.hypot(eta));
     if rho <= 1.0 {
         let u = rho.acos();
@@ -177,9 +177,9 @@ fn lp_rup_lum_rm(x: f64, y: f64, phi: f64) -> Option<[f64; 3]> {
 }
 
 /// Formula 8.8: L+ R-u L-u R+.
-fn lp_rum_lum_rp(x: f64, y: f64, phi: f64) -> Option<[f64; 3]> {
-    let xi = x + phi.sin();
-    let eta = y - 1.0 - phi.cos();
+fn lp_rum_lum_rp(x: f64, y: f64, phi: f64, sp: f64, cp: f64) -> Option<[f64; 3]> {
+    let xi = x + sp;
+    let eta = y - 1.0 - cp;
     let rho = (20.0 - xi * xi - eta * eta) / 16.0;
     if (0.0..=1.0).contains(&rho) {
         let u = -rho.acos();
@@ -194,8 +194,8 @@ fn lp_rum_lum_rp(x: f64, y: f64, phi: f64) -> Option<[f64; 3]> {
 }
 
 /// Formula 8.9: L+ R-pi/2 S- L-.
-fn lp_rm_sm_lm(x: f64, y: f64, phi: f64) -> Option<[f64; 3]> {
-    let (rho, theta) = polar(x - phi.sin(), y - 1.0 + phi.cos());
+fn lp_rm_sm_lm(x: f64, y: f64, phi: f64, sp: f64, cp: f64) -> Option<[f64; 3]> {
+    let (rho, theta) = polar(x - sp, y - 1.0 + cp);
     if rho >= 2.0 {
         let r = (rho * rho - 4.0).sqrt();
         let u = 2.0 - r;
@@ -209,9 +209,9 @@ fn lp_rm_sm_lm(x: f64, y: f64, phi: f64) -> Option<[f64; 3]> {
 }
 
 /// Formula 8.10: L+ R-pi/2 S- R-.
-fn lp_rm_sm_rm(x: f64, y: f64, phi: f64) -> Option<[f64; 3]> {
-    let xi = x + phi.sin();
-    let eta = y - 1.0 - phi.cos();
+fn lp_rm_sm_rm(x: f64, y: f64, phi: f64, sp: f64, cp: f64) -> Option<[f64; 3]> {
+    let xi = x + sp;
+    let eta = y - 1.0 - cp;
     let (rho, theta) = polar(-eta, xi);
     if rho >= 2.0 {
         let t = theta;
@@ -225,9 +225,9 @@ fn lp_rm_sm_rm(x: f64, y: f64, phi: f64) -> Option<[f64; 3]> {
 }
 
 /// Formula 8.11: L+ R-pi/2 S- L-pi/2 R+.
-fn lp_rm_s_lm_rp(x: f64, y: f64, phi: f64) -> Option<[f64; 3]> {
-    let xi = x + phi.sin();
-    let eta = y - 1.0 - phi.cos();
+fn lp_rm_s_lm_rp(x: f64, y: f64, phi: f64, sp: f64, cp: f64) -> Option<[f64; 3]> {
+    let xi = x + sp;
+    let eta = y - 1.0 - cp;
     let (rho, _) = polar(xi, eta);
     if rho >= 2.0 {
         let u = 4.0 - (rho * rho - 4.0).sqrt();
@@ -242,8 +242,9 @@ fn lp_rm_s_lm_rp(x: f64, y: f64, phi: f64) -> Option<[f64; 3]> {
     None
 }
 
-/// A formula of section 8: the base word's lengths for a goal `(x, y, phi)`.
-type Formula = fn(f64, f64, f64) -> Option<[f64; 3]>;
+/// A formula of section 8: the base word's lengths for a goal `(x, y, phi)`
+/// (and phi's sine and cosine).
+type Formula = fn(f64, f64, f64, f64, f64) -> Option<[f64; 3]>;
 
 /// Every feasible word of the 48 for the goal `(x, y, phi)` in the start's
 /// frame scaled by 1/R, in OMPL's order (its `CSC`, `CCC`, `CCCC`, `CCSC`,
@@ -252,15 +253,15 @@ fn candidates(x: f64, y: f64, phi: f64, f: &mut dyn FnMut(Word)) {
     // The four symmetries of a base formula (section 7): the goal as each
     // sees it, whether left and right swap (the type after the base's),
     // and whether the lengths change sign.
-    let four = |x: f64, y: f64, phi: f64| {
+    let (sp, cp) = phi.sin_cos();
+    let four = |x: f64, y: f64| {
         [
-            (x, y, phi, 0, 1.0),
-            (-x, y, -phi, 0, -1.0),
-            (x, -y, -phi, 1, 1.0),
-            (-x, -y, phi, 1, -1.0),
+            (x, y, phi, sp, 0, 1.0),
+            (-x, y, -phi, -sp, 0, -1.0),
+            (x, -y, -phi, -sp, 1, 1.0),
+            (-x, -y, phi, sp, 1, -1.0),
         ]
     };
-    let (sp, cp) = phi.sin_cos();
     // The goal's frame seen from the goal: the path driven the other way.
     let (xb, yb) = (x * cp + y * sp, x * sp - y * cp);
     let family = |formula: Formula,
@@ -269,8 +270,8 @@ fn candidates(x: f64, y: f64, phi: f64, f: &mut dyn FnMut(Word)) {
                   lens: &dyn Fn([f64; 3]) -> Vec<f64>,
                   f: &mut dyn FnMut(Word)| {
         let (bx, by) = if backwards { (xb, yb) } else { (x, y) };
-        for (gx, gy, gphi, swap, sign) in four(bx, by, phi) {
-            if let Some(tuv) = formula(gx, gy, gphi) {
+        for (gx, gy, gphi, gs, swap, sign) in four(bx, by) {
+            if let Some(tuv) = formula(gx, gy, gphi, gs, cp) {
                 let mut l = lens(tuv);
                 if backwards {
                     l.reverse();

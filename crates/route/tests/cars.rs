@@ -161,6 +161,41 @@ fn turning_round_in_a_narrow_corridor_needs_reversing() {
 }
 
 #[test]
+fn a_goal_without_a_heading_or_with_a_tolerance_ends_within_it() {
+    let (map, start, _) = corridor(12.5);
+    let search = Search {
+        margin: 0.05,
+        ..Search::default()
+    };
+    let anywhere = Goal {
+        position: [5.0, 8.0],
+        heading: None,
+        heading_tolerance: 0.0,
+    };
+    let route = map
+        .route(&car(false), start, &anywhere, &search)
+        .expect("a way there");
+    let end = route.path.end();
+    assert!(dist(end.position, anywhere.position) < 1e-6, "{end:?}");
+    assert_drivable(&route.path.poses(0.02), route.path.radius());
+    // Facing west give or take 0.3 rad, forwards only.
+    let loose = Goal {
+        position: [-5.0, 10.5],
+        heading: Some(PI),
+        heading_tolerance: 0.3,
+    };
+    let route = map
+        .route(&car(false), start, &loose, &search)
+        .expect("a way there");
+    let end = route.path.end();
+    assert!(dist(end.position, loose.position) < 1e-6, "{end:?}");
+    assert!(wrap(end.heading - PI).abs() <= 0.3 + 1e-9, "{end:?}");
+    for p in route.path.poses(0.02) {
+        assert!(map.gap_at(&car(false).shape, p.pose()) >= 0.0, "{p:?}");
+    }
+}
+
+#[test]
 fn the_search_stops_at_its_limit_with_its_own_error() {
     let (map, start, goal) = corridor(8.0);
     let search = Search {
