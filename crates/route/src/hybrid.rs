@@ -2,15 +2,16 @@
 //!
 //! D. Dolgov, S. Thrun, M. Montemerlo & J. Diebel, "Path planning for
 //! autonomous vehicles in unknown semi-structured environments", IJRR
-//! 29(5), 2010 (section 2), with nav2's Smac Hybrid-A* planner
+//! 29(5), 2010 (its section 2, hybrid-state A*), with nav2's Smac
+//! Hybrid-A* planner
 //! (`nav2_smac_planner`, S. Macenski et al., "Open-source, cost-aware
 //! kinematically feasible planning for mobile and surface robotics", 2024)
 //! as the reference for the details the paper leaves open.
 //!
 //! **The search.** A* over cells of the plane (x, y) and of the heading
-//! (72 bins by default), each cell holding a continuous pose: the first
-//! one to reach it that costs least (section 2.1: "associates with each
-//! grid cell a continuous 3-D state of the vehicle"). A pose is expanded by
+//! (72 bins by default), each cell holding a continuous pose, the cheapest
+//! that has reached it (the paper's hybrid state: a discrete cell with a
+//! continuous state of the vehicle in it). A pose is expanded by
 //! motion primitives, arcs at the least turning radius R to the left and to
 //! the right and a straight, driven forwards and, when the car may reverse,
 //! backwards. Each primitive is as long as an arc turning by a whole number
@@ -20,12 +21,12 @@
 //! lies in another cell and every heading stays the start's plus whole
 //! bins. A primitive costs its length, times [`Search::turn_penalty`] for
 //! an arc, times [`Search::reverse_penalty`] backwards, plus
-//! [`Search::gear_change`] radii where it changes gear (Dolgov et al.:
-//! "penalties on driving in reverse and on switching the direction of
-//! motion"; nav2's `non_straight_penalty`, `reverse_penalty`). A cell once
-//! expanded is closed.
+//! [`Search::gear_change`] radii where it changes gear (Dolgov et al.
+//! penalise driving in reverse and switching the direction of motion;
+//! nav2's `non_straight_penalty`, `reverse_penalty`). A cell once expanded
+//! is closed.
 //!
-//! **The heuristics** (section 2.2) are two, and the larger is used: the
+//! **The heuristics** (section 2) are two, and the larger is used: the
 //! *non-holonomic-without-obstacles* cost, the length of the shortest
 //! Reeds-Shepp (or, forwards only, Dubins) path to the goal ignoring every
 //! obstacle, and the *holonomic-with-obstacles* cost, the shortest distance
@@ -38,7 +39,7 @@
 //! bounds on the path's length, and so on its cost. When the second finds no way at all, no pose of the car can
 //! reach the goal and the route is refused at once.
 //!
-//! **The analytic expansion** (section 2.1, "Analytic Expansions"): from
+//! **The analytic expansion** (section 2, its analytic expansions): from
 //! every Nth expanded pose, N falling as the pose nears the goal (nav2's
 //! `analytic_expansion_ratio`: N = the heuristic over 3.5 cells, at least
 //! 1), the shortest Reeds-Shepp or Dubins path to the goal is tried, when

@@ -5,16 +5,18 @@
 //! through its position, tangent to its heading, that passes through the
 //! *goal point*, the path's point a look-ahead distance on; in the
 //! vehicle's frame, with the goal point at lateral offset `y` and distance
-//! `l`, the arc's curvature is `2 y / l^2` (Coulter's section 2,
-//! "Derivation"; the steering of a bicycle of wheelbase `L` is then
-//! `atan(2 L y / l^2)`).
+//! `l`, the arc's curvature is `2 y / l^2` (Coulter's derivation writes it
+//! `2 x / l^2`, his x being the lateral offset; the steering of a bicycle
+//! of wheelbase `L` is then `atan(2 L y / l^2)`).
 //!
 //! A path of Hybrid A* or Reeds-Shepp changes gear at its cusps, where a
 //! pursuit that looked past them would cut the corner, so [`Pursuit`]
 //! follows one *segment* (the run of poses between two cusps, driven in one
 //! gear) at a time, as nav2's Regulated Pure Pursuit controller does: the
 //! goal point is never beyond the segment's end, and the next segment is
-//! taken once the car is within [`Pursuit::new`]'s `at_cusp` of that end.
+//! taken once the car is within [`Pursuit::new`]'s `at_cusp` of that end
+//! (S. Macenski et al., "Regulated Pure Pursuit for Robot Path Tracking",
+//! Autonomous Robots 47, 2023).
 //! Backwards the car pursues the point behind it, and with the goal point's
 //! lateral offset taken in the car's own frame the same formula gives the
 //! steering in both gears: the curvature a command applies as `turn rate =
