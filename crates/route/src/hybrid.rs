@@ -150,10 +150,12 @@ pub enum CarRouteError {
     },
     /// Every pose the car can reach from its start, turning no tighter than
     /// its radius (and forwards only if it may not reverse), was searched
-    /// and none reaches the goal.
+    /// and none reaches the goal: at the search's resolution, one pose a
+    /// cell of position and heading, so a way that needs a finer cell than
+    /// [`Search::cell`] may exist.
     #[error(
         "the car cannot reach its goal turning no tighter than radius {radius}{}: \
-         all {expanded} poses it can reach were searched",
+         all {expanded} poses it can reach were searched (one a cell of position and heading)",
         if *reverse { "" } else { " without reversing" }
     )]
     Unreachable {
