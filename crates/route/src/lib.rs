@@ -57,18 +57,36 @@
 //! that leaves no room beyond `need` the route is unchanged. The moved
 //! polyline is simplified (Douglas-Peucker, a quarter cell) and kept only
 //! if every leg still clears the bare radius.
+//!
+//! **Cars.** A robot that steers like a car (a kinematic bicycle: it turns
+//! no tighter than a radius R = wheelbase / tan(max steering), and may or
+//! may not reverse) cannot follow a polyline's corners. Its routes are
+//! [`CarPath`]s, arcs of radius R and straights driven forwards or
+//! backwards ([`drive`]): [`dubins`] and [`reeds_shepp`] give the shortest
+//! such path between two poses without obstacles (forwards only, and both
+//! ways), [`CarMap::route`] searches one through walls and obstacles by
+//! Hybrid A* with the robot's true footprint ([`hybrid`]), and [`Pursuit`]
+//! leads a car along it by pure pursuit, one gear at a time ([`pursuit`]).
 
 #![warn(missing_docs)]
 
+pub mod drive;
+pub mod dubins;
 mod follow;
 mod grid;
+pub mod hybrid;
 mod lanes;
+pub mod pursuit;
+pub mod reeds_shepp;
 mod refuge;
 mod search;
 
+pub use drive::{CarPath, CarPose, Gear, Piece, Steer, turning_radius};
 pub use follow::{Follower, Path};
 pub use grid::{Clearance, Scene};
+pub use hybrid::{Car, CarMap, CarRoute, CarRouteError, Goal, Search, outline};
 pub use lanes::Side;
+pub use pursuit::{Pursuit, Target};
 pub use refuge::{Refuge, to_way};
 
 /// A point, in the scenario's units.
