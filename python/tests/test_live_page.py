@@ -1,9 +1,10 @@
 """The live page in a real browser (Debian's Chromium, driven by Playwright):
 it shows a run while it ticks, over shared memory, in-process and over
 Zenoh, and says when the run has finished; `mrsim view` shows a run started
-elsewhere."""
+elsewhere; bodies that are not discs are drawn as their polygons."""
 
 import json
+import math
 import os
 import re
 import shutil
@@ -141,3 +142,65 @@ def test_live_refuses_an_address_it_cannot_parse(repo):
     )  # fmt: skip
     assert done.returncode == 2
     assert "--live nowhere" in done.stderr
+
+
+def test_the_live_page_draws_each_body_as_its_shape_turned_by_its_heading(repo, tmp_path, browser):
+    cmd = [
+        mrsim_binary(repo), "run", "scenarios/shapes/boxes.toml", "--set", "world.mode=realtime",
+        "--set", "world.duration=3", "--transport", "inproc", "--live", "127.0.0.1:0",
+        "--quiet", "--out", str(tmp_path / "run"),
+    ]  # fmt: skip
+    proc, url = start(cmd, repo)
+    try:
+        page = browser.new_page(viewport={"width": 1100, "height": 800})
+        page.goto(url)
+        # The setup sends each polygon once, in its body frame.
+        setup = json.loads(urllib.request.urlopen(url + "setup").read())
+        rect = [[-0.45, -0.3], [0.45, -0.3], [0.45, 0.3], [-0.45, 0.3]]
+        assert [r["shape"] for r in setup["robots"]] == [rect, rect]
+        crate, wedge = setup["obstacles"]
+        assert crate["shape"] == [[-0.6, -0.25], [0.6, -0.25], [0.6, 0.25], [-0.6, 0.25]]
+        assert wedge["shape"] == [[-0.5, -0.4], [0.5, -0.4], [0.0, 0.5]]
+        # Once the run has ended the page draws no more: check its last frame.
+        page.wait_for_function("document.body.dataset.ended !== undefined", timeout=90_000)
+        assert page.text_content("#status") == "the run has finished"
+        frame = page.evaluate("window.mrsimLive.frame()")
+        bodies = {b[0]: b for b in frame["bodies"]}
+        # The crate's heading comes with every frame: its fixed 30 degrees.
+        assert bodies[2][5] == pytest.approx(math.radians(30), abs=1e-3)
+        to_canvas = lambda x, y: page.evaluate("([x, y]) => window.mrsimLive.toCanvas(x, y)", [x, y])  # noqa: E731
+        everyone = setup["robots"] + setup["obstacles"]
+        for i, body in enumerate(everyone):
+            _, x, y, _, _, th = bodies[i]
+            c, s = math.cos(th), math.sin(th)
+            want = [to_canvas(x + c * px - s * py, y + s * px + c * py) for px, py in body["shape"]]
+            drawn = page.evaluate("(i) => window.mrsimLive.outline(i)", i)
+            assert drawn is not None and len(drawn) == len(want), (body["name"], drawn)
+            for d, w in zip(drawn, want):
+                assert d == pytest.approx(w, abs=0.01), body["name"]
+        # On the canvas (transparent, over the page's white): a cart's
+        # colour at 0.85 opacity near its corner, and not just beyond its
+        # long side, inside the disc that holds it.
+        def painted(rgba, rgb):
+            return all(abs(a - b) <= 3 for a, b in zip(rgba, rgb)) and abs(rgba[3] - 217) <= 3
+
+        for i, r in enumerate(setup["robots"]):
+            _, x, y, _, _, th = bodies[i]
+            rgb = [int(r["color"][k : k + 2], 16) for k in (1, 3, 5)]
+            c, s = math.cos(th), math.sin(th)
+            near_corner = to_canvas(x + 0.8 * (c * 0.45 + s * 0.3), y + 0.8 * (s * 0.45 - c * 0.3))
+            beyond = to_canvas(x + s * 0.38, y - c * 0.38)
+            inside = page.evaluate(PIXEL, near_corner)
+            assert painted(inside, rgb), (inside, rgb)
+            outside = page.evaluate(PIXEL, beyond)
+            assert not painted(outside, rgb), (outside, rgb)
+        page.close()
+        assert proc.wait(timeout=60) == 0
+    finally:
+        proc.kill()
+
+
+PIXEL = (
+    "([x, y]) => Array.from(document.getElementById('map').getContext('2d')"
+    ".getImageData(Math.round(x), Math.round(y), 1, 1).data)"
+)

@@ -7,6 +7,7 @@ trajectory.csv."""
 import base64
 import csv
 import json
+import math
 import os
 import pathlib
 import shutil
@@ -173,3 +174,51 @@ def test_export_refuses_a_folder_that_is_not_a_run(repo, tmp_path):
     done = subprocess.run([mrsim_binary(repo), "export", str(tmp_path)], capture_output=True, text=True)
     assert done.returncode == 2
     assert "--mcap" in done.stderr
+
+
+def yaw_of(q):
+    return 2.0 * math.atan2(q["z"], q["w"])
+
+
+def test_a_scene_of_shapes_draws_rectangles_as_cubes_and_a_polygon_as_a_line_loop(
+    repo, tmp_path, foxglove_schemas
+):
+    out = run_scene(repo, tmp_path / "boxes", "shapes/boxes.toml", "--set", "world.duration=3")
+    _, messages = check_file(out, foxglove_schemas)
+    scenario = json.loads((out / "scenario.json").read_text())
+    robots = {r["name"]: r for r in scenario["robots"]}
+    obstacles = {o["name"]: o for o in scenario["obstacles"]}
+    assert robots["west"]["shape"] == {"kind": "rectangle", "length": 0.9, "width": 0.6}
+    wedge_points = obstacles["wedge"]["shape"]["points"]
+    rows = {(r["tick"], r["body"]): r for r in trajectory(out)}
+    dt = scenario["world"]["dt"]
+    scenes = [(m, msg) for _, c, m, msg in messages if c.topic == "/scene"]
+    # The first holds what lasts (walls, goals); then one a tick.
+    assert len(scenes) == 1 + len({t for t, _ in rows})
+    for message, msg in scenes[1:]:
+        tick = str(round(message.log_time / 1e9 / dt))
+        entities = {e["id"]: e for e in msg["entities"]}
+        # Each cart: a cube 0.9 x 0.6 where trajectory.csv has it, turned
+        # by its theta; no disc.
+        for name in ["west", "east"]:
+            e, row = entities[name], rows[(tick, name)]
+            assert e["cylinders"] == [] and len(e["cubes"]) == 1, e
+            cube = e["cubes"][0]
+            assert (cube["size"]["x"], cube["size"]["y"]) == (pytest.approx(0.9), pytest.approx(0.6))
+            assert cube["pose"]["position"]["x"] == pytest.approx(float(row["x"]), abs=1e-9)
+            assert cube["pose"]["position"]["y"] == pytest.approx(float(row["y"]), abs=1e-9)
+            turn = yaw_of(cube["pose"]["orientation"]) - float(row["theta"])
+            assert math.cos(turn) == pytest.approx(1.0, abs=1e-9)
+        # The crate: a cube 1.2 x 0.5 at its 30 degrees.
+        crate = entities["crate"]["cubes"][0]
+        assert (crate["size"]["x"], crate["size"]["y"]) == (pytest.approx(1.2), pytest.approx(0.5))
+        assert yaw_of(crate["pose"]["orientation"]) == pytest.approx(math.radians(30), abs=1e-9)
+        # The wedge: a line loop through its three points, in its frame,
+        # posed where it is.
+        wedge = entities["wedge"]
+        assert wedge["cylinders"] == [] and wedge["cubes"] == []
+        loop = wedge["lines"][0]
+        assert loop["type"] == 1  # LINE_LOOP
+        assert [[p["x"], p["y"]] for p in loop["points"]] == [pytest.approx(p) for p in wedge_points]
+        assert loop["pose"]["position"]["y"] == pytest.approx(float(rows[(tick, "wedge")]["y"]))
+        assert yaw_of(loop["pose"]["orientation"]) == pytest.approx(0.0, abs=1e-12)

@@ -1,8 +1,11 @@
 """The replay page in a real browser (Debian's Chromium, driven by
 Playwright): it lists the run's encounters (encounters.csv) and highlights
-the one picked, the two bodies ringed and joined where they met."""
+the one picked, the two bodies ringed and joined where they met; it draws
+bodies that are not discs as their polygons, turned by their headings."""
 
 import csv
+import json
+import math
 import subprocess
 
 import pytest
@@ -85,4 +88,66 @@ def test_the_replay_page_lists_the_encounters_and_highlights_the_one_picked(run_
     listed.nth(head_on[0]).click()
     assert page.evaluate("window.mrsimReplay.picked()") is None
     assert pixel(page, *mid) != ORANGE
+    page.close()
+
+
+def corners(shape, x, y, theta):
+    """A body-frame polygon's corners in the world at (x, y), turned by theta."""
+    c, s = math.cos(theta), math.sin(theta)
+    return [(x + c * px - s * py, y + s * px + c * py) for px, py in shape]
+
+
+def test_the_replay_page_draws_each_rectangle_turned_by_its_heading(repo, tmp_path, browser):  # noqa: F811
+    out = tmp_path / "boxes"
+    subprocess.run(
+        [built_mrsim(repo), "run", str(repo / "scenarios/shapes/boxes.toml"), "--out", str(out), "--quiet"],
+        check=True,
+    )
+    tick = 30
+    with open(out / "trajectory.csv") as f:
+        rows = {r["body"]: r for r in csv.DictReader(f) if int(r["tick"]) == tick}
+    page = browser.new_page(viewport={"width": 1200, "height": 800})
+    page.goto(out.joinpath("replay.html").as_uri() + f"#tick={tick}")
+    page.wait_for_function("window.mrsimReplay && window.mrsimReplay.ready")
+    to_canvas = lambda p: page.evaluate("([x, y]) => window.mrsimReplay.worldToCanvas(x, y)", list(p))  # noqa: E731
+    half_l, half_w = 0.45, 0.3
+    rect = [(-half_l, -half_w), (half_l, -half_w), (half_l, half_w), (-half_l, half_w)]
+    for name in ["west", "east"]:
+        row = rows[name]
+        x, y, theta = float(row["x"]), float(row["y"]), float(row["theta"])
+        # The polygon drawn is the cart's rectangle where trajectory.csv has
+        # it, turned by its theta.
+        drawn = page.evaluate("(n) => window.mrsimReplay.outline(n)", name)
+        want = [to_canvas(p) for p in corners(rect, x, y, theta)]
+        assert drawn is not None and len(drawn) == 4, drawn
+        for d, w in zip(drawn, want):
+            assert d == pytest.approx(w, abs=0.01)
+        # On the canvas: its colour near a corner, and not its colour just
+        # beyond its long side, which its circumscribed disc would cover.
+        colour = page.evaluate("(n) => window.mrsimReplay.colorOf(n)", name)
+        rgb = [int(colour[k : k + 2], 16) for k in (1, 3, 5)]
+        centre = to_canvas((x, y))
+        corner = want[0]
+        inside = (centre[0] + 0.8 * (corner[0] - centre[0]), centre[1] + 0.8 * (corner[1] - centre[1]))
+        assert pixel(page, *inside) == rgb
+        beyond = to_canvas(corners([(0.0, -(half_w + 0.08))], x, y, theta)[0])
+        assert math.hypot(beyond[0] - centre[0], beyond[1] - centre[1]) < 0.54 * page.evaluate(
+            "window.mrsimReplay.worldToCanvas(1, 0)[0] - window.mrsimReplay.worldToCanvas(0, 0)[0]"
+        )
+        assert pixel(page, *beyond) != rgb
+    # The crate at its 30 degrees, the wedge as its triangle.
+    scenario = json.loads((out / "scenario.json").read_text())
+    for o in scenario["obstacles"]:
+        shape = o["shape"]
+        points = (
+            [(-shape["length"] / 2, -shape["width"] / 2), (shape["length"] / 2, -shape["width"] / 2),
+             (shape["length"] / 2, shape["width"] / 2), (-shape["length"] / 2, shape["width"] / 2)]
+            if shape["kind"] == "rectangle" else shape["points"]
+        )  # fmt: skip
+        row = rows[o["name"]]
+        want = [to_canvas(p) for p in corners(points, float(row["x"]), float(row["y"]), o.get("heading", 0.0))]
+        drawn = page.evaluate("(n) => window.mrsimReplay.outline(n)", o["name"])
+        assert len(drawn) == len(want)
+        for d, w in zip(drawn, want):
+            assert d == pytest.approx(w, abs=0.01)
     page.close()

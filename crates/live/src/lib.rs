@@ -510,16 +510,28 @@ fn page_setup(run_id: &Value, s: &Scenario) -> Value {
         "dt": s.world.dt,
         "extent": [lo[0], lo[1], hi[0], hi[1]],
         "walls": walls,
-        "robots": s.robots.iter().enumerate().map(|(i, r)| json!({
+        "robots": s.robots.iter().enumerate().map(|(i, r)| with_shape(json!({
             "name": r.name,
             "planner": r.planner,
             "radius": r.radius,
             "goal": r.goal,
             "color": PALETTE[i % PALETTE.len()],
             "unicycle": r.kinematics == mrsim_scenario::Kinematics::Unicycle,
-        })).collect::<Vec<_>>(),
-        "obstacles": s.obstacles.iter().map(|o| json!({ "name": o.name, "radius": o.radius })).collect::<Vec<_>>(),
+        }), r.body_shape())).collect::<Vec<_>>(),
+        "obstacles": s.obstacles.iter().map(|o| {
+            with_shape(json!({ "name": o.name, "radius": o.radius }), o.body_shape())
+        }).collect::<Vec<_>>(),
     })
+}
+
+/// `body` with its `shape` added when it is a polygon: the vertices in its
+/// body frame (x along its heading), counter-clockwise. The page turns
+/// them by each frame's heading; a disc has none.
+fn with_shape(mut body: Value, shape: mrsim_shape::Shape) -> Value {
+    if let mrsim_shape::Shape::Polygon(p) = shape {
+        body["shape"] = json!(p.points());
+    }
+    body
 }
 
 #[cfg(test)]

@@ -6,8 +6,8 @@
 //!
 //! | topic | schema | what |
 //! | --- | --- | --- |
-//! | `/scene` | `foxglove.SceneUpdate` | each recorded tick: robots as discs in their colour with a heading arrow and their name, obstacles as grey discs; at the first tick also the walls (the arena's, the file's and the map's outlines) and the goals, which last |
-//! | `/tf` | `foxglove.FrameTransforms` | each recorded tick: `world` -> each robot's frame (its position; its heading for a unicycle, none for a holonomic robot, whose disc does not turn) |
+//! | `/scene` | `foxglove.SceneUpdate` | each recorded tick: robots in their colour with a heading arrow and their name, obstacles in grey, each as its shape (a disc as a cylinder, a rectangle as a cube of its length x width x 0.2 turned by its heading, another polygon as its outline, a line loop in the body's frame posed at its heading); at the first tick also the walls (the arena's, the file's and the map's outlines) and the goals, which last |
+//! | `/tf` | `foxglove.FrameTransforms` | each recorded tick: `world` -> each robot's frame (its position; its heading for a unicycle or a body that is not a disc, none for a holonomic disc, which does not turn) |
 //! | `/<robot>/scan` | `foxglove.LaserScan` | each scan in scan.csv, in the robot's frame |
 //! | `/map` | `foxglove.Grid` | once: the map's occupancy (ROS values: 0 free, 100 occupied, -1 unknown; INT8) |
 //! | `/stats` | `mrsim.RobotStats` | each recorded tick: per robot position, velocity, speed, distance to its goal, arrived, contacts so far |
@@ -18,6 +18,7 @@
 //! every message against Foxglove's own published schemas.
 
 use crate::{BodyKind, EventKind, RenderError, RunData, robot_color, sensing};
+use mrsim_scenario::ShapeSpec;
 use serde_json::{Value, json};
 use std::collections::{BTreeMap, HashMap};
 use std::io::BufWriter;
@@ -84,10 +85,11 @@ pub fn write_mcap(run: &RunData, dir: &Path) -> Result<McapWritten, RenderError>
 
     let scene = &run.scenario;
     let specs = run.specs_by_name();
-    let headings = sensing::headings(dir)?;
-    let heading_at: HashMap<(&str, u64), f64> = headings
+    let looks = run.looks_by_name();
+    let obstacle_shapes: HashMap<&str, &ShapeSpec> = scene
+        .obstacles
         .iter()
-        .flat_map(|(name, rows)| rows.iter().map(move |&(t, th)| ((name.as_str(), t), th)))
+        .map(|o| (o.name.as_str(), &o.shape))
         .collect();
     let first_ns = run.trajectory.times.first().map_or(0, |&t| ns(t));
     let mut seq = 0u32;
@@ -149,10 +151,11 @@ pub fn write_mcap(run: &RunData, dir: &Path) -> Result<McapWritten, RenderError>
             _ => {}
         }
     }
-    let unicycles: std::collections::HashSet<&str> = scene
+    // The robots whose frame turns: unicycles and bodies not discs.
+    let turning: std::collections::HashSet<&str> = scene
         .robots
         .iter()
-        .filter(|r| r.kinematics == mrsim_scenario::Kinematics::Unicycle)
+        .filter(|r| r.kinematics == mrsim_scenario::Kinematics::Unicycle || !r.shape.is_disc())
         .map(|r| r.name.as_str())
         .collect();
     for (k, &tick) in run.trajectory.ticks.iter().enumerate() {
@@ -167,15 +170,25 @@ pub fn write_mcap(run: &RunData, dir: &Path) -> Result<McapWritten, RenderError>
             match body.kind {
                 BodyKind::Robot => {
                     let color = robot_color(run.robot_index(name).unwrap_or(0));
-                    let radius = specs.get(name).map_or(run.radius_of(name), |r| r.radius);
-                    let theta = heading_at.get(&(name, tick)).copied();
-                    entities.push(robot_entity(name, s, radius, theta, color, &stamp));
+                    let spec = specs.get(name);
+                    let look = looks.get(name).copied();
+                    let body = Body {
+                        name,
+                        x: s.x,
+                        y: s.y,
+                        radius: spec.map_or(run.radius_of(name), |r| r.radius),
+                        shape: spec.map_or(&ShapeSpec::Disc, |r| &r.shape),
+                        look,
+                        heading: look.map_or(0.0, |l| l.heading(Some(s))),
+                    };
+                    entities.push(robot_entity(&body, s, color, &stamp));
+                    let turns = turning.contains(name);
                     transforms.push(json!({
                         "timestamp": stamp,
                         "parent_frame_id": "world",
                         "child_frame_id": name,
                         "translation": { "x": s.x, "y": s.y, "z": 0.0 },
-                        "rotation": yaw(if unicycles.contains(name) { theta.unwrap_or(0.0) } else { 0.0 }),
+                        "rotation": yaw(if turns { s.theta.unwrap_or(0.0) } else { 0.0 }),
                     }));
                     let goal = specs.get(name).map(|r| r.goal);
                     stats.push(json!({
@@ -188,15 +201,20 @@ pub fn write_mcap(run: &RunData, dir: &Path) -> Result<McapWritten, RenderError>
                     }));
                 }
                 BodyKind::Obstacle => {
-                    let radius = run.radius_of(name);
-                    entities.push(disc_entity(
+                    let look = looks.get(name).copied();
+                    let body = Body {
                         name,
-                        s.x,
-                        s.y,
-                        radius,
-                        [0x88, 0x88, 0x88],
-                        &stamp,
-                    ));
+                        x: s.x,
+                        y: s.y,
+                        radius: run.radius_of(name),
+                        shape: obstacle_shapes
+                            .get(name)
+                            .copied()
+                            .unwrap_or(&ShapeSpec::Disc),
+                        look,
+                        heading: look.map_or(0.0, |l| l.heading(None)),
+                    };
+                    entities.push(body_entity(&body, [0x88, 0x88, 0x88], &stamp));
                 }
             }
         }
@@ -330,26 +348,73 @@ fn label(x: f64, y: f64, text: &str) -> Value {
     })
 }
 
-fn disc_entity(name: &str, x: f64, y: f64, radius: f64, c: [u8; 3], stamp: &Value) -> Value {
-    entity(
-        name,
-        stamp,
-        json!({ "cylinders": [cylinder(x, y, radius, c, 0.9)], "texts": [label(x, y + radius, name)] }),
-    )
+/// A body at one tick, as the scene draws it.
+struct Body<'a> {
+    name: &'a str,
+    x: f64,
+    y: f64,
+    /// The disc's radius (a polygon's circumscribed one).
+    radius: f64,
+    /// The scenario's shape: a rectangle is drawn as a cube.
+    shape: &'a ShapeSpec,
+    /// Its look (`None`: a body the scenario does not list, a disc).
+    look: Option<crate::BodyLook>,
+    /// Its heading, rad.
+    heading: f64,
 }
 
-/// A robot: its disc, its name and an arrow along its heading (a unicycle)
-/// or its velocity (a holonomic robot that moves).
-fn robot_entity(
-    name: &str,
-    s: &crate::Sample,
-    radius: f64,
-    theta: Option<f64>,
-    c: [u8; 3],
-    stamp: &Value,
-) -> Value {
-    let mut e = disc_entity(name, s.x, s.y, radius, c, stamp);
-    let heading = theta.or_else(|| (s.speed() > 1e-6).then(|| s.vy.atan2(s.vx)));
+/// A rectangle's cube: `length` along the heading, `width` across, posed
+/// at the body's centre turned about z.
+fn cube(b: &Body, length: f64, width: f64, c: [u8; 3], alpha: f64) -> Value {
+    json!({
+        "pose": { "position": { "x": b.x, "y": b.y, "z": HEIGHT / 2.0 }, "orientation": yaw(b.heading) },
+        "size": { "x": length, "y": width, "z": HEIGHT },
+        "color": color(c, alpha),
+    })
+}
+
+/// A polygon's outline: a line loop (type 1) through its body-frame
+/// vertices, posed at the body turned by its heading.
+fn outline(b: &Body, points: &[[f64; 2]], c: [u8; 3]) -> Value {
+    let points: Vec<Value> = points
+        .iter()
+        .map(|p| json!({ "x": p[0], "y": p[1], "z": HEIGHT / 2.0 }))
+        .collect();
+    json!({
+        "type": 1, "pose": pose(b.x, b.y, b.heading), "thickness": 0.04, "scale_invariant": false,
+        "points": points, "color": color(c, 1.0), "colors": [], "indices": [],
+    })
+}
+
+/// A body's entity: its shape (a disc's cylinder, a rectangle's cube, a
+/// polygon's outline) and its name.
+fn body_entity(b: &Body, c: [u8; 3], stamp: &Value) -> Value {
+    let text = json!([label(b.x, b.y + b.radius, b.name)]);
+    let polygon = b
+        .look
+        .filter(|l| !l.is_disc())
+        .and_then(|l| l.outline([0.0, 0.0], 0.0));
+    let parts = match (b.shape, polygon) {
+        (ShapeSpec::Rectangle { length, width }, Some(_)) => {
+            json!({ "cubes": [cube(b, *length, *width, c, 0.9)], "texts": text })
+        }
+        (_, Some(points)) => json!({ "lines": [outline(b, &points, c)], "texts": text }),
+        (_, None) => {
+            json!({ "cylinders": [cylinder(b.x, b.y, b.radius, c, 0.9)], "texts": text })
+        }
+    };
+    entity(b.name, stamp, parts)
+}
+
+/// A robot: its shape, its name and an arrow along its heading (a
+/// unicycle, a body that is not a disc) or its velocity (a holonomic disc
+/// that moves).
+fn robot_entity(b: &Body, s: &crate::Sample, c: [u8; 3], stamp: &Value) -> Value {
+    let radius = b.radius;
+    let mut e = body_entity(b, c, stamp);
+    let heading = s
+        .theta
+        .or_else(|| (s.speed() > 1e-6).then(|| s.vy.atan2(s.vx)));
     if let Some(th) = heading {
         let length = 1.5 * radius;
         e["arrows"] = json!([{
@@ -497,6 +562,10 @@ fn schema_of(name: &str) -> Value {
                 json!({ "pose": pose, "shaft_length": number, "shaft_diameter": number,
                         "head_length": number, "head_diameter": number, "color": color }),
             );
+            let cube = obj(
+                "foxglove.CubePrimitive",
+                json!({ "pose": pose, "size": vec3, "color": color }),
+            );
             let cylinder = obj(
                 "foxglove.CylinderPrimitive",
                 json!({ "pose": pose, "size": vec3, "bottom_scale": number, "top_scale": number, "color": color }),
@@ -518,7 +587,7 @@ fn schema_of(name: &str) -> Value {
                 json!({ "timestamp": time, "frame_id": { "type": "string" }, "id": { "type": "string" },
                         "lifetime": time, "frame_locked": { "type": "boolean" },
                         "metadata": array(obj("foxglove.KeyValuePair", json!({ "key": { "type": "string" }, "value": { "type": "string" } }))),
-                        "arrows": array(arrow), "cubes": array(json!({})), "spheres": array(json!({})),
+                        "arrows": array(arrow), "cubes": array(cube), "spheres": array(json!({})),
                         "cylinders": array(cylinder), "lines": array(line), "triangles": array(json!({})),
                         "texts": array(text), "models": array(json!({})) }),
             );

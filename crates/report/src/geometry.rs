@@ -1,8 +1,48 @@
-//! Where things are drawn: the extent of a run's map, a body's radius, a
-//! collision's point.
+//! Where things are drawn: the extent of a run's map, a body's radius and
+//! shape, the pose it is drawn at, a collision's point.
 
-use crate::records::{Event, EventKind};
+use crate::records::{Event, EventKind, Sample};
 use crate::run::RunData;
+use mrsim_shape::{Pose, Shape};
+use std::collections::HashMap;
+
+/// How a body is drawn: its shape (a disc, or a polygon in its body frame)
+/// and, for an obstacle, the heading it keeps (an obstacle never turns).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BodyLook {
+    /// The scenario's shape (a disc of the body's radius by default).
+    pub shape: Shape,
+    /// An obstacle's fixed heading, rad; `None` for a robot, which is
+    /// drawn at the heading its samples record.
+    pub fixed_heading: Option<f64>,
+    /// A robot's heading at its start (a unicycle faces its goal; a
+    /// holonomic robot 0), for samples that record none.
+    pub start_heading: f64,
+}
+
+impl BodyLook {
+    /// The heading the body is drawn with at `sample`: an obstacle's fixed
+    /// one, else the sample's `theta`, else the start heading.
+    pub fn heading(&self, sample: Option<&Sample>) -> f64 {
+        self.fixed_heading
+            .or_else(|| sample.and_then(|s| s.theta))
+            .filter(|h| h.is_finite())
+            .unwrap_or(self.start_heading)
+    }
+
+    /// The body's outline in the world at `position`, turned by `heading`
+    /// (counter-clockwise polygon vertices); `None` for a disc.
+    pub fn outline(&self, position: [f64; 2], heading: f64) -> Option<Vec<[f64; 2]>> {
+        self.shape
+            .placed(Pose::new(position, heading))
+            .map(|p| p.points().to_vec())
+    }
+
+    /// Is the body a disc (drawn as a circle, as it always was)?
+    pub fn is_disc(&self) -> bool {
+        self.shape.is_disc()
+    }
+}
 
 impl RunData {
     /// `[xmin, xmax, ymin, ymax]` of the smallest box holding the arena,
@@ -77,6 +117,33 @@ impl RunData {
                     .map(|o| o.radius)
             })
             .unwrap_or(0.0)
+    }
+
+    /// How each body of the scenario is drawn, by name: robots, then
+    /// obstacles (a robot and an obstacle of one name: the robot).
+    pub fn looks_by_name(&self) -> HashMap<&str, BodyLook> {
+        let mut out = HashMap::new();
+        for o in &self.scenario.obstacles {
+            out.insert(
+                o.name.as_str(),
+                BodyLook {
+                    shape: o.body_shape(),
+                    fixed_heading: Some(o.heading),
+                    start_heading: o.heading,
+                },
+            );
+        }
+        for r in &self.scenario.robots {
+            out.insert(
+                r.name.as_str(),
+                BodyLook {
+                    shape: r.body_shape(),
+                    fixed_heading: None,
+                    start_heading: r.start_heading(),
+                },
+            );
+        }
+        out
     }
 
     /// Where a collision is drawn: its contact point, or else body `a`'s

@@ -268,6 +268,7 @@ impl Tracks {
             y: row.y,
             vx: row.vx,
             vy: row.vy,
+            theta: row.theta,
         };
         self.push(row.body, row.kind, sample)
     }

@@ -248,6 +248,7 @@ fn draw_map<DB: DrawingBackend>(
         }))
         .map_err(err)?;
 
+    let looks = run.looks_by_name();
     let grey = RGBColor(130, 130, 130);
     for body in run
         .trajectory
@@ -261,7 +262,6 @@ fn draw_map<DB: DrawingBackend>(
             .filter(|s| s.x.is_finite() && s.y.is_finite())
             .map(|s| (s.x, s.y))
             .collect();
-        let r = px(run.radius_of(&body.name)).max(2);
         chart
             .draw_series(DashedLineSeries::new(
                 points.clone(),
@@ -271,6 +271,22 @@ fn draw_map<DB: DrawingBackend>(
             ))
             .map_err(err)?;
         let ends = [points.first(), points.last()];
+        let look = looks.get(body.name.as_str()).filter(|l| !l.is_disc());
+        if let Some(look) = look {
+            // Its polygon at both ends, turned by its fixed heading.
+            let heading = look.heading(None);
+            for &p in ends.into_iter().flatten() {
+                let outline = drawn_outline(look, [p.0, p.1], heading, scale, 2.0);
+                chart
+                    .draw_series(std::iter::once(PathElement::new(
+                        outline,
+                        grey.stroke_width(1),
+                    )))
+                    .map_err(err)?;
+            }
+            continue;
+        }
+        let r = px(run.radius_of(&body.name)).max(2);
         chart
             .draw_series(
                 ends.into_iter()
@@ -323,9 +339,36 @@ fn draw_map<DB: DrawingBackend>(
         };
         let start = (start[0], start[1]);
         let r = px(spec.map_or(0.0, |s| s.radius)).max(4);
-        chart
-            .draw_series(std::iter::once(Circle::new(start, r, c.stroke_width(2))))
-            .map_err(err)?;
+        match looks.get(name.as_str()).filter(|l| !l.is_disc()) {
+            // Its polygon at its start pose, and thinner where it ended.
+            Some(look) => {
+                let samples = tracks.get(name.as_str()).map(|t| &t.samples[..]);
+                let first = samples.and_then(|s| s.first());
+                let at_start =
+                    drawn_outline(look, [start.0, start.1], look.heading(first), scale, 4.0);
+                chart
+                    .draw_series(std::iter::once(PathElement::new(
+                        at_start,
+                        c.stroke_width(2),
+                    )))
+                    .map_err(err)?;
+                if let Some(end) = samples
+                    .and_then(|s| s.last())
+                    .filter(|s| s.x.is_finite() && s.y.is_finite())
+                {
+                    let at_end =
+                        drawn_outline(look, [end.x, end.y], look.heading(Some(end)), scale, 4.0);
+                    chart
+                        .draw_series(std::iter::once(PathElement::new(at_end, c.stroke_width(1))))
+                        .map_err(err)?;
+                }
+            }
+            None => {
+                chart
+                    .draw_series(std::iter::once(Circle::new(start, r, c.stroke_width(2))))
+                    .map_err(err)?;
+            }
+        }
         if let Some(spec) = spec {
             chart
                 .draw_series(std::iter::once(Cross::new(
@@ -353,6 +396,39 @@ fn draw_map<DB: DrawingBackend>(
         )
         .map_err(err)?;
     Ok(())
+}
+
+/// The closed outline a body of `look` is drawn with at `position` and
+/// `heading`, in world coordinates: its polygon, grown about its position
+/// so that it reaches at least `min_px` pixels from it at `scale` px per
+/// length unit (a body too small to see stays visible, as a disc's circle
+/// does). A disc's outline is its position alone.
+fn drawn_outline(
+    look: &crate::BodyLook,
+    position: [f64; 2],
+    heading: f64,
+    scale: f64,
+    min_px: f64,
+) -> Vec<(f64, f64)> {
+    let Some(mut points) = look.outline(position, heading) else {
+        return vec![(position[0], position[1])];
+    };
+    let reach = look.shape.circumradius() * scale;
+    let grow = if reach > 0.0 && reach < min_px {
+        min_px / reach
+    } else {
+        1.0
+    };
+    for p in &mut points {
+        *p = [
+            position[0] + (p[0] - position[0]) * grow,
+            position[1] + (p[1] - position[1]) * grow,
+        ];
+    }
+    if let Some(&first) = points.first() {
+        points.push(first);
+    }
+    points.into_iter().map(|p| (p[0], p[1])).collect()
 }
 
 fn draw_speeds<DB: DrawingBackend>(

@@ -27,6 +27,9 @@ pub struct Sample {
     pub vx: f64,
     /// Velocity y.
     pub vy: f64,
+    /// Heading, rad: the `theta` column, present when the run records
+    /// headings (a unicycle robot or a body that is not a disc).
+    pub theta: Option<f64>,
 }
 
 impl Sample {

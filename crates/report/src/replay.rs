@@ -92,14 +92,7 @@ impl ReplayView {
 /// Writes `replay.html` for `run` into `dir`.
 pub fn write_replay(run: &RunData, dir: &Path) -> Result<(), RenderError> {
     let mut data = replay_data(run);
-    let unicycles: Vec<&str> = run
-        .scenario
-        .robots
-        .iter()
-        .filter(|r| r.kinematics == mrsim_scenario::Kinematics::Unicycle)
-        .map(|r| r.name.as_str())
-        .collect();
-    crate::sensing::add(&mut data, dir, &run.trajectory.ticks, &unicycles)?;
+    crate::sensing::add(&mut data, dir, &run.trajectory.ticks)?;
     // `<` only occurs inside JSON strings, where \u003c means the same:
     // no `</script>` can end the data block early.
     let json = data.to_string().replace('<', "\\u003c");
@@ -169,13 +162,51 @@ fn replay_data(run: &RunData) -> Value {
         }
     };
 
+    let looks = run.looks_by_name();
+    // A polygon's vertices in the body frame, to the page's precision.
+    let shape_of = |name: &str| -> Option<Value> {
+        let look = looks.get(name).filter(|l| !l.is_disc())?;
+        let points = look.outline([0.0, 0.0], 0.0)?;
+        Some(Value::Array(
+            points
+                .iter()
+                .map(|p| json!([round(p[0], decimals), round(p[1], decimals)]))
+                .collect(),
+        ))
+    };
+    // One heading per frame (null where the body has no sample or no
+    // heading), for the robots whose heading shows: unicycles, which turn,
+    // and bodies that are not discs.
+    let headings = |name: &str| -> Value {
+        let body = by_name.get(name);
+        Value::Array(
+            ticks
+                .iter()
+                .map(
+                    |&t| match body.and_then(|b| b.at(t)).and_then(|s| s.theta) {
+                        Some(th) => json!((th * 1000.0).round() / 1000.0),
+                        None => Value::Null,
+                    },
+                )
+                .collect(),
+        )
+    };
+    let has_theta = |name: &str| {
+        by_name
+            .get(name)
+            .is_some_and(|b| b.samples.iter().any(|s| s.theta.is_some()))
+    };
+
     let robots: Vec<Value> = names
         .iter()
         .enumerate()
         .map(|(i, name)| {
             let spec = specs.get(name.as_str());
             let (x, y) = track(name);
-            json!({
+            let shape = shape_of(name);
+            let turns = spec.is_some_and(|s| s.kinematics == mrsim_scenario::Kinematics::Unicycle)
+                || shape.is_some();
+            let mut r = json!({
                 "name": name,
                 "color": hex(robot_color(i)),
                 "radius": spec.map_or(0.0, |s| s.radius),
@@ -188,7 +219,14 @@ fn replay_data(run: &RunData) -> Value {
                 }),
                 "x": x,
                 "y": y,
-            })
+            });
+            if turns && has_theta(name) {
+                r["theta"] = headings(name);
+            }
+            if let Some(shape) = shape {
+                r["shape"] = shape;
+            }
+            r
         })
         .collect();
     let obstacles: Vec<Value> = run
@@ -198,7 +236,13 @@ fn replay_data(run: &RunData) -> Value {
         .filter(|b| b.kind == BodyKind::Obstacle)
         .map(|b| {
             let (x, y) = track(&b.name);
-            json!({ "name": b.name, "radius": run.radius_of(&b.name), "x": x, "y": y })
+            let mut o = json!({ "name": b.name, "radius": run.radius_of(&b.name), "x": x, "y": y });
+            if let Some(shape) = shape_of(&b.name) {
+                let heading = looks.get(b.name.as_str()).map_or(0.0, |l| l.heading(None));
+                o["shape"] = shape;
+                o["heading"] = round(heading, 6);
+            }
+            o
         })
         .collect();
     let walls: Vec<Value> = run

@@ -83,6 +83,8 @@ pub struct TopModel {
     /// Newest statistics, one per robot.
     pub robots: Vec<RobotStats>,
     bounds: [[f64; 2]; 2],
+    /// Every body's shape by body id (robots, then obstacles).
+    shapes: Vec<mrsim_shape::Shape>,
 }
 
 impl TopModel {
@@ -121,6 +123,7 @@ impl TopModel {
         Ok(Self {
             run_id: v["run_id"].as_str().unwrap_or("").to_string(),
             out_dir: v["out_dir"].as_str().unwrap_or("").to_string(),
+            shapes: scenario.body_shapes(),
             scenario,
             snapshot: SnapshotHeader::default(),
             bodies: Vec::new(),
@@ -310,6 +313,7 @@ fn draw_map(f: &mut Frame, area: Rect, m: &TopModel) {
                                 kind: body_kind::ROBOT,
                                 position: r.start,
                                 radius: r.radius,
+                                heading: r.start_heading(),
                                 ..Default::default()
                             })
                             .chain(m.scenario.obstacles.iter().enumerate().map(|(k, o)| {
@@ -318,6 +322,7 @@ fn draw_map(f: &mut Frame, area: Rect, m: &TopModel) {
                                     kind: body_kind::OBSTACLE,
                                     position: o.start,
                                     radius: o.radius,
+                                    heading: o.heading,
                                     ..Default::default()
                                 }
                             }))
@@ -337,8 +342,20 @@ fn draw_map(f: &mut Frame, area: Rect, m: &TopModel) {
                         Color::DarkGray
                     };
                     let [x, y] = b.position;
-                    if b.radius > s {
-                        ctx.draw(&Circle::new(x, y, b.radius, color));
+                    let pose = mrsim_shape::Pose::new(b.position, b.heading);
+                    let polygon = m.shapes.get(b.id as usize).and_then(|sh| sh.placed(pose));
+                    match polygon {
+                        // A polygon's outline, turned by the body's heading.
+                        Some(poly) if b.radius > s => {
+                            let pts = poly.points();
+                            for (k, p) in pts.iter().enumerate() {
+                                let q = pts[(k + 1) % pts.len()];
+                                ctx.draw(&Segment::new(p[0], p[1], q[0], q[1], color));
+                            }
+                        }
+                        Some(_) => {}
+                        None if b.radius > s => ctx.draw(&Circle::new(x, y, b.radius, color)),
+                        None => {}
                     }
                     ctx.draw(&Points::new(&[(x, y)], color));
                 }
@@ -444,4 +461,58 @@ pub fn connect_observer(
         run_id: run_id.to_string(),
         cause,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ratatui::Terminal;
+    use ratatui::backend::TestBackend;
+
+    /// The rows and columns spanned by the cells drawn in dark grey (the
+    /// obstacles) on a 100 x 50 screen of a run with one small robot and a
+    /// rectangle obstacle 8 x 0.4 turned by `heading_deg`.
+    fn obstacle_span(heading_deg: f64) -> (u16, u16) {
+        let src = format!(
+            "[world]\narena = {{ min = [-6.0, -6.0], max = [6.0, 6.0] }}\n\
+             [[robot]]\nname = \"r\"\nstart = [-5.0, -5.0]\ngoal = [-5.0, -4.0]\n\
+             [[obstacle]]\nname = \"board\"\nstart = [0.0, 0.0]\nheading_deg = {heading_deg}\n\
+             shape = {{ kind = \"rectangle\", length = 8.0, width = 0.4 }}\n"
+        );
+        let loaded = mrsim_scenario::parse(&src, "board.toml").expect("scenario");
+        let setup =
+            serde_json::json!({"run_id": "t", "out_dir": "/tmp", "scenario": loaded.scenario});
+        let m = TopModel::from_setup(setup.to_string().as_bytes()).expect("setup");
+        let mut t = Terminal::new(TestBackend::new(100, 50)).expect("terminal");
+        t.draw(|f| draw(f, &m)).expect("draw");
+        let buf = t.backend().buffer();
+        let (mut rows, mut cols) = ((u16::MAX, 0), (u16::MAX, 0));
+        for y in 0..buf.area.height {
+            for x in 0..buf.area.width {
+                let cell = &buf[(x, y)];
+                // Braille dots (the map's marker), not text.
+                let dots = cell
+                    .symbol()
+                    .chars()
+                    .any(|c| ('\u{2801}'..='\u{28ff}').contains(&c));
+                if cell.fg == Color::DarkGray && dots {
+                    rows = (rows.0.min(y), rows.1.max(y));
+                    cols = (cols.0.min(x), cols.1.max(x));
+                }
+            }
+        }
+        assert!(rows.0 <= rows.1, "nothing drawn in dark grey");
+        (rows.1 - rows.0 + 1, cols.1 - cols.0 + 1)
+    }
+
+    #[test]
+    fn a_rectangle_obstacle_is_drawn_as_its_outline_turned_by_its_heading() {
+        // A terminal cell is about twice as tall as wide: the map gives a
+        // row two columns' worth of length. Its circumscribed disc would
+        // span as many columns as twice its rows.
+        let (rows, cols) = obstacle_span(90.0);
+        assert!(2 * rows > 4 * cols, "upright: {rows} rows x {cols} columns");
+        let (rows, cols) = obstacle_span(0.0);
+        assert!(cols > 4 * 2 * rows, "lying: {rows} rows x {cols} columns");
+    }
 }

@@ -326,6 +326,7 @@ pub fn big_run(dir: &Path, n: usize, ticks: u64) -> mrsim_report::RunData {
                         y: s[1] + (g[1] - s[1]) * k,
                         vx: (g[0] - s[0]) / (ticks as f64 * DT),
                         vy: (g[1] - s[1]) / (ticks as f64 * DT),
+                        theta: None,
                     }
                 })
                 .collect();
