@@ -546,7 +546,10 @@ impl Scenario {
     /// them (`theta`)? When some robot turns (a unicycle) or some body is
     /// not a disc (a turned rectangle is not the same body).
     pub fn has_headings(&self) -> bool {
-        self.robots.iter().any(|r| r.kinematics == Kinematics::Unicycle) || self.has_shapes()
+        self.robots
+            .iter()
+            .any(|r| r.kinematics == Kinematics::Unicycle)
+            || self.has_shapes()
     }
 
     /// Is some body not a disc?
