@@ -12,8 +12,10 @@ struct Cautious {
 impl Planner for Cautious {
     fn plan(&mut self, obs: &Observation) -> Command {
         let to_goal = obs.goal - obs.me.position;
+        // Surface to surface: each body's true shape (disc, rectangle or
+        // polygon at its heading) less this robot's radius.
         let gap = (obs.others.iter())
-            .map(|o| (o.position - obs.me.position).norm() - o.radius - obs.me.radius)
+            .map(|o| o.distance_to(obs.me.position) - obs.me.radius)
             .fold(f64::INFINITY, f64::min);
         let (d, a) = (to_goal.norm(), obs.me.max_accel);
         let speed = obs.me.max_speed * (gap / self.slow_within).clamp(0.2, 1.0);

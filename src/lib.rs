@@ -109,8 +109,8 @@ pub use mrsim_agents::{
 };
 pub use mrsim_planners::{
     BodyKind, BuildError, Command, DesignatedPath, Diagnostic, EXTERNAL, Observation, ParamError,
-    ParamReader, ParamValue, Params, Planner, RegisterError, Registry, Segment, SelfState, Sensed,
-    Vec2,
+    ParamReader, ParamValue, Params, Placed, Planner, Polygon, Pose, RegisterError, Registry,
+    Segment, SelfState, Sensed, Shape, Vec2,
 };
 pub use mrsim_runfolder::{FileError, RobotMetrics, RunMetrics};
 /// Why [`run_in_process`] failed: refused before anything ran

@@ -136,11 +136,12 @@ pub(crate) fn join_seats(
     let view: SetupView =
         serde_json::from_slice(&setup).map_err(|e| AgentError::BadSetup(e.to_string()))?;
     let walls = seat::walls(&view);
+    let shapes = seat::shapes(&view)?;
     replies
         .iter()
         .zip(opts)
         .map(|(r, o)| match r {
-            Some(r) => seat::seat_of(&view, &walls, r, o),
+            Some(r) => seat::seat_of(&view, &walls, &shapes, r, o),
             None => Err(AgentError::BadSetup("a join without its reply".to_string())),
         })
         .collect::<Result<Vec<_>, _>>()

@@ -12,6 +12,12 @@
 //! ([`VelocityEstimator`]). With `"truth"` the velocity is the snapshot's and
 //! the acceleration zero.
 //!
+//! Each sensed body comes with its heading (the snapshot's) and its shape,
+//! from the scenario by body id ([`shapes_of`]): a disc, a rectangle or a
+//! convex polygon in its body frame; its `radius` is the disc around it
+//! (a polygon's circumscribed radius), and the sensing range is measured to
+//! that disc, so a polygon is sensed a little early rather than late.
+//!
 //! With a finite `sensing_range` the planner gets only the walls near it:
 //! every chain of walls (segments joined end to end, such as a room's
 //! outline or the arena) with a segment within the sensing range plus the
@@ -25,15 +31,15 @@
 //! [`Scanner::scan_robot`], the function the world's scan.csv calls too, so
 //! the file repeats exactly what the planner saw): cast from its centre
 //! along its heading (a holonomic robot's frame is the world's: heading 0)
-//! against every other body of the snapshot (true positions, whatever the
-//! sensing range) and every wall, with noise from a stream per robot and
-//! tick.
+//! against every other body of the snapshot (true positions and shapes at
+//! their headings, whatever the sensing range) and every wall, with noise
+//! from a stream per robot and tick.
 
 use mrsim_lidar::{Scanner, Walls};
 use mrsim_planners::estimate::VelocityEstimator;
 use mrsim_planners::lidar::LaserScan;
 use mrsim_planners::{
-    BodyKind, DesignatedPath, Kinematics, Observation, Segment, SelfState, Sensed, Vec2,
+    BodyKind, DesignatedPath, Kinematics, Observation, Segment, SelfState, Sensed, Shape, Vec2,
 };
 use mrsim_proto::{BodyState, SnapshotHeader, body_kind};
 use mrsim_scenario::rng::Rng;
@@ -55,6 +61,8 @@ pub struct Observer {
     scan: LaserScan,
     /// The run's walls (fixed for the run).
     walls: Arc<[Segment]>,
+    /// Every body's shape by id ([`shapes_of`]; empty: all discs).
+    shapes: Arc<[Shape]>,
     /// The scanner among `walls`, built at the first scan.
     scanner: Option<Scanner>,
     /// The box of `walls` and, once the robot is out of reach of some
@@ -76,6 +84,17 @@ pub fn walls_of(
             b: Vec2::new(w[1][0], w[1][1]),
         })
         .collect()
+}
+
+/// Every body's shape by id (robots, then obstacles), shared by the
+/// observers of a process; empty when every body is a disc, whose shape
+/// is then the snapshot's radius.
+pub fn shapes_of(scenario: &Scenario) -> Arc<[Shape]> {
+    if scenario.has_shapes() {
+        scenario.body_shapes().into()
+    } else {
+        Arc::new([])
+    }
 }
 
 /// The box of a run's walls, and their [`NearWalls`] index once a robot
@@ -288,8 +307,10 @@ impl NearWalls {
 
 /// What one robot's scan of a snapshot's bodies needs, the same for every
 /// body: which bodies it senses ([`Scan::sense_all`]).
-struct Scan {
+struct Scan<'s> {
     me: usize,
+    /// Every body's shape by id (empty: all discs).
+    shapes: &'s [Shape],
     position: Vec2,
     sensing_range: f64,
     radius: f64,
@@ -298,7 +319,7 @@ struct Scan {
     fov: Option<(Vec2, f64)>,
 }
 
-impl Scan {
+impl Scan<'_> {
     /// The reach of a body of radius zero, and the factor of a body's
     /// radius, for the squared-distance pre-test of [`Self::near_enough`]:
     /// `(range + radius + r) * (1 + 1e-9) + 1e-9` written as
@@ -359,6 +380,11 @@ impl Scan {
             velocity: Vec2::new(b.velocity[0], b.velocity[1]),
             acceleration: Vec2::zeros(),
             radius: b.radius,
+            heading: b.heading,
+            shape: match self.shapes.get(b.id as usize) {
+                Some(s @ Shape::Polygon(_)) => *s,
+                _ => Shape::disc(b.radius),
+            },
         });
     }
 
@@ -406,17 +432,21 @@ impl Observer {
             me,
             scenario.robots.len() + scenario.obstacles.len(),
             walls_of(&scenario.walls, scenario.world.arena),
+            shapes_of(scenario),
         )
     }
 
     /// An observer for robot `me` (its entry `spec`, if known) of a run
-    /// with `world` and `bodies` bodies in each snapshot.
+    /// with `world` and `bodies` bodies in each snapshot, among `walls`,
+    /// the bodies' shapes `shapes` by id ([`shapes_of`]: a body beyond its
+    /// end is the disc of its radius).
     pub fn for_robot(
         world: &WorldConfig,
         spec: Option<&RobotSpec>,
         me: usize,
         bodies: usize,
         walls: Arc<[Segment]>,
+        shapes: Arc<[Shape]>,
     ) -> Self {
         Self {
             me,
@@ -432,6 +462,7 @@ impl Observer {
             seed: world.seed,
             scan: LaserScan::default(),
             walls,
+            shapes,
             scanner: None,
             near_walls: None,
         }
@@ -490,6 +521,7 @@ impl Observer {
         });
         let scan = Scan {
             me: self.me,
+            shapes: &self.shapes,
             position,
             sensing_range: spec.sensing_range,
             radius: spec.radius,
@@ -520,6 +552,7 @@ impl Observer {
                 self.me,
                 spec,
                 bodies,
+                &self.shapes,
             )
         };
         let reach = spec.sensing_range + spec.radius;

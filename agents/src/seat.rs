@@ -10,7 +10,9 @@
 
 use crate::guard::{Halt, PlanFailure, PlanFault, plan_checked};
 use crate::{AgentError, AgentExit, AgentOptions, diagnostics, fault, observe};
-use mrsim_planners::{Command, DesignatedPath, Observation, Planner, Registry, Segment, Vec2};
+use mrsim_planners::{
+    Command, DesignatedPath, Observation, Planner, Registry, Segment, Shape, Vec2,
+};
 use mrsim_proto::{BodyState, CommandMsg, JoinReply, SnapshotHeader, command_kind, now_ns};
 use mrsim_scenario::timing::{CallStatus, Clerk, RecordedCall, Timing};
 use mrsim_scenario::{RobotSpec, WorldConfig};
@@ -141,11 +143,40 @@ pub(crate) fn walls(view: &SetupView<'_>) -> Arc<[Segment]> {
     observe::walls_of(&view.scenario.walls, view.scenario.world.arena)
 }
 
+/// Every body's shape by id in the run whose setup is `view` (robots, then
+/// obstacles), shared by the seats of one process; empty when all are
+/// discs. Only the entries that name a `shape` are read again (a run of
+/// discs reads none).
+pub(crate) fn shapes(view: &SetupView<'_>) -> Result<Arc<[Shape]>, AgentError> {
+    let s = &view.scenario;
+    let bodies = || s.robots.iter().chain(&s.obstacles);
+    // Any entry with a `shape` key has the word in its text (a disc's is
+    // left out of the setup); the entries that do are parsed for it.
+    if !bodies().any(|raw| raw.get().contains("\"shape\"")) {
+        return Ok(Arc::new([]));
+    }
+    #[derive(serde::Deserialize)]
+    struct Entry {
+        #[serde(default)]
+        radius: f64,
+        #[serde(default)]
+        shape: mrsim_scenario::ShapeSpec,
+    }
+    bodies()
+        .map(|raw| {
+            let e: Entry = serde_json::from_str(raw.get())
+                .map_err(|e| AgentError::BadSetup(format!("a body's shape: {e}")))?;
+            Ok(e.shape.shape(e.radius))
+        })
+        .collect()
+}
+
 /// The seat of the robot the world gave `reply` in the run whose setup is
-/// `view`, joined under `opts`.
+/// `view`, joined under `opts`, among `walls` and the bodies' `shapes`.
 pub(crate) fn seat_of(
     view: &SetupView<'_>,
     walls: &Arc<[Segment]>,
+    shapes: &Arc<[Shape]>,
     reply: &JoinReply,
     opts: &AgentOptions,
 ) -> Result<Seat, AgentError> {
@@ -184,8 +215,14 @@ pub(crate) fn seat_of(
             ))
         }
     };
-    let observer =
-        observe::Observer::for_robot(&scenario.world, Some(&spec), me, capacity, walls.clone());
+    let observer = observe::Observer::for_robot(
+        &scenario.world,
+        Some(&spec),
+        me,
+        capacity,
+        walls.clone(),
+        shapes.clone(),
+    );
     let diag = start_diagnostics(view.out_dir.as_deref(), me, &spec.name);
     let timed = Timed::of(&spec, me, &scenario.world);
     let policy = policy_of(scenario, me)?;

@@ -186,3 +186,86 @@ fn noisy_differenced_velocities_scatter_by_sqrt2_sigma_over_dt() {
         "variance {var}, want {want}"
     );
 }
+
+#[test]
+fn a_turned_rectangle_obstacle_arrives_with_its_shape_heading_and_circumscribed_radius() {
+    let src = r#"
+[world]
+dt = 0.1
+
+[[robot]]
+name = "r0"
+start = [0.0, 0.0]
+goal = [10.0, 0.0]
+sensor = { kind = "lidar", beams = 4, fov_deg = 360, range = 8.0 }
+
+[[obstacle]]
+name = "box"
+start = [3.0, 0.0]
+shape = { kind = "rectangle", length = 2.0, width = 1.0 }
+heading_deg = 90
+motion = { model = "static" }
+
+[[obstacle]]
+name = "post"
+start = [-3.0, 0.0]
+radius = 0.4
+motion = { model = "static" }
+"#;
+    let sc = mrsim_scenario::parse(src, "inline.toml")
+        .expect("valid scenario")
+        .scenario;
+    // The snapshot as the world publishes it: each body's circumscribed
+    // radius and heading (an obstacle's fixed one).
+    let bodies: Vec<BodyState> = std::iter::once((body_kind::ROBOT, [0.0, 0.0], 0.25, 0.0))
+        .chain(
+            sc.obstacles
+                .iter()
+                .map(|o| (body_kind::OBSTACLE, o.start, o.radius, o.heading)),
+        )
+        .enumerate()
+        .map(|(id, (kind, position, radius, heading))| BodyState {
+            radius,
+            heading,
+            ..body(id as u32, kind, position, [0.0, 0.0])
+        })
+        .collect();
+    let mut obs = Observer::new(&sc, 0);
+    let spec = sc.robots[0].clone();
+    let o = obs.observe(&SnapshotHeader::default(), &bodies, &spec, None);
+    let (b, post) = (&o.others[0], &o.others[1]);
+    assert_eq!((b.id, b.kind), (1, mrsim_planners::BodyKind::Obstacle));
+    assert_eq!(
+        b.shape,
+        mrsim_planners::Shape::Polygon(mrsim_planners::Polygon::rectangle(2.0, 1.0).unwrap())
+    );
+    assert!(
+        (b.heading - std::f64::consts::FRAC_PI_2).abs() < 1e-12,
+        "{}",
+        b.heading
+    );
+    // Half the diagonal of 2 x 1.
+    assert!((b.radius - 1.25f64.sqrt()).abs() < 1e-12, "{}", b.radius);
+    // Its corners in the world: the length along y, the width along x.
+    let corners = b.placed().expect("a polygon");
+    for (c, want) in corners
+        .points()
+        .iter()
+        .zip([[3.5, -1.0], [3.5, 1.0], [2.5, 1.0], [2.5, -1.0]])
+    {
+        assert!(
+            (c[0] - want[0]).abs() < 1e-12 && (c[1] - want[1]).abs() < 1e-12,
+            "{c:?}"
+        );
+    }
+    // From the robot's centre its near side, x = 2.5, is 2.5 away (its
+    // disc's 1.88); the disc obstacle is a disc.
+    assert!((b.distance_to(o.me.position) - 2.5).abs() < 1e-12);
+    assert_eq!(post.shape, mrsim_planners::Shape::disc(0.4));
+    assert_eq!((post.radius, post.heading), (0.4, 0.0));
+    // The scan meets the box's side too (beams -pi, -pi/2, 0, pi/2): 2.5
+    // ahead, the post's disc 2.6 behind.
+    let scan = o.scan.expect("a scan");
+    assert!((scan.ranges[2] - 2.5).abs() < 1e-4, "{:?}", scan.ranges);
+    assert!((scan.ranges[0] - 2.6).abs() < 1e-4, "{:?}", scan.ranges);
+}

@@ -5,7 +5,8 @@ Observation (float32, ``4 + 6 k``): in the learner's frame (origin at its
 centre, axes parallel to the world's), ``[goal_dx, goal_dy, vx, vy]``, then
 for each of the ``k`` nearest other bodies (robots and obstacles within its
 sensing range, nearest first) ``[dx, dy, dvx, dvy, radius, 1]`` (position and
-velocity relative to the learner's), zeros for missing neighbours. Bounded
+velocity relative to the learner's; a rectangle's or polygon's radius is its
+circumscribed one), zeros for missing neighbours. Bounded
 where the scene bounds it (offsets by the walls' box, radii, the flag).
 Action: two numbers in [-1, 1] (clipped), scaled to a velocity (times the
 robot's max_speed) or a force (times mass x max_accel + damping x

@@ -15,6 +15,7 @@
 use mrsim_planners::{BodyKind, Command, Observation, Planner, Vec2};
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
+use pyo3::types::PyList;
 
 /// What a robot knows at one tick, as a Python planner sees it: its own
 /// state, its goal, the bodies it senses (sensing range, field of view and
@@ -53,8 +54,15 @@ pub struct PyObservation {
     others_position: Py<PyArray2<f64>>,
     /// Their velocities, (n, 2).
     others_velocity: Py<PyArray2<f64>>,
-    /// Their radii, (n,).
+    /// Their radii, (n,): a disc's own, a rectangle's or polygon's
+    /// circumscribed one.
     others_radius: Py<PyArray1<f64>>,
+    /// Their headings, rad, (n,): the x axis of each body's shape.
+    others_heading: Py<PyArray1<f64>>,
+    /// Their shapes in the world, a list of n arrays: a rectangle's or
+    /// polygon's vertices at its pose, (k, 2) counter-clockwise; (0, 2) for
+    /// a disc.
+    others_vertices: Py<PyList>,
     /// Their kinds, (n,): 0 robot, 1 obstacle.
     others_kind: Py<PyArray1<u8>>,
     /// Wall segments (the arena's included), (m, 4): x0, y0, x1, y1.
@@ -122,6 +130,17 @@ impl PyObservation {
             )?
             .unbind(),
             others_radius: PyArray1::from_iter(py, o.iter().map(|s| s.radius)).unbind(),
+            others_heading: PyArray1::from_iter(py, o.iter().map(|s| s.heading)).unbind(),
+            others_vertices: PyList::new(
+                py,
+                o.iter()
+                    .map(|s| {
+                        let flat = s.placed().map_or_else(Vec::new, |p| p.points().concat());
+                        rows(py, flat, 2)
+                    })
+                    .collect::<PyResult<Vec<_>>>()?,
+            )?
+            .unbind(),
             others_kind: PyArray1::from_iter(
                 py,
                 o.iter().map(|s| match s.kind {

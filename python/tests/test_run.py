@@ -210,3 +210,56 @@ def test_a_python_planner_on_a_unicycle_sees_its_heading_and_its_laser_scan(repo
     assert ranges[back] == pytest.approx(1.0 / np.cos(heading), abs=0.05)
     # Asked to go north, it turns left: the heading is the world's.
     assert seen[-1][1] > heading + 0.1
+
+
+def test_a_python_planner_sees_a_turned_rectangle_obstacle_with_its_vertices(repo, tmp_path):
+    seen = []
+
+    class Standing:
+        def __init__(self, params):
+            pass
+
+        def plan(self, obs):
+            seen.append(
+                (obs.others_id, obs.others_radius, obs.others_heading, obs.others_vertices)
+            )
+            return np.zeros(2)
+
+    scenario = tmp_path / "box.toml"
+    # A 2 x 1 box at (3, 0) turned a quarter turn (its length along y) and a
+    # disc post behind the robot.
+    scenario.write_text(
+        """
+[world]
+duration = 0.3
+[[robot]]
+name = "r0"
+start = [0.0, 0.0]
+goal = [0.0, 3.0]
+planner = "standing"
+[[obstacle]]
+name = "box"
+start = [3.0, 0.0]
+shape = { kind = "rectangle", length = 2.0, width = 1.0 }
+heading_deg = 90
+motion = { model = "static" }
+[[obstacle]]
+name = "post"
+start = [-3.0, 0.0]
+radius = 0.4
+motion = { model = "static" }
+"""
+    )
+    mrsim.run(scenario, planners={"standing": Standing}, out=tmp_path / "run")
+    ids, radius, heading, vertices = seen[0]
+    assert list(ids) == [1, 2]
+    assert radius == pytest.approx([np.sqrt(1.25), 0.4])
+    assert heading == pytest.approx([np.pi / 2, 0.0])
+    assert isinstance(vertices, list) and len(vertices) == 2
+    box, post = vertices
+    # Its corners (-1, -0.5), (1, -0.5), (1, 0.5), (-1, 0.5) in its frame,
+    # turned a quarter turn about (3, 0), counter-clockwise.
+    assert box.shape == (4, 2)
+    assert box == pytest.approx(np.array([[3.5, -1.0], [3.5, 1.0], [2.5, 1.0], [2.5, -1.0]]))
+    # A disc has none.
+    assert post.shape == (0, 2)

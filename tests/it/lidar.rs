@@ -198,3 +198,102 @@ fn agents_over_shared_memory_and_zenoh_get_the_scans_of_an_in_process_run() {
     }
     let _ = std::fs::remove_dir_all(&inproc);
 }
+
+/// What a standing robot sensed each tick: the bodies and its scan as
+/// scan.csv writes it.
+type Sensings = Arc<Mutex<BTreeMap<u64, (Vec<mrsim::Sensed>, String)>>>;
+
+/// Stands still and notes what it senses.
+struct Seer(Sensings);
+
+impl Planner for Seer {
+    fn plan(&mut self, obs: &Observation) -> Command {
+        let mut row = String::new();
+        if let Some(s) = obs.scan {
+            row = format!("{},{},{}", s.angle_min, s.angle_increment, s.range_max);
+            for r in &s.ranges {
+                row += &if r.is_finite() {
+                    format!(",{r:.6}")
+                } else {
+                    ",inf".to_string()
+                };
+            }
+        }
+        if let Ok(mut seen) = self.0.lock() {
+            seen.insert(obs.tick, (obs.others.to_vec(), row));
+        }
+        Command::Velocity(Vec2::zeros())
+    }
+}
+
+#[test]
+fn a_turned_rectangle_reaches_the_planner_and_scan_csv_as_a_rectangle() {
+    let dir = fresh_dir("lidar-box");
+    let scenario = dir.join("box.toml");
+    // A 2 x 1 box centred at (3, 0) turned 30 degrees: the beam along +x
+    // from the origin meets its long side at x = 2 (see the lidar crate's
+    // analytic test, the box there at (4, 0)); its disc, of radius
+    // sqrt(1.25) = 1.118, would be met at 1.882.
+    std::fs::write(
+        &scenario,
+        r#"
+name = "box"
+[world]
+dt = 0.1
+duration = 1.0
+[[robot]]
+name = "scout"
+start = [0.0, 0.0]
+goal = [0.0, 3.0]
+planner = "seer"
+sensor = { kind = "lidar", beams = 4, fov_deg = 360, range = 8.0, record = true }
+[[obstacle]]
+name = "box"
+start = [3.0, 0.0]
+shape = { kind = "rectangle", length = 2.0, width = 1.0 }
+heading_deg = 30
+motion = { model = "static" }
+"#,
+    )
+    .expect("write the scenario");
+    let seen: Sensings = Arc::default();
+    let mut registry = Registry::builtin();
+    let log = seen.clone();
+    registry
+        .register_simple("seer", "stands and notes", move || Seer(log.clone()))
+        .expect("a new name");
+    let result = mrsim::run_in_process(&InProcess {
+        scenario: ScenarioSource {
+            path: Some(scenario),
+            ..Default::default()
+        },
+        registry: Arc::new(registry),
+        out: Some(dir.join("run")),
+        render: false,
+        plan_timeout: None,
+    })
+    .expect("the run");
+    let seen = seen.lock().expect("what it sensed");
+    let (others, _) = seen.get(&0).expect("tick 0");
+    let b = &others[..];
+    assert_eq!(b.len(), 1, "{b:?}");
+    let rect = mrsim::Shape::Polygon(mrsim::Polygon::rectangle(2.0, 1.0).expect("a rectangle"));
+    assert_eq!(b[0].shape, rect);
+    assert!((b[0].heading - 30f64.to_radians()).abs() < 1e-12);
+    assert!((b[0].radius - 1.25f64.sqrt()).abs() < 1e-12);
+    let text = std::fs::read_to_string(result.dir.join("scan.csv")).expect("scan.csv");
+    let mut compared = 0;
+    for line in text.lines().skip(1) {
+        let cells: Vec<&str> = line.splitn(3, ',').collect();
+        let tick: u64 = cells[0].parse().expect("tick");
+        if let Some((_, got)) = seen.get(&tick) {
+            assert_eq!(cells[2], got, "tick {tick}");
+            compared += 1;
+        }
+        // Beams -pi, -pi/2, 0, pi/2: the third meets the box's side.
+        let ranges: Vec<&str> = cells[2].split(',').skip(3).collect();
+        assert_eq!(ranges, ["inf", "inf", "2.000000", "inf"], "{line}");
+    }
+    assert!(compared >= 9, "{compared} ticks compared");
+    let _ = std::fs::remove_dir_all(&dir);
+}

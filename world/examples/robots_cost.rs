@@ -186,7 +186,7 @@ fn scan_costs(
     let t = Instant::now();
     for tick in 0..rounds {
         for me in 0..n {
-            scanner.scan_robot(&mut scan, 1, tick, me, &spec, &bodies);
+            scanner.scan_robot(&mut scan, 1, tick, me, &spec, &bodies, &[]);
             hits += scan.ranges.iter().filter(|r| r.is_finite()).count();
         }
     }
@@ -204,7 +204,7 @@ fn scan_costs(
                     let mut scan = LaserScan::default();
                     for (k, sc) in chunk.iter_mut().enumerate() {
                         let me = c * n.div_ceil(cpus) + k;
-                        sc.scan_robot(&mut scan, 1, tick, me, spec, bodies);
+                        sc.scan_robot(&mut scan, 1, tick, me, spec, bodies, &[]);
                     }
                 });
             }

@@ -2,8 +2,8 @@
 //! `record = true`, one row per robot and tick, written by the recording
 //! thread. Each scan is computed here again, by the function the agent's
 //! observation uses ([`mrsim_lidar::Scanner::scan_robot`], with the same
-//! bodies, walls and per-tick noise stream), from the states of the
-//! trajectory row of the same tick: the very scan the planner got.
+//! bodies and shapes, walls and per-tick noise stream), from the states of
+//! the trajectory row of the same tick: the very scan the planner got.
 //!
 //! The file's name, columns and reader are [`mrsim_runfolder::scan`]'s;
 //! rows are whole ([`RowFile`]) and reach the disk when the recording
@@ -24,6 +24,9 @@ pub struct ScanWriter {
     /// (robot index, entry) of every recorded robot.
     robots: Vec<(usize, RobotSpec)>,
     scanner: Scanner,
+    /// Every body's shape ([`Scenario::body_shapes`]); empty when all
+    /// are discs (the states' radii).
+    shapes: Vec<mrsim_shape::Shape>,
     seed: u64,
     width: usize,
     scan: LaserScan,
@@ -54,6 +57,11 @@ impl ScanWriter {
             out,
             robots,
             scanner: Scanner::new(Walls::new(scenario.all_walls())),
+            shapes: if scenario.has_shapes() {
+                scenario.body_shapes()
+            } else {
+                Vec::new()
+            },
             seed: scenario.world.seed,
             width,
             scan: LaserScan::default(),
@@ -65,10 +73,15 @@ impl ScanWriter {
     pub fn write(&mut self, tick: u64, bodies: &[BodyState]) -> std::io::Result<()> {
         use std::fmt::Write as _;
         for (me, spec) in &self.robots {
-            if !self
-                .scanner
-                .scan_robot(&mut self.scan, self.seed, tick, *me, spec, bodies)
-            {
+            if !self.scanner.scan_robot(
+                &mut self.scan,
+                self.seed,
+                tick,
+                *me,
+                spec,
+                bodies,
+                &self.shapes,
+            ) {
                 continue;
             }
             self.line.clear();

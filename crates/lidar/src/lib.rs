@@ -6,19 +6,21 @@
 //! The ranges come from rapier's geometry (its re-exported parry2d): the
 //! static walls (the arena, `[[wall]]` segments, a map's traced outlines)
 //! are one [`Polyline`] whose bounding-volume hierarchy is built once per
-//! scanner ([`Walls::new`]); the discs (other robots, obstacles) of each
-//! scan are cast as balls ([`ray_toi_with_ball`]), through a [`Bvh`] of
-//! their boxes when there are many. Each beam is one ray cast against the
-//! walls, then against the discs nearer than the wall it hit. parry works
-//! in f32 here (rapier2d's `Real`): the discs are cast in coordinates
-//! relative to the scanner's origin, so a range is exact to f32 rounding of
-//! the shapes near the robot; the walls in world coordinates (an error of
-//! about 1e-7 of the map's coordinates).
+//! scanner ([`Walls::new`]); the other bodies of each scan (robots,
+//! obstacles: [`Body`]) are cast as they are: a disc as a ball
+//! ([`ray_toi_with_ball`]), a rectangle or convex polygon as parry's
+//! [`ConvexPolygon`] of its corners at the body's heading (GJK's ray cast),
+//! through a [`Bvh`] of their boxes when there are many. Each beam is one
+//! ray cast against the walls, then against the bodies nearer than the
+//! wall it hit. parry works in f32 here (rapier2d's `Real`): the bodies are
+//! cast in coordinates relative to the scanner's origin, so a range is
+//! exact to f32 rounding of the shapes near the robot; the walls in world
+//! coordinates (an error of about 1e-7 of the map's coordinates).
 //!
 //! The scan keeps ROS `sensor_msgs/LaserScan`'s meanings (see
 //! [`mrsim_planners::lidar`]): `ranges[k]` is the distance from the robot's
 //! centre along beam `k` to the first surface, `+inf` when nothing lies
-//! within `range_max`; a ray starting inside a disc reads 0. Noise, when
+//! within `range_max`; a ray starting inside a body reads 0. Noise, when
 //! asked for, is added to each hit's range (Gaussian, standard deviation
 //! `noise`, drawn from [`Rng::lidar`], a stream per robot and tick, once
 //! per hit beam in beam order) and clamped to [0, range_max]; misses stay
@@ -30,7 +32,7 @@
 #![warn(missing_docs)]
 
 use mrsim_planners::lidar::{LaserScan, LidarConfig};
-use mrsim_planners::{Segment, Vec2};
+use mrsim_planners::{Pose, Segment, Shape, Vec2};
 use mrsim_proto::BodyState;
 use mrsim_scenario::rng::Rng;
 use mrsim_scenario::{Lidar, RobotSpec};
@@ -39,11 +41,93 @@ use rapier2d::parry::math::{Real, Vector};
 use rapier2d::parry::partitioning::{Bvh, BvhBuildStrategy, TraversalAction};
 use rapier2d::parry::query::details::ray_toi_with_ball;
 use rapier2d::parry::query::{Ray, RayCast};
-use rapier2d::parry::shape::Polyline;
+use rapier2d::parry::shape::{ConvexPolygon, Polyline};
 
-/// Above this many discs within range, a scan casts its rays through a
-/// [`Bvh`] of the discs' boxes instead of against each disc.
-const DISCS_BRUTE_FORCE: usize = 24;
+/// Above this many bodies within range, a scan casts its rays through a
+/// [`Bvh`] of the bodies' boxes instead of against each body.
+const BODIES_BRUTE_FORCE: usize = 24;
+
+/// A body a scan casts its rays against: where it is, its heading and its
+/// shape (body frame, x along the heading).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Body {
+    /// Position, scenario units.
+    pub position: Vec2,
+    /// Heading, rad counter-clockwise from +x (a disc's does not matter).
+    pub heading: f64,
+    /// Disc, rectangle or convex polygon.
+    pub shape: Shape,
+}
+
+impl Body {
+    /// The disc of `radius` at `position`.
+    pub fn disc(position: Vec2, radius: f64) -> Self {
+        Self {
+            position,
+            heading: 0.0,
+            shape: Shape::disc(radius),
+        }
+    }
+}
+
+impl From<(Vec2, f64)> for Body {
+    /// A disc: (centre, radius).
+    fn from((position, radius): (Vec2, f64)) -> Self {
+        Self::disc(position, radius)
+    }
+}
+
+/// A body of one scan, relative to the scanner's origin.
+#[derive(Debug, Clone)]
+enum Target {
+    /// Centre and radius.
+    Disc(Vector, Real),
+    /// The corners at the body's pose.
+    Polygon(ConvexPolygon),
+}
+
+impl Target {
+    /// The body `b`, seen from `origin`, if some of it may lie within
+    /// `range` of it (by the disc around it).
+    fn of(b: &Body, origin: Vec2, range: f64) -> Option<Self> {
+        let d = b.position - origin;
+        let r = b.shape.circumradius();
+        if d.norm() - r > range {
+            return None;
+        }
+        let disc = Target::Disc(Vector::new(d.x as Real, d.y as Real), r as Real);
+        let Some(placed) = b.shape.placed(Pose::new([d.x, d.y], b.heading)) else {
+            return Some(disc);
+        };
+        let points = placed
+            .points()
+            .iter()
+            .map(|p| Vector::new(p[0] as Real, p[1] as Real))
+            .collect();
+        // The corners as given (a validated convex polygon, kept whole: the
+        // simplifying constructor would drop corners turning by less than
+        // about a degree); corners that f32 makes one (a body far smaller
+        // than its distance) leave the disc around it.
+        Some(ConvexPolygon::from_convex_polyline_unmodified(points).map_or(disc, Target::Polygon))
+    }
+
+    fn aabb(&self) -> Aabb {
+        match self {
+            Target::Disc(c, r) => Aabb::new(*c - Vector::splat(*r), *c + Vector::splat(*r)),
+            Target::Polygon(p) => p.local_aabb(),
+        }
+    }
+
+    /// The distance along `ray` (from the scanner's origin) to the body,
+    /// if it is met within `max` (0 from inside).
+    fn cast(&self, ray: &Ray, max: Real) -> Option<Real> {
+        match self {
+            Target::Disc(c, r) => ray_toi_with_ball(*c, *r, ray, true).1,
+            Target::Polygon(p) => p.cast_local_ray(ray, max, true),
+        }
+        .filter(|t| *t <= max)
+    }
+}
 
 /// The static walls of a run, as one ray-castable shape built once.
 #[derive(Clone)]
@@ -107,9 +191,9 @@ pub fn config_of(l: &Lidar) -> LidarConfig {
 #[derive(Debug, Clone)]
 pub struct Scanner {
     walls: Walls,
-    /// The discs within range of this scan: centre relative to the
-    /// scanner's origin, radius.
-    discs: Vec<(Vector, Real)>,
+    /// The bodies within range of this scan, relative to the scanner's
+    /// origin.
+    targets: Vec<Target>,
 }
 
 impl Scanner {
@@ -117,7 +201,7 @@ impl Scanner {
     pub fn new(walls: Walls) -> Self {
         Self {
             walls,
-            discs: Vec::new(),
+            targets: Vec::new(),
         }
     }
 
@@ -127,10 +211,14 @@ impl Scanner {
     }
 
     /// The scan of robot `me` (entry `spec`) among `bodies` (every body of
-    /// the snapshot, the robot itself skipped) and the walls, into `out`,
-    /// with the noise of robot `me` at `tick` under `seed`; `false` (and
-    /// `out` untouched) if the robot has no sensor or is not in `bodies`.
+    /// the snapshot, the robot itself skipped, each at its heading) and the
+    /// walls, into `out`, with the noise of robot `me` at `tick` under
+    /// `seed`; `false` (and `out` untouched) if the robot has no sensor or
+    /// is not in `bodies`. Body `k`'s shape is `shapes[k]`
+    /// ([`mrsim_scenario::Scenario::body_shapes`]); a body past the end of
+    /// `shapes` (every body, when it is empty) is the disc of its radius.
     /// The agent's observation and the world's scan.csv both call this.
+    #[allow(clippy::too_many_arguments)]
     pub fn scan_robot(
         &mut self,
         out: &mut LaserScan,
@@ -139,6 +227,7 @@ impl Scanner {
         me: usize,
         spec: &RobotSpec,
         bodies: &[BodyState],
+        shapes: &[Shape],
     ) -> bool {
         let (Some(sensor), Some(s)) = (&spec.sensor, bodies.get(me)) else {
             return false;
@@ -153,23 +242,30 @@ impl Scanner {
                 .iter()
                 .enumerate()
                 .filter(|(k, _)| *k != me)
-                .map(|(_, b)| (Vec2::new(b.position[0], b.position[1]), b.radius)),
+                .map(|(k, b)| Body {
+                    position: Vec2::new(b.position[0], b.position[1]),
+                    heading: b.heading,
+                    shape: match shapes.get(k) {
+                        Some(s @ Shape::Polygon(_)) => *s,
+                        _ => Shape::disc(b.radius),
+                    },
+                }),
             &mut || rng.gaussian(),
         );
         true
     }
 
     /// Fills `out` with the scan from `origin` heading `heading` (rad)
-    /// among `discs` (centre, radius) and the walls. `gaussian` draws the
-    /// noise (once per hit beam, in beam order, only when
-    /// `config.noise > 0`).
-    pub fn scan(
+    /// among `bodies` ([`Body`], or (centre, radius) for discs) and the
+    /// walls. `gaussian` draws the noise (once per hit beam, in beam order,
+    /// only when `config.noise > 0`).
+    pub fn scan<B: Into<Body>>(
         &mut self,
         out: &mut LaserScan,
         config: &LidarConfig,
         origin: Vec2,
         heading: f64,
-        discs: impl IntoIterator<Item = (Vec2, f64)>,
+        bodies: impl IntoIterator<Item = B>,
         gaussian: &mut dyn FnMut() -> f64,
     ) {
         let (angle_min, inc) = config.angles();
@@ -180,20 +276,16 @@ impl Scanner {
         out.ranges.clear();
         let beams = config.beams.max(1) as usize;
         let max_toi = range as Real;
-        self.discs.clear();
-        for (c, r) in discs {
-            let d = c - origin;
-            if d.norm() - r <= range {
-                self.discs
-                    .push((Vector::new(d.x as Real, d.y as Real), r as Real));
-            }
-        }
-        let bvh = (self.discs.len() > DISCS_BRUTE_FORCE).then(|| {
+        self.targets.clear();
+        self.targets.extend(
+            bodies
+                .into_iter()
+                .filter_map(|b| Target::of(&b.into(), origin, range)),
+        );
+        let bvh = (self.targets.len() > BODIES_BRUTE_FORCE).then(|| {
             Bvh::from_iter(
                 BvhBuildStrategy::Binned,
-                self.discs.iter().enumerate().map(|(i, (c, r))| {
-                    (i, Aabb::new(*c - Vector::splat(*r), *c + Vector::splat(*r)))
-                }),
+                self.targets.iter().enumerate().map(|(i, t)| (i, t.aabb())),
             )
         });
         let world_origin = Vector::new(origin.x as Real, origin.y as Real);
@@ -209,16 +301,11 @@ impl Scanner {
             });
             let local = Ray::new(Vector::ZERO, dir);
             let limit = best.min(max_toi);
-            let disc = |i: u32, so_far: Real| {
-                let (c, r) = self.discs[i as usize];
-                ray_toi_with_ball(c, r, &local, true)
-                    .1
-                    .filter(|t| *t <= so_far)
-            };
+            let body = |i: u32, so_far: Real| self.targets[i as usize].cast(&local, so_far);
             let hit = match &bvh {
-                Some(bvh) => cast(bvh, &local, limit, disc),
-                None => (0..self.discs.len() as u32)
-                    .filter_map(|i| disc(i, limit))
+                Some(bvh) => cast(bvh, &local, limit, body),
+                None => (0..self.targets.len() as u32)
+                    .filter_map(|i| body(i, limit))
                     .reduce(Real::min),
             };
             if let Some(t) = hit {

@@ -1,11 +1,11 @@
 //! The scanner's ranges (parry's ray casts, f32) against exact analytic
-//! distances (f64) to known shapes: discs, segments, rectangles and the
-//! office map's traced outlines. The analytic ray tests here are the
+//! distances (f64) to known shapes: discs, segments, rectangles, turned
+//! rectangle and polygon bodies, and the office map's traced outlines. The analytic ray tests here are the
 //! oracle only; the simulator uses `mrsim_lidar`.
 
-use mrsim_lidar::{Scanner, Walls};
+use mrsim_lidar::{Body, Scanner, Walls};
 use mrsim_planners::lidar::{LaserScan, LidarConfig};
-use mrsim_planners::{Segment, Vec2};
+use mrsim_planners::{Polygon, Pose, Segment, Shape, Vec2};
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
 /// f32 rounding of shapes a few to a few tens of units from the origin,
@@ -406,11 +406,278 @@ fn a_robot_scans_the_others_and_not_itself_and_one_without_a_sensor_gets_none() 
         .collect();
     let mut scanner = Scanner::new(Walls::new(sc.all_walls()));
     let mut s = LaserScan::default();
-    assert!(scanner.scan_robot(&mut s, 1, 0, 0, &sc.robots[0], &bodies));
+    assert!(scanner.scan_robot(&mut s, 1, 0, 0, &sc.robots[0], &bodies, &[]));
     // Beams -pi, -pi/2, 0, pi/2: the arena at 5, b at 1.5 on beam 2.
     assert!((s.ranges[0] - 5.0).abs() < TOL, "{:?}", s.ranges);
     assert!((s.ranges[1] - 5.0).abs() < TOL);
     assert!((s.ranges[2] - 1.5).abs() < TOL);
     assert!((s.ranges[3] - 5.0).abs() < TOL);
-    assert!(!scanner.scan_robot(&mut s, 1, 0, 1, &sc.robots[1], &bodies));
+    assert!(!scanner.scan_robot(&mut s, 1, 0, 1, &sc.robots[1], &bodies, &[]));
+}
+
+/// One beam along `heading` from `o` among `bodies`, range 10.
+fn beam(o: Vec2, heading: f64, bodies: &[Body]) -> f64 {
+    let mut cfg = full(1, 10.0);
+    cfg.fov = 0.1;
+    let mut s = LaserScan::default();
+    Scanner::new(Walls::new([])).scan(
+        &mut s,
+        &cfg,
+        o,
+        heading,
+        bodies.iter().copied(),
+        &mut no_noise,
+    );
+    s.ranges[0]
+}
+
+fn rectangle(length: f64, width: f64) -> Shape {
+    Shape::Polygon(Polygon::rectangle(length, width).expect("a rectangle"))
+}
+
+#[test]
+fn a_rectangle_turned_30_degrees_reads_its_sides_not_its_disc() {
+    // A 2 x 1 box centred at c = (4, 0), heading 30 degrees: its length
+    // along u = (cos 30, sin 30) = (sqrt 3 / 2, 1 / 2), its width along
+    // v = (-1 / 2, sqrt 3 / 2); it is the points c + a u + b v with
+    // |a| <= 1 and |b| <= 1 / 2. Its circumscribed disc has radius
+    // sqrt(1 + 1/4) = 1.118.
+    let (deg30, c) = (PI / 6.0, Vec2::new(4.0, 0.0));
+    let rect = Body {
+        position: c,
+        heading: deg30,
+        shape: rectangle(2.0, 1.0),
+    };
+    let u = Vec2::new(deg30.cos(), deg30.sin());
+    let v = Vec2::new(-deg30.sin(), deg30.cos());
+    // From the origin along +x: the point (t, 0) is at a = (t - 4) sqrt 3 / 2,
+    // b = -(t - 4) / 2; the box holds it from b = 1/2, t = 3 (a = -0.87,
+    // within the length): the long side at 3, where the disc is met at
+    // 4 - 1.118 = 2.882.
+    let r = beam(Vec2::zeros(), 0.0, &[rect]);
+    assert!((r - 3.0).abs() < TOL, "{r}");
+    // From c - 3u along u (heading 30 degrees): the near end, a = -1, is
+    // 3 - 1 = 2 away.
+    let r = beam(c - 3.0 * u, deg30, &[rect]);
+    assert!((r - 2.0).abs() < TOL, "{r}");
+    // From c - 3v along v (heading 120 degrees): the long side b = -1/2 is
+    // 3 - 1/2 = 2.5 away.
+    let r = beam(c - 3.0 * v, deg30 + FRAC_PI_2, &[rect]);
+    assert!((r - 2.5).abs() < TOL, "{r}");
+    // Along u but 0.8 to its side (b = 0.8 > 1/2): past the box, though
+    // 0.8 from the centre, within its disc.
+    assert!(beam(c - 3.0 * u + 0.8 * v, deg30, &[rect]).is_infinite());
+    // The same box unturned (heading 0), from the origin along +x: its
+    // end x = 3.
+    let flat = Body {
+        heading: 0.0,
+        ..rect
+    };
+    assert!((beam(Vec2::zeros(), 0.0, &[flat]) - 3.0).abs() < TOL);
+    // And along +y from (4, -2): flat, its long side y = -1/2 at 1.5;
+    // turned, the point (4, y) is at a = y / 2, b = y sqrt 3 / 2, which
+    // the box holds from b = -1/2, y = -1 / sqrt 3: 2 - 0.577 away.
+    assert!((beam(Vec2::new(4.0, -2.0), FRAC_PI_2, &[flat]) - 1.5).abs() < TOL);
+    let r = beam(Vec2::new(4.0, -2.0), FRAC_PI_2, &[rect]);
+    assert!((r - (2.0 - 1.0 / 3f64.sqrt())).abs() < TOL, "{r}");
+}
+
+#[test]
+fn a_triangle_reads_its_edges_and_zero_from_inside() {
+    // The triangle (0, 0), (2, 0), (0, 2) of its frame at (5, 0) turned a
+    // quarter turn, (x, y) -> (5 - y, x): the world's (5, 0), (5, 2),
+    // (3, 0), the region x <= 5, y >= 0, x - y >= 3 (the hypotenuse on
+    // x - y = 3). Its disc about its origin (5, 0) has radius 2.
+    let tri = Body {
+        position: Vec2::new(5.0, 0.0),
+        heading: FRAC_PI_2,
+        shape: Shape::Polygon(
+            Polygon::new(&[[0.0, 0.0], [2.0, 0.0], [0.0, 2.0]]).expect("a triangle"),
+        ),
+    };
+    // From (0, 1) along +x: the hypotenuse at x = 1 + 3 = 4 (the disc
+    // would be met at 5 - sqrt 3 = 3.27).
+    let r = beam(Vec2::new(0.0, 1.0), 0.0, &[tri]);
+    assert!((r - 4.0).abs() < TOL, "{r}");
+    // From (8, 1) along -x: the side x = 5, 3 away.
+    let r = beam(Vec2::new(8.0, 1.0), PI, &[tri]);
+    assert!((r - 3.0).abs() < TOL, "{r}");
+    // From (4, -2) along +y: the side y = 0, 2 away.
+    let r = beam(Vec2::new(4.0, -2.0), FRAC_PI_2, &[tri]);
+    assert!((r - 2.0).abs() < TOL, "{r}");
+    // From (0, 1) at 45 degrees: the line x - y = -1, parallel to the
+    // hypotenuse and outside it (the disc, 6 / sqrt 2 = 4.2 from its
+    // centre, is passed by too).
+    assert!(beam(Vec2::new(0.0, 1.0), PI / 4.0, &[tri]).is_infinite());
+    // From (6, 3.5) heading -135 degrees, (-1, -1) / sqrt 2: the line
+    // x - y = 2.5, just left of the hypotenuse: a miss, where the disc,
+    // 2.5 / sqrt 2 = 1.77 from its centre, would be met.
+    assert!(beam(Vec2::new(6.0, 3.5), -3.0 * PI / 4.0, &[tri]).is_infinite());
+    // Inside, at (4.5, 0.5): every beam reads 0.
+    let mut s = LaserScan::default();
+    Scanner::new(Walls::new([])).scan(
+        &mut s,
+        &full(8, 5.0),
+        Vec2::new(4.5, 0.5),
+        0.0,
+        [tri],
+        &mut no_noise,
+    );
+    assert!(s.ranges.iter().all(|r| *r == 0.0), "{:?}", s.ranges);
+}
+
+/// Distance along the unit ray `p + t d` to the convex polygon `pts`
+/// (counter-clockwise): 0 if `p` is inside, else the nearest edge crossed.
+fn ray_polygon(p: Vec2, d: Vec2, pts: &[[f64; 2]]) -> Option<f64> {
+    let n = pts.len();
+    let at = |k: usize| Vec2::new(pts[k % n][0], pts[k % n][1]);
+    let cross = |u: Vec2, v: Vec2| u.x * v.y - u.y * v.x;
+    if (0..n).all(|k| cross(at(k + 1) - at(k), p - at(k)) >= 0.0) {
+        return Some(0.0);
+    }
+    (0..n)
+        .filter_map(|k| {
+            ray_segment(
+                p,
+                d,
+                &Segment {
+                    a: at(k),
+                    b: at(k + 1),
+                },
+            )
+        })
+        .reduce(f64::min)
+}
+
+#[test]
+fn random_polygons_and_discs_read_what_the_exact_ray_tests_read() {
+    let mut next = lcg(11);
+    let o = Vec2::new(0.2, -0.1);
+    // 10 bodies (one cast each) and 60 (through their hierarchy): discs,
+    // rectangles and pentagons at random headings, none over the scanner.
+    for n in [10, 60] {
+        let bodies: Vec<Body> = (0..n)
+            .map(|k| {
+                let position = Vec2::new(7.0 * next(), 7.0 * next());
+                let heading = PI * next();
+                let shape = match k % 3 {
+                    0 => Shape::disc(0.1 + 0.3 * next().abs()),
+                    1 => rectangle(0.2 + 0.8 * next().abs(), 0.1 + 0.4 * next().abs()),
+                    _ => {
+                        let r = 0.2 + 0.4 * next().abs();
+                        let pts: Vec<[f64; 2]> = (0..5)
+                            .map(|i| {
+                                let a = TAU * i as f64 / 5.0 + 0.3 * next();
+                                [r * a.cos(), r * a.sin()]
+                            })
+                            .collect();
+                        Shape::Polygon(Polygon::new(&pts).expect("a convex pentagon"))
+                    }
+                };
+                Body {
+                    position,
+                    heading,
+                    shape,
+                }
+            })
+            .filter(|b| (b.position - o).norm() > b.shape.circumradius() + 0.05)
+            .collect();
+        let exact = |a: f64| {
+            let d = Vec2::new(a.cos(), a.sin());
+            let t = bodies
+                .iter()
+                .filter_map(|b| {
+                    match b
+                        .shape
+                        .placed(Pose::new([b.position.x, b.position.y], b.heading))
+                    {
+                        Some(p) => ray_polygon(o, d, p.points()),
+                        None => ray_disc(o, d, b.position, b.shape.circumradius()),
+                    }
+                })
+                .fold(f64::INFINITY, f64::min);
+            if t > 9.0 { f64::INFINITY } else { t }
+        };
+        let cfg = full(720, 9.0);
+        let mut s = LaserScan::default();
+        Scanner::new(Walls::new([])).scan(
+            &mut s,
+            &cfg,
+            o,
+            0.4,
+            bodies.iter().copied(),
+            &mut no_noise,
+        );
+        let (a0, inc) = cfg.angles();
+        let close = |r: f64, e: f64| {
+            (r.is_infinite() && e.is_infinite()) || (r - e).abs() <= TOL * e.max(1.0)
+        };
+        let (mut hits, mut grazing) = (0, 0);
+        for (k, r) in s.ranges.iter().enumerate() {
+            let a = 0.4 + a0 + inc * k as f64;
+            let e = exact(a);
+            hits += usize::from(e.is_finite());
+            if close(*r, e) {
+                continue;
+            }
+            let near = [-1e-5, 1e-5].iter().any(|da| close(*r, exact(a + da)));
+            assert!(near, "{n} bodies, beam {k} at {a} rad: {r} vs exact {e}");
+            grazing += 1;
+        }
+        assert!(grazing <= 2, "{grazing} grazing beams among {n} bodies");
+        assert!(hits > 100, "only {hits} beams meet a body among {n}");
+    }
+}
+
+#[test]
+fn a_robot_scans_another_robots_rectangle_at_its_heading() {
+    // Robot b is a 1 x 0.4 rectangle (radius sqrt(0.29) = 0.539) at
+    // (2, 0): heading 0, its end x = 1.5 is 1.5 from a; turned a quarter
+    // turn, its long side x = 2 - 0.2 is 1.8 away.
+    let text = r#"
+        [[robot]]
+        name = "a"
+        start = [0.0, 0.0]
+        goal = [1.0, 0.0]
+        planner = "homing"
+        radius = 0.25
+        sensor = { kind = "lidar", beams = 4, fov_deg = 360, range = 8.0 }
+        [[robot]]
+        name = "b"
+        start = [2.0, 0.0]
+        goal = [3.0, 0.0]
+        planner = "homing"
+        shape = { kind = "rectangle", length = 1.0, width = 0.4 }
+    "#;
+    let sc = mrsim_scenario::parse(text, "inline.toml")
+        .expect("scenario")
+        .scenario;
+    let shapes = sc.body_shapes();
+    let body = |heading: f64| {
+        sc.robots
+            .iter()
+            .enumerate()
+            .map(|(i, r)| mrsim_proto::BodyState {
+                id: i as u32,
+                position: r.start,
+                radius: r.radius,
+                heading: if i == 1 { heading } else { 0.0 },
+                ..Default::default()
+            })
+            .collect::<Vec<_>>()
+    };
+    let mut scanner = Scanner::new(Walls::new(sc.all_walls()));
+    let mut s = LaserScan::default();
+    // Beam 2 of -pi, -pi/2, 0, pi/2 points at b.
+    assert!(scanner.scan_robot(&mut s, 1, 0, 0, &sc.robots[0], &body(0.0), &shapes));
+    assert!((s.ranges[2] - 1.5).abs() < TOL, "{:?}", s.ranges);
+    assert!(scanner.scan_robot(&mut s, 1, 0, 0, &sc.robots[0], &body(FRAC_PI_2), &shapes));
+    assert!((s.ranges[2] - 1.8).abs() < TOL, "{:?}", s.ranges);
+    // Without the shapes, the disc around it: 2 - 0.539.
+    assert!(scanner.scan_robot(&mut s, 1, 0, 0, &sc.robots[0], &body(FRAC_PI_2), &[]));
+    assert!(
+        (s.ranges[2] - (2.0 - 0.29f64.sqrt())).abs() < TOL,
+        "{:?}",
+        s.ranges
+    );
 }

@@ -256,7 +256,8 @@ pub struct Pump {
     bodies: Vec<BodyState>,
     stats: StatsHeader,
     robots: Vec<RobotStats>,
-    scanner: Option<Scanner>,
+    /// The scanner and every body's shape (empty: all discs).
+    scanner: Option<(Scanner, Vec<mrsim_planners::Shape>)>,
     scan: LaserScan,
     started: Option<Instant>,
     last: Option<Instant>,
@@ -364,7 +365,12 @@ impl Pump {
             .iter()
             .any(|r| r.sensor.is_some_and(|s| s.record))
         {
-            self.scanner = Some(Scanner::new(Walls::new(scenario.all_walls())));
+            let shapes = if scenario.has_shapes() {
+                scenario.body_shapes()
+            } else {
+                Vec::new()
+            };
+            self.scanner = Some((Scanner::new(Walls::new(scenario.all_walls())), shapes));
         }
         self.scenario = Some(scenario);
     }
@@ -413,7 +419,7 @@ impl Pump {
             })
             .collect();
         let mut scans = serde_json::Map::new();
-        if let (Some(scanner), Some(scenario)) = (&mut self.scanner, &self.scenario) {
+        if let (Some((scanner, shapes)), Some(scenario)) = (&mut self.scanner, &self.scenario) {
             for (i, r) in scenario.robots.iter().enumerate() {
                 if !r.sensor.is_some_and(|s| s.record) {
                     continue;
@@ -425,6 +431,7 @@ impl Pump {
                     i,
                     r,
                     &self.bodies,
+                    shapes,
                 ) {
                     let ranges: Vec<Value> = self
                         .scan

@@ -9,18 +9,17 @@ fn scene(n: usize) -> Vec<Sensed> {
     (0..n)
         .map(|i| {
             let a = i as f64 * 0.7;
-            Sensed {
-                id: i as u32 + 1,
-                kind: if i % 2 == 0 {
+            Sensed::disc(
+                i as u32 + 1,
+                if i % 2 == 0 {
                     BodyKind::Robot
                 } else {
                     BodyKind::Obstacle
                 },
-                position: Vec2::new(5.0 + 3.0 * a.cos() * (1.0 + i as f64 * 0.1), 3.0 * a.sin()),
-                velocity: Vec2::new(-(a.sin()), a.cos()),
-                acceleration: Vec2::zeros(),
-                radius: 0.3,
-            }
+                Vec2::new(5.0 + 3.0 * a.cos() * (1.0 + i as f64 * 0.1), 3.0 * a.sin()),
+                Vec2::new(-(a.sin()), a.cos()),
+                0.3,
+            )
         })
         .collect()
 }
@@ -189,14 +188,13 @@ fn bench_orca_crowd(c: &mut Criterion) {
         .map(|k| {
             let (i, j) = ((k % 25) as f64 - 12.0, (k / 25) as f64 - 5.0);
             let wobble = (k as f64 * 1.7).sin();
-            Sensed {
-                id: k as u32,
-                kind: BodyKind::Robot,
-                position: Vec2::new(i * 4.0 + 0.3 * wobble, j * 4.0 - 0.2 * wobble),
-                velocity: Vec2::new((k as f64).cos(), (k as f64 * 0.3).sin()),
-                acceleration: Vec2::zeros(),
-                radius: 1.5,
-            }
+            Sensed::disc(
+                k as u32,
+                BodyKind::Robot,
+                Vec2::new(i * 4.0 + 0.3 * wobble, j * 4.0 - 0.2 * wobble),
+                Vec2::new((k as f64).cos(), (k as f64 * 0.3).sin()),
+                1.5,
+            )
         })
         .collect();
     let obs = Observation {

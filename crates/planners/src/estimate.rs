@@ -199,12 +199,14 @@ mod tests {
     #[test]
     fn apply_overwrites_motion_and_forgets_bodies_out_of_view() {
         let body = |id: u32, x: f64| Sensed {
-            id,
-            kind: BodyKind::Obstacle,
-            position: Vec2::new(x, 0.0),
-            velocity: Vec2::new(99.0, 99.0),
             acceleration: Vec2::new(99.0, 99.0),
-            radius: 0.1,
+            ..Sensed::disc(
+                id,
+                BodyKind::Obstacle,
+                Vec2::new(x, 0.0),
+                Vec2::new(99.0, 99.0),
+                0.1,
+            )
         };
         let mut e = VelocityEstimator::new();
         e.apply(0.0, &mut [body(1, 0.0), body(2, 0.0)]);

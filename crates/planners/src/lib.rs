@@ -8,8 +8,9 @@
 //!
 //! Why the crate is shaped as it is:
 //!
-//! - **Pure planners.** This crate depends on nalgebra and thiserror only: the
-//!   agents bring the transport, the world brings rapier. What a planner
+//! - **Pure planners.** This crate depends on nalgebra, thiserror and the
+//!   leaf `mrsim-shape` (the bodies' shapes) only: the agents bring the
+//!   transport, the world brings rapier. What a planner
 //!   does is decided by its observation and its own state alone, which is
 //!   what makes the lockstep runs reproducible to the byte.
 //! - **One module per method**, named after it, whose `//!` cites the paper
@@ -57,7 +58,7 @@ pub mod unicycle;
 pub mod vdf;
 
 pub use lidar::LaserScan;
-pub use mrsim_shape::{Polygon, Pose, Shape};
+pub use mrsim_shape::{Placed, Polygon, Pose, Shape};
 pub use params::{ParamError, ParamReader, ParamValue, Params};
 pub use registry::{
     BuildError, EXTERNAL, Entry, Factory, FromParams, PLANNERS, PlannerInfo, ROS2, RegisterError,
@@ -77,6 +78,32 @@ pub enum BodyKind {
 }
 
 /// Another body as the robot senses it.
+///
+/// Its [`shape`](Self::shape) is given in its body frame (x along
+/// [`heading`](Self::heading)), and [`radius`](Self::radius) is always the
+/// radius of the disc around it, so a planner that takes every body for a
+/// disc keeps working, conservatively, when some are rectangles or
+/// polygons. [`Self::placed`] gives a polygon's corners in the world.
+///
+/// ```
+/// use mrsim_planners::{BodyKind, Polygon, Sensed, Shape, Vec2};
+/// // A disc (what every body was before shapes): heading 0.
+/// let d = Sensed::disc(3, BodyKind::Robot, Vec2::new(1.0, 0.0), Vec2::zeros(), 0.25);
+/// assert_eq!((d.radius, d.heading, d.shape), (0.25, 0.0, Shape::disc(0.25)));
+/// assert!(d.placed().is_none());
+/// // A 2 x 1 box turned a quarter turn: its radius is its half diagonal.
+/// let rect = Shape::Polygon(Polygon::rectangle(2.0, 1.0).unwrap());
+/// let b = Sensed::disc(4, BodyKind::Obstacle, Vec2::new(5.0, 0.0), Vec2::zeros(), 0.0)
+///     .shaped(rect, std::f64::consts::FRAC_PI_2);
+/// assert!((b.radius - 1.25f64.sqrt()).abs() < 1e-12);
+/// let corners = b.placed().unwrap();
+/// // Its length now lies along y: the first corner, (-1, -0.5) in its
+/// // frame, is at (5.5, -1) in the world.
+/// let c = corners.points()[0];
+/// assert!((c[0] - 5.5).abs() < 1e-12 && (c[1] + 1.0).abs() < 1e-12);
+/// // From (2, 0) its near side, x = 4.5, is 2.5 away; its disc's 2.38.
+/// assert!((b.distance_to(Vec2::new(2.0, 0.0)) - 2.5).abs() < 1e-12);
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sensed {
     /// The body's id in the world (stable for the run).
@@ -91,8 +118,68 @@ pub struct Sensed {
     /// Acceleration estimated from successive positions; zero when the
     /// velocity source is the truth.
     pub acceleration: Vec2,
-    /// Disc radius (0 for a point).
+    /// The radius of the disc the body fits in: a disc's own radius (0 for
+    /// a point), a polygon's circumscribed radius (the farthest vertex
+    /// from its position).
     pub radius: f64,
+    /// The body's heading, rad counter-clockwise from +x: the direction of
+    /// its shape's x axis (a unicycle's turns, an obstacle's is its
+    /// scenario's `heading_deg`, a holonomic robot's stays at its start's).
+    pub heading: f64,
+    /// The body's shape in its body frame (origin at [`Self::position`],
+    /// x along [`Self::heading`]): a disc, a rectangle or a convex polygon.
+    pub shape: Shape,
+}
+
+impl Sensed {
+    /// A disc of `radius` (0: a point) at `position` moving at `velocity`,
+    /// with no acceleration and heading 0: how a body is sensed when it
+    /// has no other shape.
+    pub fn disc(id: u32, kind: BodyKind, position: Vec2, velocity: Vec2, radius: f64) -> Self {
+        Self {
+            id,
+            kind,
+            position,
+            velocity,
+            acceleration: Vec2::zeros(),
+            radius,
+            heading: 0.0,
+            shape: Shape::disc(radius),
+        }
+    }
+
+    /// The body with `shape` at `heading` (rad), its radius the shape's
+    /// circumscribed one.
+    pub fn shaped(self, shape: Shape, heading: f64) -> Self {
+        Self {
+            radius: shape.circumradius(),
+            heading,
+            shape,
+            ..self
+        }
+    }
+
+    /// The body's pose: its position and heading.
+    pub fn pose(&self) -> Pose {
+        Pose::new([self.position.x, self.position.y], self.heading)
+    }
+
+    /// A polygon's vertices in the world (counter-clockwise); `None` for a
+    /// disc.
+    pub fn placed(&self) -> Option<Placed> {
+        self.shape.placed(self.pose())
+    }
+
+    /// The signed distance from point `p` to the body's surface, its true
+    /// shape at its heading: positive outside, negative inside (a disc's is
+    /// the distance to its centre less its radius). Less a robot's own
+    /// radius, the gap between a disc robot at `p` and the body.
+    pub fn distance_to(&self, p: Vec2) -> f64 {
+        match self.shape {
+            Shape::Disc { radius } => (p - self.position).norm() - radius,
+            Shape::Polygon(_) => mrsim_shape::signed_distance(&self.shape, self.pose(), [p.x, p.y]),
+        }
+    }
 }
 
 /// How the robot moves: the world's model and its limits.

@@ -9,9 +9,9 @@
 //!   planner, share of the snapshot and the recording);
 //! - a robot whose sensing range reaches across the whole scene (the
 //!   default range does) senses every other body each tick and keeps room
-//!   for them: `SENSED` bytes per other body, so such robots cost the
-//!   square of their number (10,000 of them: 6.4 GB); shorter ranges in a
-//!   crowd are not counted;
+//!   for them: `SENSED` bytes per other body (216, a `Sensed` with its
+//!   shape), so such robots cost the square of their number (10,000 of
+//!   them: 21.6 GB); shorter ranges in a crowd are not counted;
 //! - with one process per agent (shm, Zenoh), `PER_AGENT_PROCESS` for each
 //!   (an agent drives `robots_per_agent` robots).
 //!
@@ -38,8 +38,9 @@ pub const BASE: u64 = 64 << 20;
 /// crossing: the slope of the peak from 30,000 to 100,000 robots; rounded
 /// up).
 pub const PER_ROBOT: u64 = 20 << 10;
-/// Each body a robot senses and keeps room for (`mrsim_planners::Sensed`).
-pub const SENSED: u64 = 64;
+/// Each body a robot senses and keeps room for: one
+/// [`mrsim_planners::Sensed`], its shape (up to 8 corners) held in it.
+pub const SENSED: u64 = std::mem::size_of::<mrsim_planners::Sensed>() as u64;
 /// Each agent process's own memory (its proportional set size: its heap,
 /// iceoryx2 or Zenoh ports, its share of the binary), bytes.
 pub const PER_AGENT_PROCESS: u64 = 4 << 20;

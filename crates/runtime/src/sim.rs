@@ -16,7 +16,10 @@
 //! bodies (robots and obstacles within its sensing range, nearest centre
 //! first, ties by id), `[dx, dy, dvx, dvy, radius, 1]`: its position and
 //! velocity relative to the learner's, its radius, and 1 for "present";
-//! missing neighbours are all zeros.
+//! missing neighbours are all zeros. A rectangle's or polygon's radius is
+//! its circumscribed one (the vector stays of one size whatever the
+//! shapes); the built-in robots' planners see every body's shape and
+//! heading ([`mrsim_planners::Sensed`]).
 
 use crate::error::Invalid;
 use crate::validate::{ScenarioSource, Validated};
@@ -182,6 +185,7 @@ impl Sim {
     fn rebuild_drivers(&mut self) -> Result<(), SimError> {
         let s = &self.scenario;
         self.walls = mrsim_agents::observe::walls_of(&s.walls, s.world.arena);
+        let shapes = mrsim_agents::observe::shapes_of(s);
         self.builtins.clear();
         let scene = mrsim_agents::route::RouteScene::of(s);
         for (i, spec) in s.robots.iter().enumerate() {
@@ -207,6 +211,7 @@ impl Sim {
                     i,
                     s.robots.len() + s.obstacles.len(),
                     self.walls.clone(),
+                    shapes.clone(),
                 ),
                 path: (!spec.path.is_empty()).then(|| DesignatedPath {
                     points: spec.path.iter().map(|p| Vec2::new(p[0], p[1])).collect(),
@@ -532,5 +537,85 @@ mod tests {
         // b3 starts 11 m from its goal, behind three robots of its stream.
         assert!(d < 1.0, "b3 ends {d} m from its goal");
         assert!(!sim.info()[0].reached);
+    }
+
+    /// Stands still and keeps the bodies it sensed last.
+    struct Seer(Arc<std::sync::Mutex<Vec<mrsim_planners::Sensed>>>);
+
+    impl Planner for Seer {
+        fn plan(&mut self, obs: &mrsim_planners::Observation) -> Command {
+            if let Ok(mut seen) = self.0.lock() {
+                *seen = obs.others.to_vec();
+            }
+            Command::Velocity(Vec2::zeros())
+        }
+    }
+
+    #[test]
+    fn a_built_in_robot_senses_a_turned_rectangle_and_the_learner_its_circumscribed_radius() {
+        let dir = std::env::temp_dir().join(format!("mrsim-sim-box-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("a scratch folder");
+        let path = dir.join("box.toml");
+        std::fs::write(
+            &path,
+            r#"
+[world]
+dt = 0.1
+[[robot]]
+name = "learner"
+start = [0.0, 2.0]
+goal = [5.0, 2.0]
+[[robot]]
+name = "seer"
+start = [0.0, 0.0]
+goal = [0.0, -3.0]
+planner = "seer"
+[[obstacle]]
+name = "box"
+start = [3.0, 0.0]
+shape = { kind = "rectangle", length = 2.0, width = 1.0 }
+heading_deg = 30
+motion = { model = "static" }
+"#,
+        )
+        .expect("write the scenario");
+        let seen = Arc::new(std::sync::Mutex::new(Vec::new()));
+        let mut registry = Registry::builtin();
+        let log = seen.clone();
+        registry
+            .register_simple("seer", "stands and notes", move || Seer(log.clone()))
+            .expect("a new name");
+        let v = Validated::with_registry(
+            ScenarioSource {
+                path: Some(path),
+                ..Default::default()
+            },
+            Arc::new(registry),
+        )
+        .expect("valid");
+        let mut sim = Sim::new(v, &["learner".into()]).expect("a sim");
+        sim.step(&[Applied::Velocity([0.0, 0.0])]).expect("step");
+        let seen = seen.lock().expect("what it sensed").clone();
+        let b = seen.iter().find(|s| s.id == 2).expect("the box is sensed");
+        let rect = mrsim_planners::Shape::Polygon(
+            mrsim_planners::Polygon::rectangle(2.0, 1.0).expect("a rectangle"),
+        );
+        assert_eq!(b.shape, rect);
+        assert!(
+            (b.heading - 30f64.to_radians()).abs() < 1e-12,
+            "{}",
+            b.heading
+        );
+        assert!((b.radius - 1.25f64.sqrt()).abs() < 1e-12, "{}", b.radius);
+        // The learner's vector: the box's radius slot is its circumscribed
+        // radius (the seer, 2 m away, comes first; the box 3.6 m).
+        let mut obs = vec![0.0; observation_size(2)];
+        sim.observe_f64(2, &mut obs).expect("observe");
+        assert!(
+            (obs[10] - 3.0).abs() < 1e-6 && (obs[11] + 2.0).abs() < 1e-6,
+            "{obs:?}"
+        );
+        assert!((obs[14] - 1.25f64.sqrt()).abs() < 1e-12, "{obs:?}");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

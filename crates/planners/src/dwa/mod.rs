@@ -289,13 +289,14 @@ impl Planner for Dwa {
             // The scan's returns as still points, in the world's frame (a
             // holonomic robot's scan is taken with heading 0).
             let points: Vec<Sensed> = scan_points(obs)
-                .map(|q| Sensed {
-                    id: u32::MAX,
-                    kind: BodyKind::Obstacle,
-                    position: obs.me.position + q,
-                    velocity: Vec2::zeros(),
-                    acceleration: Vec2::zeros(),
-                    radius: 0.0,
+                .map(|q| {
+                    Sensed::disc(
+                        u32::MAX,
+                        BodyKind::Obstacle,
+                        obs.me.position + q,
+                        Vec2::zeros(),
+                        0.0,
+                    )
                 })
                 .collect();
             let mut seen = *obs;

@@ -90,14 +90,7 @@ impl RobotModel {
 
 /// A sensed body of `kind`, without acceleration (the truth's estimate).
 pub fn sensed(id: u32, kind: BodyKind, position: Vec2, velocity: Vec2, radius: f64) -> Sensed {
-    Sensed {
-        id,
-        kind,
-        position,
-        velocity,
-        acceleration: Vec2::zeros(),
-        radius,
-    }
+    Sensed::disc(id, kind, position, velocity, radius)
 }
 
 /// A sensed robot (see [`sensed`]).

@@ -133,21 +133,23 @@ impl Sim {
             .iter()
             .enumerate()
             .filter(|(j, _)| *j != i)
-            .map(|(_, r)| Sensed {
-                id: r.state.id,
-                kind: BodyKind::Robot,
-                position: r.state.position,
-                velocity: r.state.velocity,
-                acceleration: Vec2::zeros(),
-                radius: r.state.radius,
+            .map(|(_, r)| {
+                Sensed::disc(
+                    r.state.id,
+                    BodyKind::Robot,
+                    r.state.position,
+                    r.state.velocity,
+                    r.state.radius,
+                )
             });
-        let obstacles = self.obstacles.iter().enumerate().map(|(k, o)| Sensed {
-            id: n + k as u32,
-            kind: BodyKind::Obstacle,
-            position: o.position,
-            velocity: o.velocity,
-            acceleration: Vec2::zeros(),
-            radius: o.radius,
+        let obstacles = self.obstacles.iter().enumerate().map(|(k, o)| {
+            Sensed::disc(
+                n + k as u32,
+                BodyKind::Obstacle,
+                o.position,
+                o.velocity,
+                o.radius,
+            )
         });
         robots.chain(obstacles).collect()
     }
