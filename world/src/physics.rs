@@ -27,8 +27,8 @@
 //! unicycle starts facing its goal.
 
 use crate::motion::{Body, MotionError, MotionSetup, MotionState};
-use mrsim_planners::ackermann::{Car, CarState, bicycle_step, centre_velocity};
 use mrsim_planners::Vec2;
+use mrsim_planners::ackermann::{Car, CarState, bicycle_step, centre_velocity};
 use mrsim_proto::{BodyState, body_kind};
 use mrsim_scenario::{Kinematics, RobotSpec, Scenario, ShapeSpec};
 use rapier2d::prelude::*;
@@ -584,10 +584,7 @@ impl World {
                     };
                     let next =
                         ackermann_substep(&w.car, self.commands[i], now, spec.velocity_lag, h);
-                    let nv = [
-                        (next.position.x - p[0]) / h,
-                        (next.position.y - p[1]) / h,
-                    ];
+                    let nv = [(next.position.x - p[0]) / h, (next.position.y - p[1]) / h];
                     let given = v2(nv);
                     body.set_linvel(given, true);
                     body.set_rotation(Rotation::new(next.heading as f32), true);

@@ -217,7 +217,14 @@ fn sinc(x: f64) -> f64 {
 /// v tan(delta) h / L exactly (by its chord), and the centre is placed
 /// L / 2 ahead of it. A NaN speed asks 0, a NaN steering keeps the wheels
 /// where they are.
-pub fn bicycle_step(car: &Car, s: CarState, speed: f64, steering: f64, lag: f64, h: f64) -> CarState {
+pub fn bicycle_step(
+    car: &Car,
+    s: CarState,
+    speed: f64,
+    steering: f64,
+    lag: f64,
+    h: f64,
+) -> CarState {
     let max = car.max_steering;
     let target = if steering.is_nan() {
         s.steering

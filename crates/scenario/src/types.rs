@@ -604,7 +604,10 @@ impl RobotSpec {
 
     /// Does the robot's body turn (a unicycle or a car)?
     pub fn turns(&self) -> bool {
-        matches!(self.kinematics, Kinematics::Unicycle | Kinematics::Ackermann)
+        matches!(
+            self.kinematics,
+            Kinematics::Unicycle | Kinematics::Ackermann
+        )
     }
 
     /// Has a robot at `position` with heading `heading` (rad) arrived, for

@@ -67,11 +67,12 @@ fn fit_circle(points: &[[f64; 2]]) -> ([f64; 2], f64) {
         for v in m[i].iter_mut() {
             *v /= pivot;
         }
-        for k in 0..3 {
+        let row = m[i];
+        for (k, other) in m.iter_mut().enumerate() {
             if k != i {
-                let f = m[k][i];
-                for j in 0..4 {
-                    m[k][j] -= f * m[i][j];
+                let f = other[i];
+                for (v, p) in other.iter_mut().zip(row) {
+                    *v -= f * p;
                 }
             }
         }
@@ -106,7 +107,10 @@ fn at_full_steering_the_car_turns_on_the_radius_of_its_wheelbase_and_steering_li
     assert!((rr - r).abs() < 1e-4, "rear axle's circle {rr} vs {r}");
     let (cc, cr) = fit_circle(&centres);
     let centre_r = (r * r + 1.5f64.powi(2)).sqrt();
-    assert!((cr - centre_r).abs() < 1e-4, "centre's circle {cr} vs {centre_r}");
+    assert!(
+        (cr - centre_r).abs() < 1e-4,
+        "centre's circle {cr} vs {centre_r}"
+    );
     // One circle, one centre; and every point on it, not only on average.
     assert!((rc[0] - cc[0]).hypot(rc[1] - cc[1]) < 1e-4);
     for p in &rears {
@@ -193,7 +197,9 @@ fn a_force_or_velocity_reaching_a_car_brakes_it_and_a_car_command_brakes_the_oth
              [[robot]]\nname = \"r\"\nstart = [0.0, 0.0]\ngoal = [9.0, 0.0]\n\
              kinematics = \"{drive}\"\nmax_speed = 1.0\nmax_accel = 2.0\n"
         );
-        let scenario = mrsim_scenario::parse(&src, "inline.toml").expect("valid").scenario;
+        let scenario = mrsim_scenario::parse(&src, "inline.toml")
+            .expect("valid")
+            .scenario;
         let mut w = World::new(&scenario).expect("world");
         let cmd = if drive == "holonomic" {
             Applied::Velocity([1.0, 0.0])
@@ -203,11 +209,19 @@ fn a_force_or_velocity_reaching_a_car_brakes_it_and_a_car_command_brakes_the_oth
         w.set_command(0, cmd);
         steps(&mut w, 10);
         let s = w.states()[0];
-        assert!((s.velocity[0] - 1.0).abs() < 1e-5, "{drive}: {:?}", s.velocity);
+        assert!(
+            (s.velocity[0] - 1.0).abs() < 1e-5,
+            "{drive}: {:?}",
+            s.velocity
+        );
         w.set_command(0, Applied::Ackermann([1.0, 0.3]));
         steps(&mut w, 10);
         let s = w.states()[0];
-        assert!(s.velocity[0].hypot(s.velocity[1]) < 1e-5, "{drive}: {:?}", s.velocity);
+        assert!(
+            s.velocity[0].hypot(s.velocity[1]) < 1e-5,
+            "{drive}: {:?}",
+            s.velocity
+        );
     }
 }
 

@@ -58,7 +58,11 @@ fn at_full_lock_the_rear_axle_drives_the_minimum_circle_and_the_centre_a_wider_o
     for _ in 0..1700 {
         s = bicycle_step(&c, s, 2.0, c.max_steering, 0.0, 0.01);
         let rear = s.rear_axle(c.wheelbase);
-        assert!(((rear - pivot).norm() - r).abs() < 1e-9, "{}", (rear - pivot).norm());
+        assert!(
+            ((rear - pivot).norm() - r).abs() < 1e-9,
+            "{}",
+            (rear - pivot).norm()
+        );
         assert!(((s.position - pivot).norm() - centre_r).abs() < 1e-9);
     }
     assert!(s.heading > 0.3 + 2.0 * PI, "{}", s.heading);

@@ -211,7 +211,9 @@ fn defaults_fit(d: &RawRobot, robots: &[RobotSpec]) -> Result<(), Fail> {
                 return Err(Fail::new(
                     Some(v.span()),
                     "defaults",
-                    format!("{key} is a car's key and no robot is a car (kinematics = \"ackermann\")"),
+                    format!(
+                        "{key} is a car's key and no robot is a car (kinematics = \"ackermann\")"
+                    ),
                 ));
             }
         }

@@ -27,9 +27,12 @@ impl Layer<'_> {
     }
 }
 
+/// A number key's field of a robot table.
+type Field = fn(&RawRobot) -> &Option<S<f64>>;
+
 /// The keys that apply to a car only (`kinematics = "ackermann"`), with
 /// their fields.
-pub(super) const CAR_KEYS: [(&str, fn(&RawRobot) -> &Option<S<f64>>); 4] = [
+pub(super) const CAR_KEYS: [(&str, Field); 4] = [
     ("wheelbase", |r| &r.wheelbase),
     ("max_steering_deg", |r| &r.max_steering_deg),
     ("max_steering_rate_deg", |r| &r.max_steering_rate_deg),

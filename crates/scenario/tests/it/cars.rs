@@ -61,7 +61,10 @@ fn every_car_key_is_taken_from_the_robot_or_its_defaults() {
     let back: mrsim_scenario::Scenario = serde_json::from_str(&json).expect("back");
     assert_eq!(back, l.scenario);
     let r0 = serde_json::to_string(&l.scenario.robots[0]).expect("json");
-    assert!(!r0.contains("ackermann") && !r0.contains("goal_heading"), "{r0}");
+    assert!(
+        !r0.contains("ackermann") && !r0.contains("goal_heading"),
+        "{r0}"
+    );
 }
 
 #[test]
@@ -144,8 +147,13 @@ fn a_goal_heading_is_read_with_its_tolerance() {
 fn bad_goal_headings_are_refused_at_their_line() {
     let src = car("goal_heading_tolerance_deg = 5");
     refused_at(&src, "goal_heading_tolerance_deg", "needs goal_heading_deg");
-    let src = car("kinematics = \"unicycle\"\ngoal_heading_deg = 45\ngoal_heading_tolerance_deg = 0");
-    refused_at(&src, "goal_heading_tolerance_deg", "must be in (0, 180] degrees");
+    let src =
+        car("kinematics = \"unicycle\"\ngoal_heading_deg = 45\ngoal_heading_tolerance_deg = 0");
+    refused_at(
+        &src,
+        "goal_heading_tolerance_deg",
+        "must be in (0, 180] degrees",
+    );
     let src = car("kinematics = \"unicycle\"\ngoal_heading_deg = inf");
     refused_at(&src, "goal_heading_deg", "must be a finite number");
     // A holonomic robot never turns: a heading other than 0 (within the
@@ -154,6 +162,10 @@ fn bad_goal_headings_are_refused_at_their_line() {
     refused_at(&src, "goal_heading_deg", "can never be met");
     accept(&car("goal_heading_deg = 5"));
     // A default tolerance with no goal heading in the file.
-    let src = with(BASE, "mass = 1.0", "mass = 1.0\ngoal_heading_tolerance_deg = 5");
+    let src = with(
+        BASE,
+        "mass = 1.0",
+        "mass = 1.0\ngoal_heading_tolerance_deg = 5",
+    );
     refused_at(&src, "goal_heading_tolerance_deg", "no robot has one");
 }
