@@ -25,6 +25,35 @@
 //! to 0), a velocity command u asks v = u.e and omega = 0 (e the heading's
 //! unit vector); a unicycle command on a holonomic robot brakes it. A
 //! unicycle starts facing its goal.
+//!
+//! A car (`kinematics = "ackermann"`) is the kinematic bicycle
+//! (`mrsim_planners::ackermann`, whose `bicycle_step` the world calls, so
+//! that the tracking controller predicts what the world does): the pose
+//! names the centre of the body's shape, and the wheelbase L is centred
+//! on it, so the rear axle is L/2 behind the centre along the heading. The
+//! rear axle moves at speed v along the heading and the heading turns at v
+//! tan(delta) / L (delta the steering angle). The world keeps each car's v
+//! and delta; each substep it moves delta towards the command's steering,
+//! clamped to ±`max_steering`, by at most `max_steering_rate` h, and v
+//! towards the command's speed by the velocity lag (ideal when
+//! `velocity_lag` = 0), its change clamped to `max_accel` h and v to
+//! [-`max_reverse_speed`, `max_speed`]; then, with the new v and delta, it
+//! moves the rear axle along the arc they drive in the substep (exactly,
+//! by its chord), places the centre L/2 ahead of it and gives rapier the
+//! velocity that takes the centre there, the collider turned to the new
+//! heading (a car's heading rate, published as its angular velocity, is v
+//! tan(delta) / L). A contact changes that velocity; of the change only its
+//! component along the heading changes v (the wheels do not slip: the
+//! sideways part is dropped), as for a unicycle. A car's published
+//! velocity is its centre's at the end of the tick, v e + (v tan(delta) /
+//! 2) e_perp, plus what a contact changed of the velocity given in the
+//! last substep (rapier's own is the chord of the substep's arc, a little
+//! off the heading's end). A force or velocity command that reaches a car
+//! brakes it (v brought to 0 as above, the wheels held): a holonomic
+//! planner drives a car through the agents' tracking controller, which
+//! turns its velocity into a car's command before it is sent. A car's
+//! command on a holonomic robot or a unicycle brakes it. A car starts
+//! facing its goal, its wheels straight.
 
 use crate::motion::{Body, MotionError, MotionSetup, MotionState};
 use mrsim_planners::Vec2;

@@ -19,7 +19,8 @@
 //! car (steering, steering rate, speed forwards and backwards,
 //! acceleration, velocity lag); the world moves cars with it
 //! (`mrsim_world::physics`), so what this controller predicts is what the
-//! world does while nothing touches the car.
+//! world does while nothing touches the car (and its velocity lag is 0:
+//! the prediction leaves the lag out).
 //!
 //! **2. Tracking a holonomic velocity.** A holonomic planner asks the
 //! centre to move at u, that is along the holonomic trajectory c0 + u t. A
