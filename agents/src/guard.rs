@@ -125,6 +125,7 @@ mod tests {
                 max_accel: 1.0,
                 heading: 0.0,
                 angular_velocity: 0.0,
+                steering: 0.0,
                 kinematics: mrsim_planners::Kinematics::Holonomic,
             },
             goal: Vec2::new(1.0, 0.0),

@@ -206,8 +206,10 @@ pub fn build_planner_in(
 /// On a unicycle robot the planner drives through the look-ahead point
 /// controller (`mrsim_planners::unicycle`), which hands a planner that
 /// plans (v, omega) itself (`Planner::native_unicycle`, dwa) the robot's
-/// own observation and passes its command unchanged; a holonomic robot's
-/// planner is used as built.
+/// own observation and passes its command unchanged; on a car, through
+/// the tracking controller (`mrsim_planners::ackermann`), which does the
+/// same for a planner of cars (`Planner::native_ackermann`); a holonomic
+/// robot's planner is used as built.
 fn fit_kinematics(spec: &RobotSpec, planner: Box<dyn Planner>) -> Box<dyn Planner> {
     match spec.kinematics {
         mrsim_scenario::Kinematics::Holonomic => planner,
@@ -215,6 +217,9 @@ fn fit_kinematics(spec: &RobotSpec, planner: Box<dyn Planner>) -> Box<dyn Planne
             planner,
             spec.lookahead,
         )),
+        mrsim_scenario::Kinematics::Ackermann => {
+            Box::new(mrsim_planners::ackermann::Tracker::new(planner))
+        }
     }
 }
 

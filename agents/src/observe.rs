@@ -503,8 +503,7 @@ impl Observer {
         let position = Vec2::new(s.position[0], s.position[1]);
         let velocity = Vec2::new(s.velocity[0], s.velocity[1]);
         let goal = Vec2::new(spec.goal[0], spec.goal[1]);
-        let unicycle = spec.kinematics == mrsim_scenario::Kinematics::Unicycle;
-        let heading = if unicycle {
+        let heading = if spec.turns() {
             Vec2::new(s.heading.cos(), s.heading.sin())
         } else if velocity.norm() > 1e-9 {
             velocity.normalize()
@@ -585,14 +584,8 @@ impl Observer {
                 max_accel: spec.max_accel,
                 heading: s.heading,
                 angular_velocity: s.angular_velocity,
-                kinematics: if unicycle {
-                    Kinematics::Unicycle {
-                        max_angular_speed: spec.max_angular_speed,
-                        max_angular_accel: spec.max_angular_accel,
-                    }
-                } else {
-                    Kinematics::Holonomic
-                },
+                steering: s.steering,
+                kinematics: kinematics_of(spec),
             },
             goal,
             goal_tolerance: spec.goal_tolerance,
@@ -602,6 +595,23 @@ impl Observer {
             path,
             scan: scanned.then_some(&self.scan),
         }
+    }
+}
+
+/// The planners' motion model of robot `spec`, its limits included.
+pub fn kinematics_of(spec: &RobotSpec) -> Kinematics {
+    match (spec.kinematics, spec.ackermann) {
+        (mrsim_scenario::Kinematics::Unicycle, _) => Kinematics::Unicycle {
+            max_angular_speed: spec.max_angular_speed,
+            max_angular_accel: spec.max_angular_accel,
+        },
+        (mrsim_scenario::Kinematics::Ackermann, Some(a)) => Kinematics::Ackermann {
+            wheelbase: a.wheelbase,
+            max_steering: a.max_steering,
+            max_steering_rate: a.max_steering_rate,
+            max_reverse_speed: a.max_reverse_speed,
+        },
+        _ => Kinematics::Holonomic,
     }
 }
 

@@ -465,6 +465,10 @@ impl Planner for Routed {
         self.inner.native_unicycle()
     }
 
+    fn native_ackermann(&self) -> bool {
+        self.inner.native_ackermann()
+    }
+
     fn needs_scan(&self) -> bool {
         self.inner.needs_scan()
     }

@@ -442,6 +442,9 @@ impl Seat {
             Command::Force(f) => (command_kind::FORCE, f),
             Command::Velocity(v) => (command_kind::VELOCITY, v),
             Command::Unicycle { v, omega } => (command_kind::UNICYCLE, Vec2::new(v, omega)),
+            Command::Ackermann { speed, steering } => {
+                (command_kind::ACKERMANN, Vec2::new(speed, steering))
+            }
         };
         // Realtime: the CPU the planner call took on this thread, and
         // under SCHED_DEADLINE the overruns so far.
@@ -694,5 +697,6 @@ fn cmd_value(cmd: Command) -> Vec2 {
     match cmd {
         Command::Force(v) | Command::Velocity(v) => v,
         Command::Unicycle { v, omega } => Vec2::new(v, omega),
+        Command::Ackermann { speed, steering } => Vec2::new(speed, steering),
     }
 }

@@ -63,7 +63,10 @@ def run(scenario=None, planners=None, out=None, set=(), render=False, plan_timeo
     ``planners`` maps names to Python planners: a class (or any callable)
     called with the robot's ``params`` as a dict, whose instances have
     ``plan(observation)`` returning two numbers, a velocity (m/s), or a force
-    (N) if the class sets ``command = "force"``. A robot uses one with
+    (N) if the class sets ``command = "force"``, or a car's speed (m/s) and
+    steering angle (rad) if it sets ``command = "ackermann"`` (any other
+    robot brakes on it; a car's velocity or force goes through the tracking
+    controller). A robot uses one with
     ``planner = "NAME"`` in the scenario or ``set=["robot.r0.planner=NAME"]``.
     ``set`` takes ``KEY=VALUE`` overrides as ``mrsim run --set``; ``out`` the
     run folder (default: a new one under ``runs/``); ``plan_timeout`` the

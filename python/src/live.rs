@@ -13,7 +13,6 @@
 use crate::planner::{Kind, PyObservation, two_numbers};
 use crate::run::params_dict;
 use mrsim_agents::{LiveAgent, Next};
-use mrsim_planners::{Command, Vec2};
 use pyo3::exceptions::{PyResourceWarning, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -104,20 +103,13 @@ fn agent_error(e: mrsim_agents::AgentError) -> PyErr {
 
 #[pymethods]
 impl Agent {
-    /// `command`: "velocity" (default) or "force", what `reply` sends;
-    /// `timeout`: seconds to wait for the world and the join.
+    /// `command`: "velocity" (default), "force" or "ackermann" (a car's
+    /// speed and steering angle, rad), what `reply` sends; `timeout`:
+    /// seconds to wait for the world and the join.
     #[new]
     #[pyo3(signature = (run_id, robot, command="velocity", timeout=30.0))]
     fn new(run_id: &str, robot: &str, command: &str, timeout: f64) -> PyResult<Self> {
-        let kind = match command {
-            "velocity" => Kind::Velocity,
-            "force" => Kind::Force,
-            other => {
-                return Err(PyValueError::new_err(format!(
-                    "command is \"velocity\" or \"force\", not {other:?}"
-                )));
-            }
-        };
+        let kind = Kind::named(command)?;
         if !(timeout.is_finite() && timeout > 0.0) {
             return Err(PyValueError::new_err(
                 "timeout must be a positive number of seconds",
@@ -180,18 +172,14 @@ impl Agent {
         }
     }
 
-    /// Answers the last observation with two numbers (a velocity or a force,
-    /// as the constructor's `command` says).
+    /// Answers the last observation with two numbers (a velocity, a force
+    /// or a car's speed and steering, as the constructor's `command` says).
     fn reply(&mut self, command: &Bound<'_, PyAny>) -> PyResult<()> {
         let v = two_numbers(command).map_err(PyValueError::new_err)?;
         if !(v[0].is_finite() && v[1].is_finite()) {
             return Err(PyValueError::new_err(format!("non-finite command {v:?}")));
         }
-        let v = Vec2::new(v[0], v[1]);
-        let cmd = match self.kind {
-            Kind::Force => Command::Force(v),
-            Kind::Velocity => Command::Velocity(v),
-        };
+        let cmd = self.kind.command(v);
         let agent = self
             .inner
             .as_mut()

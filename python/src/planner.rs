@@ -67,13 +67,25 @@ pub struct PyObservation {
     others_kind: Py<PyArray1<u8>>,
     /// Wall segments (the arena's included), (m, 4): x0, y0, x1, y1.
     walls: Py<PyArray2<f64>>,
-    /// Own heading, rad (a unicycle's; 0 for a holonomic robot).
+    /// Own heading, rad (a unicycle's or a car's; 0 for a holonomic robot).
     heading: f64,
     /// Own turn rate, rad/s.
     angular_velocity: f64,
-    /// `"holonomic"` or `"unicycle"` (a unicycle's velocity commands go
-    /// through the look-ahead point controller).
+    /// Own steering angle, rad (a car's; 0 for the others).
+    steering: f64,
+    /// `"holonomic"`, `"unicycle"` or `"ackermann"` (a unicycle's velocity
+    /// commands go through the look-ahead point controller, a car's
+    /// through the tracking controller).
     kinematics: &'static str,
+    /// A car's wheelbase (0 for the others).
+    wheelbase: f64,
+    /// A car's steering limit either way, rad (0 for the others).
+    max_steering: f64,
+    /// A car's steering-rate limit, rad/s (0 for the others).
+    max_steering_rate: f64,
+    /// A car's fastest speed backwards (0 for the others, and for a car
+    /// that never reverses).
+    max_reverse_speed: f64,
     /// The laser scan's ranges, (beams,), `inf` where no return; `None`
     /// without a `sensor`.
     scan_ranges: Option<Py<PyArray1<f64>>>,
@@ -98,6 +110,7 @@ impl PyObservation {
     pub fn new(py: Python<'_>, obs: &Observation) -> PyResult<Self> {
         let o = obs.others;
         let walls = obs.walls.iter().flat_map(|w| [w.a.x, w.a.y, w.b.x, w.b.y]);
+        let car = mrsim_planners::ackermann::Car::of(&obs.me);
         Ok(Self {
             tick: obs.tick,
             time: obs.time,
@@ -152,10 +165,16 @@ impl PyObservation {
             walls: rows(py, walls.collect(), 4)?.unbind(),
             heading: obs.me.heading,
             angular_velocity: obs.me.angular_velocity,
+            steering: obs.me.steering,
             kinematics: match obs.me.kinematics {
                 mrsim_planners::Kinematics::Holonomic => "holonomic",
                 mrsim_planners::Kinematics::Unicycle { .. } => "unicycle",
+                mrsim_planners::Kinematics::Ackermann { .. } => "ackermann",
             },
+            wheelbase: car.map_or(0.0, |c| c.wheelbase),
+            max_steering: car.map_or(0.0, |c| c.max_steering),
+            max_steering_rate: car.map_or(0.0, |c| c.max_steering_rate),
+            max_reverse_speed: car.map_or(0.0, |c| c.max_reverse_speed),
             scan_ranges: obs
                 .scan
                 .map(|s| PyArray1::from_slice(py, &s.ranges).unbind()),
@@ -178,27 +197,48 @@ impl PyObservation {
     }
 }
 
-/// Whether a Python planner's answers are forces or velocities: its class
-/// attribute `command` (`"force"` or `"velocity"`, the default).
+/// What a Python planner's two numbers are: its class attribute `command`
+/// (`"force"`, `"velocity"`, the default, or `"ackermann"`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Kind {
     /// Forces, N.
     Force,
     /// Velocities, m/s.
     Velocity,
+    /// A car's speed along its heading and steering angle, rad
+    /// ([`Command::Ackermann`]; any other robot brakes).
+    Ackermann,
 }
 
 impl Kind {
-    /// The kind `planner` declares; an error naming the bad value.
+    /// The kind named `name`; an error naming the bad value.
+    pub fn named(name: &str) -> PyResult<Self> {
+        match name {
+            "velocity" => Ok(Kind::Velocity),
+            "force" => Ok(Kind::Force),
+            "ackermann" => Ok(Kind::Ackermann),
+            other => Err(pyo3::exceptions::PyValueError::new_err(format!(
+                "a command is \"velocity\", \"force\" or \"ackermann\", not {other:?}"
+            ))),
+        }
+    }
+
+    /// The kind `planner` declares.
     pub fn of(planner: &Bound<'_, PyAny>) -> PyResult<Self> {
         match planner.getattr("command") {
             Err(_) => Ok(Kind::Velocity),
-            Ok(v) => match v.extract::<String>()?.as_str() {
-                "velocity" => Ok(Kind::Velocity),
-                "force" => Ok(Kind::Force),
-                other => Err(pyo3::exceptions::PyValueError::new_err(format!(
-                    "a planner's `command` is \"velocity\" or \"force\", not {other:?}"
-                ))),
+            Ok(v) => Self::named(v.extract::<String>()?.as_str()),
+        }
+    }
+
+    /// The command of two numbers of this kind.
+    pub fn command(self, v: [f64; 2]) -> Command {
+        match self {
+            Kind::Force => Command::Force(Vec2::new(v[0], v[1])),
+            Kind::Velocity => Command::Velocity(Vec2::new(v[0], v[1])),
+            Kind::Ackermann => Command::Ackermann {
+                speed: v[0],
+                steering: v[1],
             },
         }
     }
@@ -303,10 +343,12 @@ impl Planner for PyPlanner {
             // naming the robot and the tick.
             Err(msg) => std::panic::panic_any(msg),
         };
-        let v = Vec2::new(v[0], v[1]);
-        match self.kind {
-            Kind::Force => Command::Force(v),
-            Kind::Velocity => Command::Velocity(v),
-        }
+        self.kind.command(v)
+    }
+
+    /// A planner of a car's own commands sees the car itself, not the
+    /// tracking controller's enlarged disc.
+    fn native_ackermann(&self) -> bool {
+        self.kind == Kind::Ackermann
     }
 }

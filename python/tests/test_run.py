@@ -263,3 +263,60 @@ motion = { model = "static" }
     assert box == pytest.approx(np.array([[3.5, -1.0], [3.5, 1.0], [2.5, 1.0], [2.5, -1.0]]))
     # A disc has none.
     assert post.shape == (0, 2)
+
+
+CAR = """
+[world]
+dt = 0.1
+duration = 60.0
+
+[[robot]]
+name = "car"
+start = [0.0, 0.0]
+goal = [30.0, 0.0]
+planner = "pursuit"
+kinematics = "ackermann"
+shape = { kind = "rectangle", length = 4.6, width = 1.6 }
+wheelbase = 3.0
+max_steering_deg = 30
+max_speed = 4.0
+goal_tolerance = 1.0
+"""
+
+
+def test_a_python_planner_drives_a_car_by_its_speed_and_steering(tmp_path):
+    seen = []
+
+    class Pursuit:
+        """A full turn at full lock left, then pure pursuit of the goal."""
+
+        command = "ackermann"
+
+        def __init__(self, params):
+            pass
+
+        def plan(self, obs):
+            seen.append((obs.kinematics, obs.wheelbase, obs.max_steering, obs.radius, obs.steering))
+            if obs.time < 12.0:
+                return (2.0, obs.max_steering)
+            d = obs.goal - obs.position
+            dist = np.hypot(*d)
+            alpha = (np.arctan2(d[1], d[0]) - obs.heading + np.pi) % (2 * np.pi) - np.pi
+            steering = np.arctan(2.0 * obs.wheelbase * np.sin(alpha) / max(dist, 1e-9))
+            return (min(obs.max_speed, dist), steering)
+
+    (tmp_path / "car.toml").write_text(CAR)
+    result = mrsim.run(tmp_path / "car.toml", planners={"pursuit": Pursuit}, out=tmp_path / "run")
+    assert result.metrics["robots"]["car"]["reached_goal"]
+    kinematics, wheelbase, max_steering, radius, _ = seen[0]
+    assert (kinematics, wheelbase) == ("ackermann", 3.0)
+    assert abs(max_steering - np.radians(30)) < 1e-12
+    # A planner of the car's own commands sees the car, not the tracking
+    # controller's disc enlarged by its bound.
+    assert abs(radius - np.hypot(2.3, 0.8)) < 1e-9
+    # The wheels came to full lock at the world's rate, and the car turned
+    # with them: its heading in trajectory.csv went past a quarter turn.
+    assert max(s for *_, s in seen) == pytest.approx(np.radians(30))
+    rows = (result.dir / "trajectory.csv").read_text().splitlines()
+    assert rows[0].endswith(",theta")
+    assert max(float(r.split(",")[-1]) for r in rows[1:]) > np.pi / 2

@@ -12,6 +12,7 @@
 mod common;
 
 mod bench;
+mod cars;
 mod cores;
 mod cores_real;
 mod cut;

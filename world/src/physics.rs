@@ -25,8 +25,39 @@
 //! to 0), a velocity command u asks v = u.e and omega = 0 (e the heading's
 //! unit vector); a unicycle command on a holonomic robot brakes it. A
 //! unicycle starts facing its goal.
+//!
+//! A car (`kinematics = "ackermann"`) is the kinematic bicycle
+//! (`mrsim_planners::ackermann`, whose `bicycle_step` the world calls, so
+//! that the tracking controller predicts what the world does): the pose
+//! names the centre of the body's shape, and the wheelbase L is centred
+//! on it, so the rear axle is L/2 behind the centre along the heading. The
+//! rear axle moves at speed v along the heading and the heading turns at v
+//! tan(delta) / L (delta the steering angle). The world keeps each car's v
+//! and delta; each substep it moves delta towards the command's steering,
+//! clamped to ±`max_steering`, by at most `max_steering_rate` h, and v
+//! towards the command's speed by the velocity lag (ideal when
+//! `velocity_lag` = 0), its change clamped to `max_accel` h and v to
+//! [-`max_reverse_speed`, `max_speed`]; then, with the new v and delta, it
+//! moves the rear axle along the arc they drive in the substep (exactly,
+//! by its chord), places the centre L/2 ahead of it and gives rapier the
+//! velocity that takes the centre there, the collider turned to the new
+//! heading (a car's heading rate, published as its angular velocity, is v
+//! tan(delta) / L). A contact changes that velocity; of the change only its
+//! component along the heading changes v (the wheels do not slip: the
+//! sideways part is dropped), as for a unicycle. A car's published
+//! velocity is its centre's at the end of the tick, v e + (v tan(delta) /
+//! 2) e_perp, plus what a contact changed of the velocity given in the
+//! last substep (rapier's own is the chord of the substep's arc, a little
+//! off the heading's end). A force or velocity command that reaches a car
+//! brakes it (v brought to 0 as above, the wheels held): a holonomic
+//! planner drives a car through the agents' tracking controller, which
+//! turns its velocity into a car's command before it is sent. A car's
+//! command on a holonomic robot or a unicycle brakes it. A car starts
+//! facing its goal, its wheels straight.
 
 use crate::motion::{Body, MotionError, MotionSetup, MotionState};
+use mrsim_planners::Vec2;
+use mrsim_planners::ackermann::{Car, CarState, bicycle_step, centre_velocity};
 use mrsim_proto::{BodyState, body_kind};
 use mrsim_scenario::{Kinematics, RobotSpec, Scenario, ShapeSpec};
 use rapier2d::prelude::*;
@@ -40,6 +71,8 @@ pub enum Applied {
     Velocity([f64; 2]),
     /// A unicycle's forward speed and turn rate set-points.
     Unicycle([f64; 2]),
+    /// A car's speed and steering angle (rad) set-points.
+    Ackermann([f64; 2]),
 }
 
 impl Applied {
@@ -96,7 +129,7 @@ struct Actuator {
     velocity_lag: f64,
     max_accel: f64,
     max_speed: f64,
-    unicycle: bool,
+    kinematics: Kinematics,
 }
 
 impl Actuator {
@@ -107,9 +140,36 @@ impl Actuator {
             velocity_lag: spec.velocity_lag,
             max_accel: spec.max_accel,
             max_speed: spec.max_speed,
-            unicycle: spec.kinematics == Kinematics::Unicycle,
+            kinematics: spec.kinematics,
         }
     }
+}
+
+/// What the world keeps of a car between substeps.
+#[derive(Debug, Clone, Copy)]
+struct Wheels {
+    /// The car's geometry and limits.
+    car: Car,
+    /// Speed of the rear axle along the heading.
+    speed: f64,
+    /// Steering angle, rad.
+    steering: f64,
+    /// The velocity last given to rapier, as rapier holds it: what a
+    /// contact changed of it is the contact's.
+    given: [f32; 2],
+}
+
+/// The car of `spec`, if it is one.
+pub fn car_of(spec: &RobotSpec) -> Option<Car> {
+    let a = spec.ackermann?;
+    (spec.kinematics == Kinematics::Ackermann).then_some(Car {
+        wheelbase: a.wheelbase,
+        max_steering: a.max_steering,
+        max_steering_rate: a.max_steering_rate,
+        max_reverse_speed: a.max_reverse_speed,
+        max_speed: spec.max_speed,
+        max_accel: spec.max_accel,
+    })
 }
 
 /// The simulated world.
@@ -137,6 +197,8 @@ pub struct World {
     headings: Vec<f64>,
     /// Each robot's turn rate, rad/s.
     turn_rates: Vec<f64>,
+    /// Each robot's wheels, `Some` for a car.
+    wheels: Vec<Option<Wheels>>,
     /// Every body's shape by body id (robots, then obstacles).
     shapes: Vec<mrsim_shape::Shape>,
     states: Vec<BodyState>,
@@ -258,6 +320,18 @@ fn collider_of(shape: &ShapeSpec, radius: f64, min_radius: f64) -> ColliderBuild
     }
 }
 
+/// One substep of a car (module documentation): from its state `s` (the
+/// centre, heading, speed and steering), the command, its velocity lag
+/// and the substep `h`, its next state. Only a car's command drives it;
+/// any other brakes it, the wheels held.
+pub fn ackermann_substep(car: &Car, cmd: Applied, s: CarState, lag: f64, h: f64) -> CarState {
+    let (speed, steering) = match cmd {
+        Applied::Ackermann([v, d]) => (v, d),
+        Applied::Force(_) | Applied::Velocity(_) | Applied::Unicycle(_) => (0.0, s.steering),
+    };
+    bicycle_step(car, s, speed, steering, lag, h)
+}
+
 /// One substep of the unicycle model (module documentation): from the
 /// body's velocity `v`, heading `theta` and turn rate `omega`, the command,
 /// the limits of `spec` and the substep `h`, the new velocity, heading and
@@ -287,6 +361,8 @@ pub fn unicycle_substep(
             (f[0] * c + f[1] * s - spec.damping * speed) / spec.mass,
             0.0,
         ),
+        // Not a unicycle's command: brake, and stop turning.
+        Applied::Ackermann(_) => (-speed / lag, 0.0),
     };
     let finite = |x: f64| if x.is_nan() { 0.0 } else { x };
     let accel = finite(accel).clamp(-spec.max_accel, spec.max_accel);
@@ -385,6 +461,18 @@ impl World {
                 .collect(),
             shapes: scenario.body_shapes(),
             turn_rates: vec![0.0; scenario.robots.len()],
+            wheels: scenario
+                .robots
+                .iter()
+                .map(|r| {
+                    car_of(r).map(|car| Wheels {
+                        car,
+                        speed: 0.0,
+                        steering: 0.0,
+                        given: [0.0, 0.0],
+                    })
+                })
+                .collect(),
             states: initial_states(scenario),
             touching: Vec::new(),
             touching_next: Vec::new(),
@@ -505,7 +593,38 @@ impl World {
                 };
                 let lv = body.linvel();
                 let v = [lv.x as f64, lv.y as f64];
-                if spec.unicycle {
+                if let Some(w) = &mut self.wheels[i] {
+                    let theta = self.headings[i];
+                    // What a contact changed of the velocity given, along
+                    // the heading (the wheels do not slip).
+                    let (sn, cs) = theta.sin_cos();
+                    let dv = [
+                        f64::from(lv.x) - f64::from(w.given[0]),
+                        f64::from(lv.y) - f64::from(w.given[1]),
+                    ];
+                    let speed = w.speed + dv[0] * cs + dv[1] * sn;
+                    let t = body.translation();
+                    let p = [f64::from(t.x), f64::from(t.y)];
+                    let now = CarState {
+                        position: Vec2::new(p[0], p[1]),
+                        heading: theta,
+                        speed,
+                        steering: w.steering,
+                    };
+                    let next =
+                        ackermann_substep(&w.car, self.commands[i], now, spec.velocity_lag, h);
+                    let nv = [(next.position.x - p[0]) / h, (next.position.y - p[1]) / h];
+                    let given = v2(nv);
+                    body.set_linvel(given, true);
+                    body.set_rotation(Rotation::new(next.heading as f32), true);
+                    w.given = [given.x, given.y];
+                    w.speed = next.speed;
+                    w.steering = next.steering;
+                    self.headings[i] = next.heading;
+                    self.turn_rates[i] = next.speed * next.steering.tan() / w.car.wheelbase;
+                    continue;
+                }
+                if spec.kinematics == Kinematics::Unicycle {
                     let (nv, theta, omega) = unicycle_substep(
                         &self.scenario.robots[i],
                         self.commands[i],
@@ -542,7 +661,7 @@ impl World {
                         [(vc[0] - v[0]) / t, (vc[1] - v[1]) / t]
                     }
                     // Not a holonomic command: brake.
-                    Applied::Unicycle(_) => {
+                    Applied::Unicycle(_) | Applied::Ackermann(_) => {
                         let t = if spec.velocity_lag > 0.0 {
                             spec.velocity_lag
                         } else {
@@ -698,13 +817,29 @@ impl World {
             s.position = [p.x as f64, p.y as f64];
             s.velocity = [v.x as f64, v.y as f64];
         }
-        for (s, (th, w)) in self
+        for (s, ((th, w), wheels)) in self
             .states
             .iter_mut()
-            .zip(self.headings.iter().zip(&self.turn_rates))
+            .zip(self.headings.iter().zip(&self.turn_rates).zip(&self.wheels))
         {
             s.heading = *th;
             s.angular_velocity = *w;
+            if let Some(wh) = wheels {
+                s.steering = wh.steering;
+                // The centre's velocity at the tick's end, v e + (v
+                // tan(delta) / 2) e_perp, and what a contact changed of the
+                // velocity given (rapier's is the last substep's chord).
+                let c = centre_velocity(&CarState {
+                    position: Vec2::zeros(),
+                    heading: *th,
+                    speed: wh.speed,
+                    steering: wh.steering,
+                });
+                s.velocity = [
+                    c.x + s.velocity[0] - f64::from(wh.given[0]),
+                    c.y + s.velocity[1] - f64::from(wh.given[1]),
+                ];
+            }
         }
         for ((s, m), o) in self.states[n..]
             .iter_mut()

@@ -91,7 +91,9 @@ enum Msg {
 #[derive(Default)]
 pub struct Extras {
     /// Append a `theta` column (every body's heading): only when the
-    /// scenario has a unicycle robot, so other runs' files stay the same.
+    /// bodies' headings matter (`Scenario::has_headings`: a unicycle or a
+    /// car, or a body that is not a disc), so other runs' files stay the
+    /// same.
     pub theta: bool,
     /// The scans to record, if any robot asks.
     pub scans: Option<crate::scan::ScanWriter>,

@@ -3,12 +3,12 @@
 //! (lockstep under `[world.cpus]`). The rule is the agents' observation's
 //! (`mrsim_agents::observe`): every other body within `sensing_range`,
 //! surface to surface, and within `field_of_view_deg` centred on the
-//! heading (a unicycle's body heading; else the direction of its velocity,
+//! heading (a unicycle's or a car's body heading; else the direction of its velocity,
 //! or towards its goal at rest). Unlike the agent's, it counts true
 //! positions: no position noise, no observation delay.
 
 use mrsim_proto::BodyState;
-use mrsim_scenario::{Kinematics, RobotSpec};
+use mrsim_scenario::RobotSpec;
 
 /// The bodies of `states` robot `me` (spec `spec`) senses.
 pub fn count(states: &[BodyState], me: usize, spec: &RobotSpec) -> usize {
@@ -17,7 +17,7 @@ pub fn count(states: &[BodyState], me: usize, spec: &RobotSpec) -> usize {
     };
     let (px, py) = (s.position[0], s.position[1]);
     let (vx, vy) = (s.velocity[0], s.velocity[1]);
-    let heading = if spec.kinematics == Kinematics::Unicycle {
+    let heading = if spec.turns() {
         (s.heading.cos(), s.heading.sin())
     } else if vx.hypot(vy) > 1e-9 {
         let n = vx.hypot(vy);

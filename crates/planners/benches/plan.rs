@@ -41,6 +41,7 @@ fn zhu_loh(c: &mut Criterion) {
         max_accel: 5.0,
         heading: 0.0,
         angular_velocity: 0.0,
+        steering: 0.0,
         kinematics: mrsim_planners::Kinematics::Holonomic,
     };
     // (obstacles, horizon steps)
@@ -100,6 +101,7 @@ fn bench(c: &mut Criterion) {
             max_accel: 5.0,
             heading: 0.0,
             angular_velocity: 0.0,
+            steering: 0.0,
             kinematics: mrsim_planners::Kinematics::Holonomic,
         },
         goal: Vec2::new(20.0, 1.0),
@@ -158,6 +160,7 @@ fn bench_designated_path(c: &mut Criterion) {
             max_accel: 0.5,
             heading: 0.0,
             angular_velocity: 0.0,
+            steering: 0.0,
             kinematics: mrsim_planners::Kinematics::Holonomic,
         },
         goal: Vec2::new(6.0, 3.0),
@@ -213,6 +216,7 @@ fn bench_orca_crowd(c: &mut Criterion) {
             max_accel: 1e9,
             heading: 0.0,
             angular_velocity: 0.0,
+            steering: 0.0,
             kinematics: mrsim_planners::Kinematics::Holonomic,
         },
         goal: Vec2::new(200.0, 0.0),

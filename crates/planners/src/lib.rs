@@ -2,9 +2,11 @@
 //!
 //! Every planner is a function of an [`Observation`]: the robot's own state,
 //! its goal, the bodies it senses and the static geometry. It returns a
-//! [`Command`] (a force or a velocity). No planner sees IPC, a clock or the
-//! physics engine, so each one can be unit-tested, benchmarked and compared
-//! on its own, and the same code runs in an agent process or in a thread.
+//! [`Command`] (a force or a velocity; a unicycle's forward speed and
+//! turn rate; a car's speed and steering angle). No planner sees IPC, a
+//! clock or the physics engine, so each one can be unit-tested,
+//! benchmarked and compared on its own, and the same code runs in an agent
+//! process or in a thread.
 //!
 //! Why the crate is shaped as it is:
 //!
@@ -39,6 +41,7 @@
 mod params;
 mod registry;
 
+pub mod ackermann;
 pub mod chung;
 pub mod designated_path;
 pub mod dwa;
@@ -196,6 +199,23 @@ pub enum Kinematics {
         /// Angular-acceleration limit, rad/s².
         max_angular_accel: f64,
     },
+    /// A car, the kinematic bicycle: a speed along the heading and a
+    /// steering angle of the front wheels ([`Command::Ackermann`]). The
+    /// position is the centre of the body, the rear axle `wheelbase / 2`
+    /// behind it; the heading turns at the rate speed tan(steering) /
+    /// wheelbase.
+    /// `max_speed` and `max_accel` of [`SelfState`] bound the speed forward
+    /// and its rate of change ([`ackermann`]).
+    Ackermann {
+        /// Distance between the axles, > 0.
+        wheelbase: f64,
+        /// Steering limit either way, rad, in (0, pi/2).
+        max_steering: f64,
+        /// Steering-rate limit, rad/s.
+        max_steering_rate: f64,
+        /// Fastest speed backwards, >= 0 (0: never reverses).
+        max_reverse_speed: f64,
+    },
 }
 
 /// The robot's own state and physical limits.
@@ -226,6 +246,8 @@ pub struct SelfState {
     pub heading: f64,
     /// Turn rate, rad/s (0 for a holonomic robot).
     pub angular_velocity: f64,
+    /// A car's steering angle, rad, counter-clockwise (0 for the others).
+    pub steering: f64,
     /// The robot's motion model.
     pub kinematics: Kinematics,
 }
@@ -306,15 +328,29 @@ pub enum Command {
         /// Turn rate, rad/s, counter-clockwise.
         omega: f64,
     },
+    /// A car's set-points ([`Kinematics::Ackermann`]): the speed of its
+    /// rear axle along the heading (negative: backwards) and the steering
+    /// angle of its front wheels, rad, counter-clockwise. The world brings
+    /// the speed to it within `max_accel` (and the velocity lag) and the
+    /// steering within `max_steering_rate`, and clamps them to [-
+    /// `max_reverse_speed`, `max_speed`] and ±`max_steering`, whatever is
+    /// asked. On a holonomic robot or a unicycle it brakes the robot.
+    Ackermann {
+        /// Speed along the heading.
+        speed: f64,
+        /// Steering angle, rad.
+        steering: f64,
+    },
 }
 
 impl Command {
     /// The command's vector, whatever its kind ((v, omega) for a unicycle
-    /// command).
+    /// command, (speed, steering) for a car's).
     pub fn vector(&self) -> Vec2 {
         match *self {
             Command::Force(v) | Command::Velocity(v) => v,
             Command::Unicycle { v, omega } => Vec2::new(v, omega),
+            Command::Ackermann { speed, steering } => Vec2::new(speed, steering),
         }
     }
 }
@@ -367,6 +403,15 @@ pub trait Planner: Send {
     /// driving through the look-ahead point ([`unicycle`]). The default,
     /// false, suits a planner that commands a force or a velocity.
     fn native_unicycle(&self) -> bool {
+        false
+    }
+
+    /// True for a planner that plans a car's (speed, steering) itself: on
+    /// a car it then gets the robot's own observation and its command is
+    /// applied unchanged, instead of driving through the tracking
+    /// controller ([`ackermann::Tracker`]). The default, false, suits a
+    /// planner that commands a force or a velocity.
+    fn native_ackermann(&self) -> bool {
         false
     }
 

@@ -135,7 +135,8 @@ impl Planner for LookAhead {
         let me = &seen.me;
         let cmd = self.inner.plan(&seen);
         let u = match cmd {
-            Command::Unicycle { .. } => return cmd,
+            // A car's command on a unicycle passes, and the world brakes.
+            Command::Unicycle { .. } | Command::Ackermann { .. } => return cmd,
             Command::Velocity(u) => u,
             Command::Force(f) => {
                 let m = if me.mass > 0.0 { me.mass } else { 1.0 };

@@ -31,8 +31,10 @@ use iceoryx2::prelude::ZeroCopySend;
 /// ([`CommandMsg::cpu_ns`]) and the agent's count of reservation overruns
 /// ([`CommandMsg::overruns`]); in lockstep under `[world.cpus]` the world
 /// marks the robots whose planner reads a snapshot with [`flags::PLANS`],
-/// and such a robot plans only then.
-pub const PROTOCOL_VERSION: u32 = 11;
+/// and such a robot plans only then. Version 12: a [`BodyState`] carries
+/// a car's steering angle ([`BodyState::steering`]), and a car is driven by
+/// [`command_kind::ACKERMANN`] commands (speed, steering).
+pub const PROTOCOL_VERSION: u32 = 12;
 
 /// Longest robot name, in bytes, that fits a [`JoinRequest`].
 pub const MAX_NAME_LEN: usize = 64;
@@ -79,11 +81,14 @@ pub struct BodyState {
     pub velocity: [f64; 2],
     /// Disc radius (0 for a point robot).
     pub radius: f64,
-    /// Heading, rad, counter-clockwise from +x: a unicycle robot's body
-    /// orientation; 0 for holonomic robots and obstacles (they have none).
+    /// Heading, rad, counter-clockwise from +x: a unicycle's or a car's
+    /// body orientation, an obstacle's fixed one; 0 for holonomic robots.
     pub heading: f64,
     /// Turn rate, rad/s (0 for holonomic robots and obstacles).
     pub angular_velocity: f64,
+    /// A car's steering angle, rad, counter-clockwise (0 for every other
+    /// body; since protocol 12).
+    pub steering: f64,
 }
 
 /// Header of every snapshot: one per tick, followed by a slice of
@@ -129,6 +134,10 @@ pub mod command_kind {
     /// A command the robot's timing model lost on its way (`command_loss`):
     /// counted and recorded as lost, never applied (since protocol 8).
     pub const LOST: u32 = 5;
+    /// A car's set-points: `value` is (speed along the heading, steering
+    /// angle in rad), tracked within the car's limits; on any other robot
+    /// it brakes (since protocol 12).
+    pub const ACKERMANN: u32 = 6;
 }
 
 /// One agent's answer to one tick.
@@ -144,8 +153,9 @@ pub struct CommandMsg {
     pub token: u64,
     /// The tick this command answers.
     pub tick: u64,
-    /// Force (N in scenario units), velocity, or (v, omega) for
-    /// [`command_kind::UNICYCLE`].
+    /// Force (N in scenario units), velocity, (v, omega) for
+    /// [`command_kind::UNICYCLE`], or (speed, steering) for
+    /// [`command_kind::ACKERMANN`].
     pub value: [f64; 2],
     /// Time the agent spent on the answer, ns: the observation and the
     /// planner (an agent that plans as it wakes counts from its wake-up

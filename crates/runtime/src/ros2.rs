@@ -22,7 +22,8 @@
 
 use crate::error::{Invalid, Refusal};
 use mrsim_agents::{AgentExit, AgentOptions, Live, Next, OwnedObservation};
-use mrsim_planners::{Command, Kinematics, Vec2};
+use mrsim_planners::ackermann::steering_for_turn_rate;
+use mrsim_planners::{Command, Kinematics, SelfState, Vec2};
 use mrsim_ros2::attachment::Attachment;
 use mrsim_ros2::msgs::{
     Clock, Header, LaserScan, OccupancyGrid, Odometry, Quaternion, TfMessage, Time,
@@ -324,12 +325,22 @@ fn log_once(s: &mut CmdState, bit: u8, robot: &str, what: &str) {
     }
 }
 
-/// The command a Twist means for a robot of `kinematics`.
-pub fn command_of(t: &Twist, kinematics: Kinematics) -> Command {
-    match kinematics {
+/// The command a Twist means for the robot `me`: a holonomic robot takes
+/// `linear.x`, `linear.y` as its velocity; a unicycle `linear.x` as its
+/// forward speed and `angular.z` as its turn rate; a car takes them as
+/// teb_local_planner's car-like mode publishes them (`linear.x` the speed,
+/// `angular.z` the heading's rate), steering atan(L omega / v) so that the
+/// bicycle turns at omega (at v = 0 no steering turns the car: it keeps
+/// the steering it has, `me.steering`).
+pub fn command_of(t: &Twist, me: &SelfState) -> Command {
+    match me.kinematics {
         Kinematics::Unicycle { .. } => Command::Unicycle {
             v: t.linear.x,
             omega: t.angular.z,
+        },
+        Kinematics::Ackermann { wheelbase, .. } => Command::Ackermann {
+            speed: t.linear.x,
+            steering: steering_for_turn_rate(t.linear.x, t.angular.z, wheelbase, me.steering),
         },
         Kinematics::Holonomic => Command::Velocity(Vec2::new(t.linear.x, t.linear.y)),
     }
@@ -648,7 +659,7 @@ pub fn run(req: &Ros2Request) -> Result<Ros2Stats, Ros2Error> {
         }
         let lockstep = obs.deadline_ns == 0;
         let twist = take_command(&inbox, i, side.mark, lockstep, req.wait);
-        live.reply(link.as_mut(), command_of(&twist, obs.me.kinematics))?;
+        live.reply(link.as_mut(), command_of(&twist, &obs.me))?;
     };
     let finished = live.finish(exit);
     let robots = match inbox.state.lock() {
@@ -763,15 +774,87 @@ mod tests {
             max_angular_accel: 1.0,
         };
         assert_eq!(
-            command_of(&t, uni),
+            command_of(&t, &me(uni, 0.0)),
             Command::Unicycle {
                 v: 0.5,
                 omega: -1.0
             }
         );
         assert_eq!(
-            command_of(&t, Kinematics::Holonomic),
+            command_of(&t, &me(Kinematics::Holonomic, 0.0)),
             Command::Velocity(Vec2::new(0.5, 0.25))
+        );
+    }
+
+    /// A robot of `kinematics` at rest with steering `steering`.
+    fn me(kinematics: Kinematics, steering: f64) -> SelfState {
+        SelfState {
+            id: 0,
+            position: Vec2::zeros(),
+            velocity: Vec2::zeros(),
+            radius: 1.0,
+            mass: 1.0,
+            damping: 0.0,
+            max_speed: 4.0,
+            max_accel: 2.0,
+            heading: 0.0,
+            angular_velocity: 0.0,
+            steering,
+            kinematics,
+        }
+    }
+
+    #[test]
+    fn a_car_takes_teb_s_speed_and_turn_rate_as_the_steering_of_that_turn() {
+        let car = Kinematics::Ackermann {
+            wheelbase: 3.0,
+            max_steering: 0.5,
+            max_steering_rate: 1.0,
+            max_reverse_speed: 1.0,
+        };
+        let twist = |v: f64, w: f64| Twist {
+            linear: Vector3 {
+                x: v,
+                y: 0.7,
+                z: 0.0,
+            },
+            angular: Vector3 {
+                x: 0.0,
+                y: 0.0,
+                z: w,
+            },
+        };
+        // v = 2 m/s, omega = 0.5 rad/s on L = 3: tan(delta) = 0.75, and
+        // the bicycle then turns at v tan(delta) / L = 0.5 (linear.y, which
+        // a car cannot follow, is ignored).
+        let Command::Ackermann { speed, steering } = command_of(&twist(2.0, 0.5), &me(car, 0.1))
+        else {
+            panic!("a car's command");
+        };
+        assert_eq!(speed, 2.0);
+        assert!((steering.tan() - 0.75).abs() < 1e-12, "{steering}");
+        // Backwards, the same turn rate steers the other way.
+        let Command::Ackermann { speed, steering } = command_of(&twist(-1.0, 0.5), &me(car, 0.1))
+        else {
+            panic!("a car's command");
+        };
+        assert_eq!(speed, -1.0);
+        assert!((steering.tan() + 1.5).abs() < 1e-12, "{steering}");
+        // At rest no steering turns the car: it keeps its own; a zero
+        // Twist (what a missing cmd_vel brakes with) stops it so.
+        assert_eq!(
+            command_of(&twist(0.0, 0.5), &me(car, 0.1)),
+            Command::Ackermann {
+                speed: 0.0,
+                steering: 0.1
+            }
+        );
+        assert_eq!(
+            command_of(&Twist::default(), &me(car, -0.2)),
+            Command::Ackermann {
+                speed: 0.0,
+                steering: -0.2
+            }
         );
     }
 

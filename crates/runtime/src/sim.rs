@@ -90,7 +90,8 @@ pub struct LearnerInfo {
     pub collisions: u32,
     /// Distance from its centre to its goal after the tick.
     pub distance_to_goal: f64,
-    /// Within its goal tolerance now.
+    /// Within its goal tolerance now (and of its goal heading, if it has
+    /// one).
     pub at_goal: bool,
     /// Has been within its goal tolerance for `goal_hold_ticks` ticks
     /// running at some point (the world's goal test; stays true).
@@ -236,7 +237,10 @@ impl Sim {
         }
         for (&i, c) in self.learners.iter().zip(commands) {
             let v = match *c {
-                Applied::Force(v) | Applied::Velocity(v) | Applied::Unicycle(v) => v,
+                Applied::Force(v)
+                | Applied::Velocity(v)
+                | Applied::Unicycle(v)
+                | Applied::Ackermann(v) => v,
             };
             if !v.iter().all(|x| x.is_finite()) {
                 return Err(SimError::NonFinite {
@@ -264,11 +268,15 @@ impl Sim {
                 Command::Force(f) => Applied::Force([f.x, f.y]),
                 Command::Velocity(v) => Applied::Velocity([v.x, v.y]),
                 Command::Unicycle { v, omega } => Applied::Unicycle([v, omega]),
+                Command::Ackermann { speed, steering } => Applied::Ackermann([speed, steering]),
             };
             // A planner's NaN brakes its robot, as the world does with an
             // agent's non-finite command.
             let cmd = match cmd {
-                Applied::Force(v) | Applied::Velocity(v) | Applied::Unicycle(v)
+                Applied::Force(v)
+                | Applied::Velocity(v)
+                | Applied::Unicycle(v)
+                | Applied::Ackermann(v)
                     if !v.iter().all(|x| x.is_finite()) =>
                 {
                     Applied::BRAKE
@@ -298,10 +306,8 @@ impl Sim {
     fn update_info(&mut self) {
         let states = self.world.states();
         for (i, spec) in self.scenario.robots.iter().enumerate() {
-            let p = states[i].position;
-            let d = (spec.goal[0] - p[0]).hypot(spec.goal[1] - p[1]);
             let h = &mut self.hold[i];
-            if d <= spec.goal_tolerance && self.world.tick() > 0 {
+            if spec.at_goal(states[i].position, states[i].heading) && self.world.tick() > 0 {
                 h.0 += 1;
                 if h.0 >= spec.goal_hold_ticks.max(1) {
                     h.1 = true;
@@ -316,7 +322,7 @@ impl Sim {
             let d = (spec.goal[0] - p[0]).hypot(spec.goal[1] - p[1]);
             let info = &mut self.info[j];
             info.distance_to_goal = d;
-            info.at_goal = d <= spec.goal_tolerance;
+            info.at_goal = spec.at_goal(p, states[i].heading);
             info.reached = self.hold[i].1;
         }
     }

@@ -37,6 +37,10 @@ pub(crate) enum Rule {
     Fraction,
     /// In (0, 360].
     Degrees,
+    /// In (0, 90), exclusive (a steering angle).
+    Acute,
+    /// In (0, 180] (a tolerance on a heading).
+    HalfTurn,
 }
 
 /// Checks a number; the error points at it.
@@ -55,6 +59,12 @@ pub(crate) fn check(v: &S<f64>, key: &str, rule: Rule, what: &str) -> Result<f64
         }
         Rule::Degrees if !(x > 0.0 && x <= 360.0) => {
             bad(format!("{key} must be in (0, 360], got {x}"))
+        }
+        Rule::Acute if !(x > 0.0 && x < 90.0) => {
+            bad(format!("{key} must be in (0, 90) degrees, got {x}"))
+        }
+        Rule::HalfTurn if !(x > 0.0 && x <= 180.0) => {
+            bad(format!("{key} must be in (0, 180] degrees, got {x}"))
         }
         _ => Ok(x),
     }

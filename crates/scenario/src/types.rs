@@ -213,6 +213,68 @@ pub enum Kinematics {
     /// A differential drive: forward speed v along its heading and turn
     /// rate omega, never sideways.
     Unicycle,
+    /// A car: the kinematic bicycle, a speed along the heading and a
+    /// steering angle of the front wheels, within the limits of its
+    /// [`Ackermann`] (`RobotSpec::ackermann`).
+    Ackermann,
+}
+
+/// A car-like robot's geometry and steering limits (`kinematics =
+/// "ackermann"`: the keys `wheelbase`, `max_steering_deg`,
+/// `max_steering_rate_deg`, `max_reverse_speed`). The robot's pose names
+/// the centre of its shape; the wheelbase is centred on it, so the rear
+/// axle is `wheelbase / 2` behind the centre along the heading.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Ackermann {
+    /// Distance between the axles, > 0.
+    pub wheelbase: f64,
+    /// Largest steering angle either way, rad, in (0, pi/2).
+    pub max_steering: f64,
+    /// Fastest change of the steering angle, rad/s, > 0.
+    pub max_steering_rate: f64,
+    /// Fastest speed backwards, >= 0 (0: the car never reverses).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub max_reverse_speed: f64,
+}
+
+/// Built-in `max_steering_deg`, degrees.
+pub const DEFAULT_MAX_STEERING_DEG: f64 = 30.0;
+/// Built-in `max_steering_rate_deg`, degrees per second.
+pub const DEFAULT_MAX_STEERING_RATE_DEG: f64 = 60.0;
+/// Built-in `goal_heading_tolerance_deg`, degrees.
+pub const DEFAULT_GOAL_HEADING_TOLERANCE_DEG: f64 = 10.0;
+
+impl Ackermann {
+    /// The radius of the tightest circle the rear axle drives,
+    /// `wheelbase / tan(max_steering)` (the centre's, L/2 ahead of the
+    /// axle, is `sqrt(R^2 + (L/2)^2)`).
+    pub fn min_turning_radius(&self) -> f64 {
+        self.wheelbase / self.max_steering.tan()
+    }
+}
+
+/// The heading a robot must have at its goal (`goal_heading_deg`,
+/// `goal_heading_tolerance_deg`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct GoalHeading {
+    /// The heading, rad, counter-clockwise from +x.
+    pub heading: f64,
+    /// How far the robot's heading may be from it, rad, in (0, pi].
+    pub tolerance: f64,
+}
+
+impl GoalHeading {
+    /// Is `heading` (rad) within the tolerance of the goal heading (the
+    /// difference taken the short way round)?
+    pub fn holds(&self, heading: f64) -> bool {
+        angle_between(heading, self.heading) <= self.tolerance
+    }
+}
+
+/// The angle between two headings, rad, in [0, pi] (the short way round).
+pub fn angle_between(a: f64, b: f64) -> f64 {
+    let d = (a - b).rem_euclid(std::f64::consts::TAU);
+    d.min(std::f64::consts::TAU - d)
 }
 
 /// How a robot's planner is led to its goal (the `route` robot key).
@@ -323,9 +385,18 @@ pub struct RobotSpec {
     pub path: Vec<[f64; 2]>,
     /// Half-width of the corridor around `path`.
     pub boundary: Option<f64>,
-    /// Holonomic (default) or unicycle.
+    /// Holonomic (default), unicycle or ackermann.
     #[serde(default)]
     pub kinematics: Kinematics,
+    /// Ackermann: the car's geometry and steering limits; `Some` exactly
+    /// when `kinematics` is [`Kinematics::Ackermann`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ackermann: Option<Ackermann>,
+    /// The heading the robot must have at its goal, if any: it has
+    /// arrived only when within `goal_tolerance` of the goal and within
+    /// this heading's tolerance ([`RobotSpec::at_goal`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub goal_heading: Option<GoalHeading>,
     /// Unicycle: turn-rate limit enforced by the world, rad/s, > 0.
     #[serde(default = "default_angular_speed")]
     pub max_angular_speed: f64,
@@ -519,16 +590,33 @@ impl RobotSpec {
         self.shape.shape(self.radius)
     }
 
-    /// The robot's heading at its start, rad: a unicycle faces its goal (0
-    /// if they coincide); a holonomic robot has heading 0 (its body never
-    /// turns).
+    /// The robot's heading at its start, rad: a unicycle or a car faces
+    /// its goal (0 if they coincide); a holonomic robot has heading 0 (its
+    /// body never turns).
     pub fn start_heading(&self) -> f64 {
         let d = [self.goal[0] - self.start[0], self.goal[1] - self.start[1]];
-        if self.kinematics == Kinematics::Unicycle && (d[0] != 0.0 || d[1] != 0.0) {
+        if self.turns() && (d[0] != 0.0 || d[1] != 0.0) {
             d[1].atan2(d[0])
         } else {
             0.0
         }
+    }
+
+    /// Does the robot's body turn (a unicycle or a car)?
+    pub fn turns(&self) -> bool {
+        matches!(
+            self.kinematics,
+            Kinematics::Unicycle | Kinematics::Ackermann
+        )
+    }
+
+    /// Has a robot at `position` with heading `heading` (rad) arrived, for
+    /// one tick: within `goal_tolerance` of the goal and, with a
+    /// `goal_heading`, within its tolerance of it (the world's goal test,
+    /// which also asks `goal_hold_ticks` such ticks running).
+    pub fn at_goal(&self, position: [f64; 2], heading: f64) -> bool {
+        let d = (self.goal[0] - position[0]).hypot(self.goal[1] - position[1]);
+        d <= self.goal_tolerance && self.goal_heading.is_none_or(|g| g.holds(heading))
     }
 }
 
@@ -543,13 +631,10 @@ impl Scenario {
     }
 
     /// Do the bodies' headings matter, so that trajectory.csv carries
-    /// them (`theta`)? When some robot turns (a unicycle) or some body is
-    /// not a disc (a turned rectangle is not the same body).
+    /// them (`theta`)? When some robot turns (a unicycle or a car) or
+    /// some body is not a disc (a turned rectangle is not the same body).
     pub fn has_headings(&self) -> bool {
-        self.robots
-            .iter()
-            .any(|r| r.kinematics == Kinematics::Unicycle)
-            || self.has_shapes()
+        self.robots.iter().any(RobotSpec::turns) || self.has_shapes()
     }
 
     /// Is some body not a disc?

@@ -344,6 +344,7 @@ impl Admission {
             command_kind::FORCE
                 | command_kind::VELOCITY
                 | command_kind::UNICYCLE
+                | command_kind::ACKERMANN
                 | command_kind::NONE
                 | command_kind::LOST
         ) {

@@ -605,6 +605,7 @@ impl<'a> Loop<'a> {
                     let applied = match c.kind {
                         command_kind::VELOCITY => Applied::Velocity(c.value),
                         command_kind::UNICYCLE => Applied::Unicycle(c.value),
+                        command_kind::ACKERMANN => Applied::Ackermann(c.value),
                         _ => Applied::Force(c.value),
                     };
                     match &self.timed.models[i] {
@@ -718,9 +719,9 @@ impl<'a> Loop<'a> {
         self.window.tick += 1;
         let at = self.stamp();
         self.recording.contacts(at, contacts);
-        let positions = self.world.states().iter().map(|s| s.position);
+        let poses = self.world.states().iter().map(|s| (s.position, s.heading));
         let scenario = &self.world.scenario;
-        let reached = self.recording.goals(at, scenario, positions);
+        let reached = self.recording.goals(at, scenario, poses);
         for i in reached {
             let flags = self.world.states()[i].flags | flags::AT_GOAL;
             self.world.set_flags(i, flags);

@@ -258,21 +258,22 @@ impl Recording {
     }
 
     /// The goal test after a step (Ko & Choi eq 22: within tolerance for
-    /// `goal_hold_ticks` ticks running), for robots at `positions`; writes
-    /// and returns the robots that reached their goal just now. The other
-    /// metrics of the robots' motion come from the recorded states, off
-    /// this loop ([`crate::tracking`]).
+    /// `goal_hold_ticks` ticks running; with a `goal_heading`, the heading
+    /// within its tolerance too, [`mrsim_scenario::RobotSpec::at_goal`]),
+    /// for robots at `poses` (position, heading); writes and returns the
+    /// robots that reached their goal just now. The other metrics of the
+    /// robots' motion come from the recorded states, off this loop
+    /// ([`crate::tracking`]).
     pub fn goals(
         &mut self,
         at: Stamp,
         scenario: &Scenario,
-        positions: impl Iterator<Item = [f64; 2]>,
+        poses: impl Iterator<Item = ([f64; 2], f64)>,
     ) -> Vec<usize> {
         let mut reached = Vec::new();
-        let robots = positions.zip(&scenario.robots);
-        for (i, ((p, spec), acc)) in robots.zip(&mut self.acc).enumerate() {
-            let d = (spec.goal[0] - p[0]).hypot(spec.goal[1] - p[1]);
-            if d <= spec.goal_tolerance {
+        let robots = poses.zip(&scenario.robots);
+        for (i, (((p, heading), spec), acc)) in robots.zip(&mut self.acc).enumerate() {
+            if spec.at_goal(p, heading) {
                 if acc.hold == 0 {
                     acc.hold_start = at.time;
                 }

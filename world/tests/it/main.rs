@@ -2,6 +2,7 @@
 //! one module per theme (`cargo test --release -p mrsim-world --test it
 //! dynamics::` runs one).
 
+mod ackermann;
 mod dynamics;
 mod obstacles;
 mod shapes;

@@ -183,7 +183,7 @@ impl Planner for Orca {
         // unless the robot heads away from the wall ([`WallRadius`]).
         let behind = match me.kinematics {
             Kinematics::Unicycle { .. } => self.look_ahead.clamp(0.0, me.radius),
-            Kinematics::Holonomic => 0.0,
+            Kinematics::Holonomic | Kinematics::Ackermann { .. } => 0.0,
         };
         let (sin, cos) = me.heading.sin_cos();
         let walls = WallRadius {

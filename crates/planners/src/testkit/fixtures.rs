@@ -60,6 +60,7 @@ impl RobotModel {
             max_accel: self.max_accel,
             heading: 0.0,
             angular_velocity: 0.0,
+            steering: 0.0,
             kinematics: Kinematics::Holonomic,
         }
     }
@@ -86,6 +87,49 @@ impl RobotModel {
             ..self.at(position, velocity)
         }
     }
+
+    /// The car `car` (its geometry and steering limits; its speed limits
+    /// are the model's) with id 0, its centre at `position`, heading
+    /// `heading`, driving at `speed` along it with steering `steering`: its
+    /// centre's velocity is v e + (L/2) theta' e_perp, theta' = v
+    /// tan(steering) / L.
+    pub fn car(
+        &self,
+        car: CarLimits,
+        position: Vec2,
+        heading: f64,
+        speed: f64,
+        steering: f64,
+    ) -> SelfState {
+        let (s, c) = heading.sin_cos();
+        let omega = speed * steering.tan() / car.wheelbase;
+        let velocity = Vec2::new(c, s) * speed + Vec2::new(-s, c) * (car.wheelbase / 2.0 * omega);
+        SelfState {
+            heading,
+            angular_velocity: omega,
+            steering,
+            kinematics: Kinematics::Ackermann {
+                wheelbase: car.wheelbase,
+                max_steering: car.max_steering,
+                max_steering_rate: car.max_steering_rate,
+                max_reverse_speed: car.max_reverse_speed,
+            },
+            ..self.at(position, velocity)
+        }
+    }
+}
+
+/// A test car's geometry and steering limits ([`RobotModel::car`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CarLimits {
+    /// Distance between the axles.
+    pub wheelbase: f64,
+    /// Steering limit, rad.
+    pub max_steering: f64,
+    /// Steering-rate limit, rad/s.
+    pub max_steering_rate: f64,
+    /// Fastest speed backwards.
+    pub max_reverse_speed: f64,
 }
 
 /// A sensed body of `kind`, without acceleration (the truth's estimate).

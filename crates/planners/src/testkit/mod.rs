@@ -16,7 +16,7 @@
 pub mod fixtures;
 pub mod rvo2;
 
-pub use fixtures::{RobotModel, observation, obstacle, robot, sensed};
+pub use fixtures::{CarLimits, RobotModel, observation, obstacle, robot, sensed};
 
 use crate::{
     BodyKind, Command, DesignatedPath, Observation, Planner, Segment, SelfState, Sensed, Vec2,
@@ -106,6 +106,7 @@ impl Sim {
                 max_accel,
                 heading: 0.0,
                 angular_velocity: 0.0,
+                steering: 0.0,
                 kinematics: crate::Kinematics::Holonomic,
             },
             goal,
@@ -189,9 +190,9 @@ impl Sim {
                             (v - s.velocity) / h
                         }
                     }
-                    // The testkit's robots are holonomic: a unicycle
-                    // command brakes them (the world's rule).
-                    Command::Unicycle { .. } => -s.velocity / h,
+                    // The testkit's robots are holonomic: a unicycle or
+                    // a car's command brakes them (the world's rule).
+                    Command::Unicycle { .. } | Command::Ackermann { .. } => -s.velocity / h,
                 };
                 if a.norm() > s.max_accel {
                     a *= s.max_accel / a.norm();

@@ -74,6 +74,8 @@ fn robot(name: &str, start: [f64; 2], goal: [f64; 2]) -> RobotSpec {
         max_angular_speed: mrsim_scenario::DEFAULT_MAX_ANGULAR_SPEED,
         max_angular_accel: mrsim_scenario::DEFAULT_MAX_ANGULAR_ACCEL,
         lookahead: mrsim_scenario::DEFAULT_LOOKAHEAD,
+        ackermann: None,
+        goal_heading: None,
         route: Default::default(),
         lane: Default::default(),
         sensor: None,

@@ -23,7 +23,7 @@ use crate::overrides::RobotPatch;
 use crate::raw::{RawDoc, RawRobot};
 use crate::types::*;
 use obstacles::resolve_obstacle;
-use robots::{Layer, resolve_robot, robot_patch};
+use robots::{CAR_KEYS, Layer, resolve_robot, robot_patch};
 use scene::check_scene;
 use world::{resolve_wall, resolve_world};
 
@@ -151,6 +151,9 @@ pub(crate) fn resolve(
         }
     }
 
+    if let Some(d) = defaults {
+        defaults_fit(d, &robots)?;
+    }
     if robots.is_empty() {
         return Err(Fail::new(
             Some(0..0),
@@ -196,4 +199,33 @@ pub(crate) fn resolve(
         scenario,
         file_robots,
     })
+}
+
+/// A `[defaults]` key that fits only some drives (a car's) or only a goal
+/// heading (its tolerance) must fit some robot of the file: one that fits
+/// none would say something of no robot.
+fn defaults_fit(d: &RawRobot, robots: &[RobotSpec]) -> Result<(), Fail> {
+    if !robots.iter().any(|r| r.kinematics == Kinematics::Ackermann) {
+        for (key, field) in CAR_KEYS {
+            if let Some(v) = field(d) {
+                return Err(Fail::new(
+                    Some(v.span()),
+                    "defaults",
+                    format!(
+                        "{key} is a car's key and no robot is a car (kinematics = \"ackermann\")"
+                    ),
+                ));
+            }
+        }
+    }
+    if let Some(v) = &d.goal_heading_tolerance_deg
+        && !robots.iter().any(|r| r.goal_heading.is_some())
+    {
+        return Err(Fail::new(
+            Some(v.span()),
+            "defaults",
+            "goal_heading_tolerance_deg needs goal_heading_deg, and no robot has one",
+        ));
+    }
+    Ok(())
 }

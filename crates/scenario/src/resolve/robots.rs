@@ -19,6 +19,26 @@ pub(super) struct Layer<'a> {
     pub what: String,
 }
 
+impl Layer<'_> {
+    /// Is this the `[defaults]` table (whose keys are for the robots they
+    /// fit, not a statement about each robot)?
+    fn is_defaults(&self) -> bool {
+        self.what == "defaults"
+    }
+}
+
+/// A number key's field of a robot table.
+type Field = fn(&RawRobot) -> &Option<S<f64>>;
+
+/// The keys that apply to a car only (`kinematics = "ackermann"`), with
+/// their fields.
+pub(super) const CAR_KEYS: [(&str, Field); 4] = [
+    ("wheelbase", |r| &r.wheelbase),
+    ("max_steering_deg", |r| &r.max_steering_deg),
+    ("max_steering_rate_deg", |r| &r.max_steering_rate_deg),
+    ("max_reverse_speed", |r| &r.max_reverse_speed),
+];
+
 /// Where a robot's errors point.
 #[derive(Debug, Clone)]
 pub(crate) struct RobotSpans {
@@ -256,6 +276,8 @@ pub(super) fn resolve_robot(
             DEFAULT_MAX_ANGULAR_ACCEL,
         )?,
         lookahead: 0.0,
+        ackermann: None,
+        goal_heading: None,
         route: pick(layers, |r| &r.route).map_or(Route::Direct, |(v, _)| *v.get_ref()),
         lane: pick(layers, |r| &r.lane).map_or(Lane::None, |(v, _)| *v.get_ref()),
         sensor,
@@ -264,6 +286,8 @@ pub(super) fn resolve_robot(
     };
     let mut spec = spec;
     spec.lookahead = lookahead(layers, &spec)?;
+    spec.ackermann = ackermann(layers, spec.kinematics, table.as_ref(), &anon)?;
+    spec.goal_heading = goal_heading(layers, spec.kinematics)?;
     if spec.lane != Lane::None
         && spec.route != Route::Shortest
         && let Some((v, what)) = pick(layers, |r| &r.lane)
@@ -355,6 +379,142 @@ fn lookahead(layers: &[Layer], spec: &RobotSpec) -> Result<f64, Fail> {
         ));
     }
     Ok(given)
+}
+
+/// The name of a drive as a scenario writes it.
+fn drive_name(k: Kinematics) -> &'static str {
+    match k {
+        Kinematics::Holonomic => "holonomic",
+        Kinematics::Unicycle => "unicycle",
+        Kinematics::Ackermann => "ackermann",
+    }
+}
+
+/// A car's geometry and limits, when the robot is one: `wheelbase`
+/// required, `max_steering_deg` in (0, 90) (default
+/// [`DEFAULT_MAX_STEERING_DEG`]), `max_steering_rate_deg` > 0 (default
+/// [`DEFAULT_MAX_STEERING_RATE_DEG`]), `max_reverse_speed` >= 0 (default
+/// 0), each checked in every layer. On another drive these keys are
+/// refused where the robot's own table (or an override) gives them; a
+/// `[defaults]` one is for the cars of the file (refused by `resolve` when
+/// there is none).
+fn ackermann(
+    layers: &[Layer],
+    kinematics: Kinematics,
+    table: Option<&Range<usize>>,
+    anon: &str,
+) -> Result<Option<Ackermann>, Fail> {
+    if kinematics != Kinematics::Ackermann {
+        for l in layers.iter().filter(|l| !l.is_defaults()) {
+            for (key, field) in CAR_KEYS {
+                if let Some(v) = field(l.raw) {
+                    return Err(Fail::new(
+                        Some(v.span()),
+                        &l.what,
+                        format!(
+                            "{key} is a car's key (kinematics = \"ackermann\"); this robot is {}",
+                            drive_name(kinematics)
+                        ),
+                    ));
+                }
+            }
+        }
+        return Ok(None);
+    }
+    let wheelbase = pick_num(layers, |r| &r.wheelbase, "wheelbase", Rule::Pos, f64::NAN)?;
+    if wheelbase.is_nan() {
+        let (span, what) = match pick(layers, |r| &r.kinematics) {
+            Some((k, what)) => (Some(k.span()), what),
+            None => (table.cloned(), anon),
+        };
+        return Err(Fail::new(
+            span,
+            what,
+            "kinematics = \"ackermann\" needs `wheelbase`, the distance between the axles (> 0)",
+        ));
+    }
+    let max_steering = pick_num(
+        layers,
+        |r| &r.max_steering_deg,
+        "max_steering_deg",
+        Rule::Acute,
+        DEFAULT_MAX_STEERING_DEG,
+    )?;
+    let max_steering_rate = pick_num(
+        layers,
+        |r| &r.max_steering_rate_deg,
+        "max_steering_rate_deg",
+        Rule::Pos,
+        DEFAULT_MAX_STEERING_RATE_DEG,
+    )?;
+    let max_reverse_speed = pick_num(
+        layers,
+        |r| &r.max_reverse_speed,
+        "max_reverse_speed",
+        Rule::NonNeg,
+        0.0,
+    )?;
+    Ok(Some(Ackermann {
+        wheelbase,
+        max_steering: max_steering.to_radians(),
+        max_steering_rate: max_steering_rate.to_radians(),
+        max_reverse_speed,
+    }))
+}
+
+/// The heading the robot must have at its goal (`goal_heading_deg`, any
+/// finite angle; `goal_heading_tolerance_deg` in (0, 180], default
+/// [`DEFAULT_GOAL_HEADING_TOLERANCE_DEG`], only with a goal heading: where
+/// the robot's own table gives it without one it is refused, a
+/// `[defaults]` one is for the robots that have one). A holonomic robot's
+/// heading stays 0, so a goal heading it can never meet is refused.
+fn goal_heading(layers: &[Layer], kinematics: Kinematics) -> Result<Option<GoalHeading>, Fail> {
+    let heading = pick_num(
+        layers,
+        |r| &r.goal_heading_deg,
+        "goal_heading_deg",
+        Rule::Finite,
+        f64::NAN,
+    )?;
+    let tolerance = pick_num(
+        layers,
+        |r| &r.goal_heading_tolerance_deg,
+        "goal_heading_tolerance_deg",
+        Rule::HalfTurn,
+        DEFAULT_GOAL_HEADING_TOLERANCE_DEG,
+    )?;
+    if heading.is_nan() {
+        for l in layers.iter().filter(|l| !l.is_defaults()) {
+            if let Some(v) = &l.raw.goal_heading_tolerance_deg {
+                return Err(Fail::new(
+                    Some(v.span()),
+                    &l.what,
+                    "goal_heading_tolerance_deg needs goal_heading_deg (the heading it is a \
+                     tolerance of)",
+                ));
+            }
+        }
+        return Ok(None);
+    }
+    let goal = GoalHeading {
+        heading: heading.to_radians(),
+        tolerance: tolerance.to_radians(),
+    };
+    if kinematics == Kinematics::Holonomic
+        && !goal.holds(0.0)
+        && let Some((v, what)) = pick(layers, |r| &r.goal_heading_deg)
+    {
+        return Err(Fail::new(
+            Some(v.span()),
+            what,
+            format!(
+                "goal_heading_deg {heading} can never be met: a holonomic robot never turns \
+                 (its heading stays 0), and 0 is not within goal_heading_tolerance_deg \
+                 {tolerance} of it"
+            ),
+        ));
+    }
+    Ok(Some(goal))
 }
 
 /// A `sensor` table: only `kind = "lidar"` is known; each key is checked

@@ -3,6 +3,7 @@
 
 mod common;
 
+mod cars;
 mod cores;
 mod files;
 mod fuzz;

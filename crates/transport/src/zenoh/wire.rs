@@ -112,7 +112,7 @@ pub fn decode_slice<H: Wire, T: Wire>(
 }
 
 impl Wire for BodyState {
-    const LEN: usize = 4 * 4 + 7 * 8;
+    const LEN: usize = 4 * 4 + 8 * 8;
     fn put(&self, o: &mut Vec<u8>) {
         put_u32(self.id, o);
         put_u32(self.kind, o);
@@ -124,6 +124,7 @@ impl Wire for BodyState {
         put_f64(self.radius, o);
         put_f64(self.heading, o);
         put_f64(self.angular_velocity, o);
+        put_f64(self.steering, o);
     }
     fn get(r: &mut Reader<'_>) -> Self {
         Self {
@@ -136,6 +137,7 @@ impl Wire for BodyState {
             radius: r.f64(),
             heading: r.f64(),
             angular_velocity: r.f64(),
+            steering: r.f64(),
         }
     }
 }
@@ -351,6 +353,9 @@ mod tests {
         round_trip(BodyState {
             id: 2,
             radius: 0.5,
+            heading: 0.25,
+            angular_velocity: -0.5,
+            steering: 0.125,
             ..Default::default()
         });
         round_trip(StatsHeader {
