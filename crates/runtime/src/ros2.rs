@@ -793,6 +793,7 @@ mod tests {
             position: Vec2::zeros(),
             velocity: Vec2::zeros(),
             radius: 1.0,
+            shape: mrsim_planners::Shape::disc(1.0),
             mass: 1.0,
             damping: 0.0,
             max_speed: 4.0,
