@@ -178,6 +178,8 @@ pub struct Interaction {
     ttc: Vec<f64>,
     /// Every body's shape by id, empty when every body is a disc.
     shapes: Vec<mrsim_shape::Shape>,
+    /// This tick's placed shapes, by body id (with shapes only).
+    placed: Vec<mrsim_shape::Placement>,
     open: HashMap<(u32, u32), Open>,
     /// Encounters ended and not yet taken.
     closed: Vec<(u32, u32, Open)>,
@@ -210,6 +212,7 @@ impl Interaction {
             } else {
                 Vec::new()
             },
+            placed: Vec::new(),
             open: HashMap::new(),
             closed: Vec::new(),
         }
@@ -283,6 +286,17 @@ impl Interaction {
         smallest.resize(n, f64::INFINITY);
         ttc.clear();
         ttc.resize(n, f64::INFINITY);
+        // With shapes, every body placed once this tick.
+        let mut placed = std::mem::take(&mut self.placed);
+        placed.clear();
+        if !self.shapes.is_empty() {
+            placed.extend(
+                states
+                    .iter()
+                    .zip(&self.shapes)
+                    .map(|(s, b)| mrsim_shape::Placement::of(b, pose(s))),
+            );
+        }
         for i in 0..n {
             let s = &states[i];
             let after = i as u32 + 1;
@@ -303,23 +317,46 @@ impl Interaction {
                     (Some(a), Some(b)) if !(a.is_disc() && b.is_disc()) => Some((a, b)),
                     _ => None,
                 };
-                let g = match shaped {
-                    Some((a, b)) => mrsim_shape::gap(a, pose(s), b, pose(q)),
-                    None => gap(s, q),
-                };
-                // Farther than the social distance, or not a number.
-                if g.partial_cmp(&reach) != Some(std::cmp::Ordering::Less) {
-                    continue;
-                }
-                let t = match shaped {
-                    // The circumscribed discs touch first: from there, the
-                    // true shapes' time.
-                    Some((a, b)) => {
-                        let v = [q.velocity[0] - s.velocity[0], q.velocity[1] - s.velocity[1]];
-                        let from = time_to_collision(s, q);
-                        mrsim_shape::time_to_contact(a, pose(s), b, pose(q), v, from)
+                let (g, t) = match shaped {
+                    None => {
+                        let g = gap(s, q);
+                        // Farther than the social distance, or not a number.
+                        if g.partial_cmp(&reach) != Some(std::cmp::Ordering::Less) {
+                            continue;
+                        }
+                        (g, time_to_collision(s, q))
                     }
-                    None => time_to_collision(s, q),
+                    Some((a, b)) => {
+                        // The circumscribed discs' gap and time are lower
+                        // bounds of the shapes': a pair whose bounds change
+                        // no robot's smallest gap or time and meet no
+                        // encounter changes nothing, and its shapes are not
+                        // measured.
+                        let (g0, t0) = (gap(s, q), time_to_collision(s, q));
+                        if g0.partial_cmp(&reach) != Some(std::cmp::Ordering::Less) {
+                            continue;
+                        }
+                        let lowers = |k: usize, x: f64, of: &[f64]| k < n && x < of[k];
+                        let meets = g0 < self.encounter_gap;
+                        let nearer = lowers(i, g0, &smallest) || lowers(j, g0, &smallest);
+                        let sooner = lowers(i, t0, &ttc) || lowers(j, t0, &ttc);
+                        if !(meets || nearer || sooner) {
+                            continue;
+                        }
+                        let g = mrsim_shape::placed_gap(&placed[i], &placed[j]);
+                        if g.partial_cmp(&reach) != Some(std::cmp::Ordering::Less) {
+                            continue;
+                        }
+                        // The circumscribed discs touch first: from there,
+                        // the true shapes' time.
+                        let t = if meets || sooner {
+                            let v = [q.velocity[0] - s.velocity[0], q.velocity[1] - s.velocity[1]];
+                            mrsim_shape::time_to_contact(a, pose(s), b, pose(q), v, t0)
+                        } else {
+                            t0
+                        };
+                        (g, t)
+                    }
                 };
                 for k in [i, j] {
                     if k < n {
@@ -351,6 +388,7 @@ impl Interaction {
         }
         self.smallest = smallest;
         self.ttc = ttc;
+        self.placed = placed;
         self.near = near;
         // Encounters not seen this tick have ended.
         let closed = &mut self.closed;

@@ -281,6 +281,59 @@ pub fn gap(a: &Shape, pa: Pose, b: &Shape, pb: Pose) -> f64 {
     }
 }
 
+/// A shape placed at its pose once, for many gaps at one instant (a
+/// polygon's vertices turned into the world once, not once per pair).
+#[derive(Debug, Clone, Copy)]
+pub enum Placement {
+    /// A disc: centre and radius.
+    Disc {
+        /// Centre.
+        centre: P2,
+        /// Radius.
+        radius: f64,
+    },
+    /// A polygon's vertices in the world.
+    Polygon(Placed),
+}
+
+impl Placement {
+    /// `shape` at `pose`.
+    pub fn of(shape: &Shape, pose: Pose) -> Self {
+        match shape.placed(pose) {
+            Some(p) => Placement::Polygon(p),
+            None => Placement::Disc {
+                centre: pose.position,
+                radius: shape.circumradius(),
+            },
+        }
+    }
+}
+
+/// [`gap`] of two placed shapes: the same number.
+pub fn placed_gap(a: &Placement, b: &Placement) -> f64 {
+    match (a, b) {
+        (
+            Placement::Disc {
+                centre: ca,
+                radius: ra,
+            },
+            Placement::Disc {
+                centre: cb,
+                radius: rb,
+            },
+        ) => {
+            let dx = ca[0] - cb[0];
+            let dy = ca[1] - cb[1];
+            (dx * dx + dy * dy).sqrt() - ra - rb
+        }
+        (Placement::Disc { centre, radius }, Placement::Polygon(p))
+        | (Placement::Polygon(p), Placement::Disc { centre, radius }) => {
+            polygon_signed_distance(p.points(), *centre) - radius
+        }
+        (Placement::Polygon(x), Placement::Polygon(y)) => convex_gap(x.points(), y.points()),
+    }
+}
+
 /// The time until two posed shapes touch, `b` moving at `v` relative to
 /// `a` and neither turning: 0 if they overlap, infinity if they never
 /// touch. `from` is a time known to come before contact (0, or the
@@ -339,37 +392,33 @@ pub fn gap_to_segment(shape: &Shape, pose: Pose, s: [P2; 2]) -> f64 {
 pub fn signed_distance(shape: &Shape, pose: Pose, p: P2) -> f64 {
     match shape.placed(pose) {
         None => norm(sub(p, pose.position)) - shape.circumradius(),
-        Some(poly) => {
-            let pts = poly.points();
-            let n = pts.len();
-            let mut inside = true;
-            let mut outside_d = f64::INFINITY;
-            let mut inside_d = f64::INFINITY;
-            for i in 0..n {
-                let (a, b) = (pts[i], pts[(i + 1) % n]);
-                let e = sub(b, a);
-                let side = cross(e, sub(p, a)) / norm(e);
-                if side < 0.0 {
-                    inside = false;
-                }
-                inside_d = inside_d.min(side);
-                outside_d = outside_d.min(segment_distance([a, b], p));
-            }
-            if inside { -inside_d } else { outside_d }
-        }
+        Some(poly) => polygon_signed_distance(poly.points(), p),
     }
+}
+
+/// The signed distance from a convex polygon's surface (world vertices,
+/// counter-clockwise) to `p`.
+fn polygon_signed_distance(pts: &[P2], p: P2) -> f64 {
+    let n = pts.len();
+    let mut inside = true;
+    let mut outside_d2 = f64::INFINITY;
+    let mut inside_d = f64::INFINITY;
+    for i in 0..n {
+        let (a, b) = (pts[i], pts[(i + 1) % n]);
+        let e = sub(b, a);
+        let side = cross(e, sub(p, a)) / norm(e);
+        if side < 0.0 {
+            inside = false;
+        }
+        inside_d = inside_d.min(side);
+        outside_d2 = outside_d2.min(segment_distance_sq([a, b], p));
+    }
+    if inside { -inside_d } else { outside_d2.sqrt() }
 }
 
 /// Distance from point `p` to segment `s`.
 pub fn segment_distance(s: [P2; 2], p: P2) -> f64 {
-    let d = sub(s[1], s[0]);
-    let l2 = dot(d, d);
-    let t = if l2 > 0.0 {
-        (dot(sub(p, s[0]), d) / l2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    norm(sub(p, [s[0][0] + t * d[0], s[0][1] + t * d[1]]))
+    segment_distance_sq(s, p).sqrt()
 }
 
 /// The least depth of overlap of the projections of `a` and `b` on the
@@ -392,6 +441,10 @@ fn least_overlap(a: &[P2], b: &[P2]) -> f64 {
         // The shorter way to push them apart along the axis (not the
         // length the two intervals share: one may hold the other).
         least = least.min((hi_a - lo_b).min(hi_b - lo_a));
+        if least <= 0.0 {
+            // A separating axis: they are apart, by however much.
+            return least;
+        }
     }
     least
 }
@@ -412,19 +465,32 @@ fn convex_gap(a: &[P2], b: &[P2]) -> f64 {
         return -overlap;
     }
     // Apart (or touching): the nearest pair is a vertex of one and an edge
-    // of the other.
-    let mut d = f64::INFINITY;
+    // of the other (squared distances, one root).
+    let mut d2 = f64::INFINITY;
     for (x, y) in [(a, b), (b, a)] {
         let n = y.len();
         let edges = if n == 2 { 1 } else { n };
         for i in 0..edges {
             let s = [y[i], y[(i + 1) % n]];
             for &p in x {
-                d = d.min(segment_distance(s, p));
+                d2 = d2.min(segment_distance_sq(s, p));
             }
         }
     }
-    d
+    d2.sqrt()
+}
+
+/// Squared distance from point `p` to segment `s`.
+fn segment_distance_sq(s: [P2; 2], p: P2) -> f64 {
+    let d = sub(s[1], s[0]);
+    let l2 = dot(d, d);
+    let t = if l2 > 0.0 {
+        (dot(sub(p, s[0]), d) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let q = sub(p, [s[0][0] + t * d[0], s[0][1] + t * d[1]]);
+    dot(q, q)
 }
 
 #[cfg(test)]

@@ -212,6 +212,12 @@ proptest! {
     }
 
     #[test]
+    fn shapes_placed_once_give_the_same_gap(a in arb_shape(), pa in arb_pose(), b in arb_shape(), pb in arb_pose()) {
+        let placed = placed_gap(&Placement::of(&a, pa), &Placement::of(&b, pb));
+        prop_assert_eq!(placed.to_bits(), gap(&a, pa, &b, pb).to_bits());
+    }
+
+    #[test]
     fn the_true_gap_is_never_below_the_circumscribed_discs_gap(a in arb_shape(), pa in arb_pose(), b in arb_shape(), pb in arb_pose()) {
         let discs = gap(&Shape::disc(a.circumradius()), pa, &Shape::disc(b.circumradius()), pb);
         prop_assert!(gap(&a, pa, &b, pb) >= discs - 1e-9);
