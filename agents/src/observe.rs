@@ -577,7 +577,13 @@ impl Observer {
                 position,
                 velocity,
                 radius: spec.radius,
-                shape: spec.body_shape(),
+                // The shapes already read (a polygon checked once, not
+                // every tick); all discs: the disc of its radius.
+                shape: self
+                    .shapes
+                    .get(self.me)
+                    .copied()
+                    .unwrap_or(Shape::disc(spec.radius)),
                 mass: spec.mass,
                 damping: spec.damping,
                 max_speed: spec.max_speed,

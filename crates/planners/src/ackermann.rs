@@ -456,14 +456,7 @@ impl Planner for Tracker {
                 };
             }
             Command::Velocity(u) => u,
-            Command::Force(f) => {
-                let m = if me.mass > 0.0 { me.mass } else { 1.0 };
-                let mut a = (f - me.velocity * me.damping) / m;
-                if a.norm() > me.max_accel {
-                    a *= me.max_accel / a.norm();
-                }
-                me.velocity + a * obs.dt
-            }
+            Command::Force(f) => me.velocity_after(f, obs.dt),
         };
         // A planner's NaN or infinity reaches the guard as it was.
         if !(u.x.is_finite() && u.y.is_finite()) {

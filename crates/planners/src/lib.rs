@@ -252,6 +252,21 @@ pub struct SelfState {
     pub kinematics: Kinematics,
 }
 
+impl SelfState {
+    /// The velocity a force `f` held for `dt` brings the robot to, by its
+    /// actuator model (m r'' + b r' = f, the acceleration within
+    /// `max_accel`): what a force asks of a robot that takes velocities
+    /// (the unicycle's and the car's controllers).
+    pub fn velocity_after(&self, f: Vec2, dt: f64) -> Vec2 {
+        let m = if self.mass > 0.0 { self.mass } else { 1.0 };
+        let mut a = (f - self.velocity * self.damping) / m;
+        if a.norm() > self.max_accel {
+            a *= self.max_accel / a.norm();
+        }
+        self.velocity + a * dt
+    }
+}
+
 /// A static wall segment.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Segment {

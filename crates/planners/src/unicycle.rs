@@ -138,14 +138,7 @@ impl Planner for LookAhead {
             // A car's command on a unicycle passes, and the world brakes.
             Command::Unicycle { .. } | Command::Ackermann { .. } => return cmd,
             Command::Velocity(u) => u,
-            Command::Force(f) => {
-                let m = if me.mass > 0.0 { me.mass } else { 1.0 };
-                let mut a = (f - me.velocity * me.damping) / m;
-                if a.norm() > me.max_accel {
-                    a *= me.max_accel / a.norm();
-                }
-                me.velocity + a * obs.dt
-            }
+            Command::Force(f) => me.velocity_after(f, obs.dt),
         };
         let (v, omega) = Self::unicycle_for(u, me.heading, l);
         Command::Unicycle { v, omega }

@@ -4,7 +4,7 @@
 mod common;
 
 use common::{Lcg, assert_drivable, close, dist};
-use mrsim_route::{CarPath, Gear, Steer, dubins, reeds_shepp};
+use mrsim_route::{CarPath, Gear, Piece, Steer, dubins, reeds_shepp};
 use mrsim_shape::Pose;
 use proptest::prelude::*;
 use std::f64::consts::{PI, TAU};
@@ -188,4 +188,45 @@ proptest! {
         let m = |p: Pose| Pose::new([p.position[0], -p.position[1]], -p.heading);
         prop_assert!((ab - reeds_shepp::length(m(a), m(b), r)).abs() < 1e-6);
     }
+}
+
+#[test]
+fn pieces_join_and_the_end_is_the_closed_form() {
+    let r = 2.0;
+    let p = CarPath::new(
+        Pose::new([1.0, 1.0], 0.0),
+        r,
+        [
+            Piece {
+                steer: Steer::Left,
+                length: PI,
+            },
+            Piece {
+                steer: Steer::Left,
+                length: PI,
+            },
+            Piece {
+                steer: Steer::Straight,
+                length: 0.0,
+            },
+            Piece {
+                steer: Steer::Straight,
+                length: -3.0,
+            },
+        ],
+    );
+    // Half a circle to the left (radius 2), then 3 back.
+    assert_eq!(p.pieces().len(), 2);
+    let e = p.end();
+    assert!((e.position[0] - 4.0).abs() < 1e-12, "{e:?}");
+    assert!((e.position[1] - 5.0).abs() < 1e-12, "{e:?}");
+    assert!((e.heading - PI).abs() < 1e-12);
+    assert_eq!(p.gear_changes(), 1);
+    assert!((p.length() - (2.0 * PI + 3.0)).abs() < 1e-12);
+    let poses = p.poses(0.1);
+    assert_drivable(&poses, r);
+    assert!(poses.windows(2).all(|w| w[1].s - w[0].s <= 0.1 + 1e-12));
+    let last = poses.last().expect("poses");
+    assert!((last.s - p.length()).abs() < 1e-12);
+    assert_eq!(last.gear, Gear::Reverse);
 }
