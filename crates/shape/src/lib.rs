@@ -228,6 +228,34 @@ impl Shape {
         }
     }
 
+    /// The radius of the largest disc about the body's origin inside the
+    /// shape (a disc's own radius; a rectangle's half width): the least
+    /// distance from the origin to an edge's line, 0 if the origin is not
+    /// inside.
+    ///
+    /// ```
+    /// use mrsim_shape::{Polygon, Shape};
+    /// let agv = Shape::Polygon(Polygon::rectangle(0.9, 0.6).unwrap());
+    /// assert!((agv.inradius() - 0.3).abs() < 1e-12);
+    /// ```
+    pub fn inradius(&self) -> f64 {
+        match self {
+            Shape::Disc { radius } => *radius,
+            Shape::Polygon(p) => {
+                let pts = p.points();
+                let n = pts.len();
+                (0..n)
+                    .map(|i| {
+                        let (a, b) = (pts[i], pts[(i + 1) % n]);
+                        let e = sub(b, a);
+                        cross(e, sub([0.0, 0.0], a)) / norm(e)
+                    })
+                    .fold(f64::INFINITY, f64::min)
+                    .max(0.0)
+            }
+        }
+    }
+
     /// The polygon's vertices in the world at `pose` (`None` for a disc).
     pub fn placed(&self, pose: Pose) -> Option<Placed> {
         match self {
@@ -383,6 +411,15 @@ pub fn gap_to_segment(shape: &Shape, pose: Pose, s: [P2; 2]) -> f64 {
     match shape.placed(pose) {
         None => segment_distance(s, pose.position) - shape.circumradius(),
         Some(poly) => convex_gap(poly.points(), &s),
+    }
+}
+
+/// [`gap_to_segment`] of a placed shape: the same number, the polygon
+/// turned into the world once for many segments.
+pub fn placed_gap_to_segment(a: &Placement, s: [P2; 2]) -> f64 {
+    match a {
+        Placement::Disc { centre, radius } => segment_distance(s, *centre) - radius,
+        Placement::Polygon(p) => convex_gap(p.points(), &s),
     }
 }
 

@@ -202,8 +202,10 @@
 //! outline ahead was already in contact, and the robot stood still for
 //! good).
 
+mod ackermann;
 mod brake;
 mod contact;
+mod footprint;
 mod meeting;
 mod planner;
 mod unicycle;
@@ -213,6 +215,7 @@ pub use planner::{Dwa, Obstacles};
 
 use crate::{BodyKind, Command, Kinematics, Observation, Planner, Sensed, Vec2};
 use contact::{scan_points, time_to_disc, time_to_segment};
+use footprint::{Footprint, Motion, Rollout};
 
 impl Dwa {
     /// Time to the first contact of the robot moving at `v` (infinite if
@@ -244,6 +247,45 @@ impl Dwa {
             consider(time_to_segment(me.position, v, me.radius, w), v);
         }
         (t_min, admissible)
+    }
+
+    /// [`Dwa::time_to_contact`] for a footprint moving at `v`: the first
+    /// contact of the footprint translated at `v` up to `horizon`, and
+    /// whether, holding `v` for a tick and then braking along it, it stops
+    /// clear of the walls and of the others at their velocities.
+    fn footprint_contact(
+        f: &mut Footprint,
+        obs: &Observation,
+        v: Vec2,
+        horizon: f64,
+    ) -> (f64, bool) {
+        let me = &obs.me;
+        let dt = if obs.dt > 0.0 { obs.dt } else { 0.1 };
+        let h = dt / 2.0;
+        let (p, th) = (me.position, me.heading);
+        let steps = (horizon / h).ceil() as usize;
+        let held: Vec<(Vec2, f64)> = (0..=steps).map(|k| (p + v * (k as f64 * h), th)).collect();
+        let t_c = f.contact(&Rollout::new(h, held, me.radius), &[Motion::Constant], true);
+        let u = v.norm();
+        let a = me.max_accel.max(1e-9);
+        let stop = ((dt + u / a) / h).ceil() as usize + 1;
+        let dir = if u > 0.0 { v / u } else { Vec2::zeros() };
+        let braking: Vec<(Vec2, f64)> = (0..=stop)
+            .map(|k| {
+                let t = k as f64 * h;
+                let tb = (t - dt).clamp(0.0, u / a);
+                let s = u * t.min(dt) + u * tb - 0.5 * a * tb * tb;
+                (p + dir * s, th)
+            })
+            .collect();
+        let stops = f
+            .contact(
+                &Rollout::new(h, braking, me.radius),
+                &[Motion::Constant],
+                true,
+            )
+            .is_infinite();
+        (t_c, stops)
     }
 
     /// The sampled dynamic window V_d intersected with V_s.
@@ -278,6 +320,9 @@ impl Dwa {
 
 impl Planner for Dwa {
     fn plan(&mut self, obs: &Observation) -> Command {
+        if let Some(car) = crate::ackermann::Car::of(&obs.me) {
+            return ackermann::plan(self, obs, car);
+        }
         if let Kinematics::Unicycle {
             max_angular_speed,
             max_angular_accel,
@@ -312,6 +357,10 @@ impl Planner for Dwa {
         true
     }
 
+    fn native_ackermann(&self) -> bool {
+        true
+    }
+
     fn needs_scan(&self) -> bool {
         self.obstacles == Obstacles::Scan
     }
@@ -333,9 +382,30 @@ impl Dwa {
 
         let mut best: Option<(f64, Vec2)> = None;
         let mut least_bad = (f64::NEG_INFINITY, me.velocity);
-        for v in self.window(obs) {
+        let window = self.window(obs);
+        // A rectangle or polygon: its true footprint, translated (a
+        // holonomic robot never turns), against the walls and the others.
+        let pad = self.padding.unwrap_or(me.shape.inradius() / 4.0);
+        let mut foot = (!me.shape.is_disc()).then(|| {
+            let reach = me.max_speed * self.horizon + me.radius + pad;
+            self.walls.prepare(obs.walls, 2.0 * (me.radius + pad));
+            let any = !self.walls.near(obs.walls, me.position, reach).is_empty();
+            Footprint::new(
+                me.shape,
+                (me.position, me.heading),
+                pad,
+                obs.walls,
+                &mut self.walls,
+                any,
+                obs.others,
+            )
+        });
+        for v in window {
             let speed = v.norm();
-            let (t_c, admissible) = Self::time_to_contact(obs, v);
+            let (t_c, admissible) = match foot.as_mut() {
+                Some(f) => Self::footprint_contact(f, obs, v, self.horizon),
+                None => Self::time_to_contact(obs, v),
+            };
             if t_c > least_bad.0 {
                 least_bad = (t_c, v);
             }

@@ -4,6 +4,7 @@
 
 use super::brake::Braking;
 use super::contact::{scan_points, time_to_disc, time_to_segment};
+use super::footprint::{Footprint, Motion, Rollout, unicycle_poses};
 use super::meeting::{in_the_way, right_of_goal};
 use super::planner::{Dwa, Obstacles};
 use super::walls::WallGrid;
@@ -169,7 +170,7 @@ const TIE: f64 = 1e-6;
 /// frame, would pick the left turn for one and the right for the other,
 /// which is the same side of the line between them: they would meet
 /// again. Within rounding, both turn right.
-fn rightmost_best(scored: &[(f64, f64, f64)], tie: f64) -> Option<(f64, f64, f64)> {
+pub(super) fn rightmost_best(scored: &[(f64, f64, f64)], tie: f64) -> Option<(f64, f64, f64)> {
     let top = scored.iter().map(|s| s.0).fold(f64::NEG_INFINITY, f64::max);
     let mut best: Option<(f64, f64, f64)> = None;
     for &s in scored.iter().filter(|s| s.0 >= top - tie) {
@@ -184,6 +185,25 @@ fn rightmost_best(scored: &[(f64, f64, f64)], tie: f64) -> Option<(f64, f64, f64
 fn wrap(a: f64) -> f64 {
     let w = a.rem_euclid(2.0 * PI);
     if w > PI { w - 2.0 * PI } else { w }
+}
+
+/// Whether a back-off (v, omega) may go on for another tick: no contact
+/// along it within the tick (a disc: driving straight, its turn in place
+/// being always clear), and, for a footprint, stopping from it clear of
+/// everything.
+fn backing_clear(
+    probe: &mut impl FnMut(f64, f64, bool) -> (f64, bool),
+    v: f64,
+    omega: f64,
+    foot: bool,
+    dt: f64,
+) -> bool {
+    if foot {
+        let (t, stops) = probe(v, omega, true);
+        t > dt && stops
+    } else {
+        probe(v, 0.0, false).0 > dt
+    }
 }
 
 /// Seconds facing the goal without moving before the robot backs off.
@@ -259,9 +279,18 @@ pub(super) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
     let at_goal = d_goal <= obs.goal_tolerance;
     // What is avoided: the scan's returns, or the bodies and the walls the
     // robot can reach within the horizon.
-    let padded = me.radius + dwa.padding.unwrap_or(me.radius / 4.0);
-    let reach = me.max_speed * dwa.horizon + padded;
     let scan = dwa.obstacles == Obstacles::Scan;
+    // A rectangle or polygon on true states is checked with its true
+    // footprint, keeping a quarter of its inscribed radius by default
+    // (module documentation of `dwa`, "True footprints").
+    let foot = !scan && !me.shape.is_disc();
+    let pad = if foot {
+        dwa.padding.unwrap_or(me.shape.inradius() / 4.0)
+    } else {
+        dwa.padding.unwrap_or(me.radius / 4.0)
+    };
+    let padded = me.radius + pad;
+    let reach = me.max_speed * dwa.horizon + padded;
     let points: Vec<Vec2> = if scan {
         scan_points(obs).filter(|q| q.norm() <= reach).collect()
     } else {
@@ -308,40 +337,87 @@ pub(super) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
         .iter()
         .map(|w| (w.closest_point(me.position) - me.position).norm())
         .fold(f64::INFINITY, f64::min);
-    let mut arc_walls = ArcWalls {
-        all: obs.walls,
-        grid: &mut dwa.walls,
-        buf: Vec::new(),
-        any: !walls.is_empty(),
-        radius: padded.min(wall_distance * (1.0 - 1e-6)),
-    };
     let others: &[Sensed] = if scan { &[] } else { obs.others };
     let step = dt / 2.0;
     let horizon = dwa.horizon;
-    let mut contact_time = |v: f64, w: f64| {
-        let t = arc_points(&points, padded, v, w, horizon);
-        if !arc_walls.any && others.is_empty() {
-            t
-        } else {
-            t.min(arc_contact(
-                obs,
-                padded,
-                others,
-                &mut arc_walls,
+    // The nearest obstacle (recovery, going round): to the disc, or to the
+    // true footprint.
+    let grid = &mut dwa.walls;
+    let (mut arc_walls, mut footprint, (gap, toward)) = if foot {
+        let mut f = Footprint::new(
+            me.shape,
+            (me.position, me.heading),
+            pad,
+            obs.walls,
+            grid,
+            !walls.is_empty(),
+            others,
+        );
+        let (g, d) = f.nearest((me.position, me.heading), padded);
+        let to_robot = Vec2::new(c * d.x + s * d.y, -s * d.x + c * d.y);
+        (None, Some(f), (g, to_robot))
+    } else {
+        let near = nearest(obs, &points, &walls, others);
+        let aw = ArcWalls {
+            all: obs.walls,
+            grid,
+            buf: Vec::new(),
+            any: !walls.is_empty(),
+            radius: padded.min(wall_distance * (1.0 - 1e-6)),
+        };
+        (Some(aw), None, near)
+    };
+    // Time to the first contact along the arc of (v, omega), and, with
+    // `brake`, for a footprint, whether driving it a tick and braking
+    // leaves it clear of everything ("Both could stop"; a disc's is
+    // `Braking::both_stop`).
+    let moving = [Motion::Constant, Motion::Still];
+    let stopping = [Motion::Braking { delay: dt, a }, Motion::Still];
+    let radius = me.radius;
+    let mut probe = |v: f64, w: f64, brake: bool| -> (f64, bool) {
+        if let Some(f) = footprint.as_mut() {
+            let held = unicycle_poses(
+                (me.position, me.heading),
                 v,
                 w,
+                horizon,
+                None,
                 step,
                 horizon,
-            ))
+            );
+            let t = f.contact(&Rollout::new(step, held, radius), &moving, true);
+            let ok = !brake || {
+                let poses = unicycle_poses(
+                    (me.position, me.heading),
+                    v,
+                    w,
+                    dt,
+                    Some((a, alpha_max)),
+                    step / 2.0,
+                    horizon,
+                );
+                f.contact(&Rollout::new(step / 2.0, poses, radius), &stopping, true)
+                    .is_infinite()
+            };
+            return (t, ok);
+        }
+        let t = arc_points(&points, padded, v, w, horizon);
+        let Some(aw) = arc_walls.as_mut() else {
+            return (t, true);
+        };
+        if !aw.any && others.is_empty() {
+            (t, true)
+        } else {
+            let t = t.min(arc_contact(obs, padded, others, aw, v, w, step, horizon));
+            (t, true)
         }
     };
 
     // Recovery: go on backing off, or start when touching something or
     // when standing still facing the goal for STILL_FOR s.
-    let (gap, toward) = nearest(obs, &points, &walls, others);
     let rec = &mut dwa.recovery;
     if let Some((until, v, w)) = rec.backing {
-        if obs.time < until && contact_time(v, 0.0) > dt {
+        if obs.time < until && backing_clear(&mut probe, v, w, foot, dt) {
             return Command::Unicycle { v, omega: w };
         }
         rec.backing = None;
@@ -360,11 +436,23 @@ pub(super) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
         // nose turned away from it; forwards if it is behind.
         let back = 0.5 * me.max_speed;
         let v = if toward.x > 0.0 { -back } else { back };
-        let v = if contact_time(v, 0.0) > dt { v } else { 0.0 };
         let w = if toward.x > 0.0 {
             side_of(toward, Vec2::new(1.0, 0.0)) * 0.5 * w_max
         } else {
             0.0
+        };
+        let (v, w) = if foot {
+            // A footprint's corners swing as it turns: the back-off as
+            // planned, else straight, else turning in place, else still,
+            // whichever is clear.
+            [(v, w), (v, 0.0), (0.0, w)]
+                .into_iter()
+                .find(|&(v, w)| backing_clear(&mut probe, v, w, true, dt))
+                .unwrap_or((0.0, 0.0))
+        } else if backing_clear(&mut probe, v, 0.0, false, dt) {
+            (v, w)
+        } else {
+            (0.0, w)
         };
         rec.backing = Some((obs.time + BACK_OFF_FOR, v, w));
         rec.still_since = f64::NAN;
@@ -456,7 +544,7 @@ pub(super) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
     for i in 0..n {
         for j in 0..n {
             let (v, w) = (at(i, v_lo, v_hi.max(v_lo)), at(j, w_lo, w_hi.max(w_lo)));
-            let t_c = contact_time(v, w);
+            let (t_c, stops) = probe(v, w, true);
             // Least bad: furthest contact, then slowest.
             if t_c > least_bad.0 || (t_c == least_bad.0 && v < least_bad.1) {
                 least_bad = (t_c, v, w);
@@ -478,7 +566,12 @@ pub(super) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
             }
             // On true states: at rest, after a tick and braking, before
             // touching another robot that goes on for a tick and brakes.
-            if !scan && !braking.both_stop(others, &turns, v, w) {
+            if !scan && !foot && !braking.both_stop(others, &turns, v, w) {
+                continue;
+            }
+            // A footprint: at rest, after a tick and braking, clear of
+            // everything (turning in place too: its corners swing).
+            if !stops {
                 continue;
             }
             let score = if at_goal {
