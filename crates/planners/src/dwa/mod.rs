@@ -184,6 +184,46 @@
 //! would forbid every arc, driving away included. Turning in place is
 //! always admitted. From the scan, the gap rules above do this work.
 //!
+//! **True footprints** (module `footprint`; a robot whose `shape` is a
+//! rectangle or convex polygon, on true states): the arcs of a unicycle,
+//! the straight lines of a holonomic robot and the trajectories of a car
+//! are checked with the robot's polygon at each sampled pose (every half
+//! tick, or a quarter for a car), against the walls' segments and the
+//! others' true shapes (their discs or polygons at their headings,
+//! moving at their velocities), not with the disc around it: a 0.9 x 0.6
+//! AGV, whose circumscribed disc padded is 1.35 m across, drives through
+//! a 1.2 m door. The gaps are `mrsim-shape`'s; the samples between two
+//! checks are skipped by conservative advancement (no point of the
+//! footprint moves faster than its centre plus its turn times its
+//! radius). The padding is then a quarter of the inscribed radius (half
+//! the shorter side of a rectangle) by default, kept from everything; a
+//! robot already nearer than that to something may not come nearer. The
+//! paper's V_a and "Both could stop" become one test: driving the sample
+//! for a tick and then braking as hard as the robot can (along the same
+//! curve) leaves the footprint clear of the walls, of the others going on
+//! for a tick and braking (a scripted obstacle going on), and of the
+//! others standing where they are; a contact counts only when the robot's
+//! own motion brings it nearer. Turning in place is checked too (a
+//! rectangle's corners swing), and a back-off that is not clear is tried
+//! straight, then turning in place, then not at all. Discs keep the tests
+//! above exactly. From the scan, a polygon is still its padded
+//! circumscribed disc.
+//!
+//! **On a car** (`kinematics = "ackermann"`; module `ackermann`, which
+//! says each case): the window is (speed, steering), speeds within
+//! max_accel dt of the present one down to -max_reverse_speed, steering
+//! within max_steering_rate dt of the present one within +-max_steering;
+//! each sample is held over the horizon (at least the time to stop from
+//! top speed) through the bicycle model the world drives
+//! ([`crate::ackermann::bicycle_step`]), checked with the car's true
+//! footprint as above, and scored as above with the heading taken a second
+//! on and a speed target that also keeps the sample's lateral
+//! acceleration within max_accel (teb_local_planner's and nav2's car-like
+//! practice: the bicycle's own controls, its minimum radius never
+//! exceeded). A car cannot turn in place: it recovers by backing with its
+//! wheels turned so that its nose swings towards the goal
+//! ([`Planner::native_ackermann`]: the car's command is dwa's own).
+//!
 //! **Walls on true states**: a map's traced outlines hold thousands of
 //! wall segments, and every chord of every arc would be checked against
 //! every one within reach. A grid of the walls (square cells of the padded
