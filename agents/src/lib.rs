@@ -20,6 +20,7 @@
 //! per snapshot. Every plan call goes through [`guard::plan_checked`].
 #![warn(missing_docs)]
 
+pub mod car_route;
 pub mod cores;
 pub mod diagnostics;
 pub mod fault;

@@ -1,6 +1,8 @@
 //! `route = "shortest"`: the planner is steered along the shortest way the
 //! robot's disc fits through the run's walls and static obstacles
 //! (`mrsim-route`), computed once when the planner is built.
+//! A car's (`kinematics = "ackermann"`) is a route it can drive, which it
+//! follows itself ([`crate::car_route`]).
 //!
 //! [`Routed`] wraps the robot's planner (outside the look-ahead controller
 //! of a unicycle, so that progress is the centre's): each tick it projects
@@ -49,8 +51,11 @@
 //! no other robot's id or state, so its robot does not give way.
 
 use mrsim_planners::{BodyKind, Command, Diagnostic, Observation, Planner, Segment, Sensed, Vec2};
-use mrsim_route::{Clearance, Follower, P, Path, Refuge, RouteError, Scene, Side, to_way};
-use mrsim_scenario::{Lane, Motion, ObstacleSpec, RobotSpec, Scenario};
+use mrsim_route::{
+    CarRouteError, Clearance, Follower, P, Path, Refuge, RouteError, Scene, Side, to_way,
+};
+use mrsim_scenario::{Kinematics, Lane, Motion, ObstacleSpec, RobotSpec, Scenario};
+use mrsim_shape::{Pose, Shape};
 
 /// Seconds without progress along the route before it is planned again.
 pub const PATIENCE: f64 = 8.0;
@@ -117,6 +122,9 @@ pub fn ahead(spec: &RobotSpec) -> f64 {
 pub struct RouteScene {
     walls: Vec<[P; 2]>,
     discs: Vec<(P, f64)>,
+    /// Every static obstacle's shape and pose (cars' routes go round
+    /// their true shapes).
+    statics: Vec<(Shape, Pose)>,
     resolution: Option<f64>,
 }
 
@@ -141,7 +149,56 @@ impl RouteScene {
                 .filter(|o| matches!(o.motion, Motion::Static))
                 .map(|o| (o.start, o.radius))
                 .collect(),
+            statics: obstacles
+                .iter()
+                .filter(|o| matches!(o.motion, Motion::Static))
+                .map(|o| (o.body_shape(), Pose::new(o.start, o.heading)))
+                .collect(),
             resolution: map_resolution,
+        }
+    }
+
+    /// The walls.
+    pub(crate) fn walls(&self) -> &[[P; 2]] {
+        &self.walls
+    }
+
+    /// The static obstacles, each's shape and pose.
+    pub(crate) fn statics(&self) -> &[(Shape, Pose)] {
+        &self.statics
+    }
+
+    /// The map's cell in scenario units, if there is a map.
+    pub(crate) fn resolution(&self) -> Option<f64> {
+        self.resolution
+    }
+
+    /// Checks that robot `spec` has a route (with `route = "shortest"`):
+    /// a car's by Hybrid A* ([`crate::car_route`]), any other's over the
+    /// clearance grid.
+    pub fn check(&self, spec: &RobotSpec) -> Result<(), RouteFailure> {
+        if spec.kinematics == Kinematics::Ackermann {
+            self.car_route(spec)?;
+        } else {
+            self.route(spec)?;
+        }
+        Ok(())
+    }
+
+    /// The points of robot `spec`'s route, from its start to its goal (a
+    /// car's: its centre's along the route), and their length.
+    pub fn line(&self, spec: &RobotSpec) -> Result<(Vec<P>, f64), RouteFailure> {
+        if spec.kinematics == Kinematics::Ackermann {
+            let (setup, route) = self.car_route(spec)?;
+            let step = setup.wheelbase / 8.0;
+            Ok(crate::car_route::centre_line(
+                &route.path,
+                setup.wheelbase,
+                step,
+            ))
+        } else {
+            let (_, path) = self.route(spec)?;
+            Ok((path.points().to_vec(), path.length()))
         }
     }
 
@@ -190,15 +247,38 @@ impl RouteScene {
     }
 }
 
-/// `planner` as robot `spec` drives with it: steered along its route on
-/// `scene` when its `route` is `shortest` ([`Routed`]), else unchanged.
+/// Why a robot has no route.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RouteFailure {
+    /// A disc's (or a unicycle's): no way is wide enough.
+    #[error(transparent)]
+    Disc(#[from] RouteError),
+    /// A car's: Hybrid A* found no route it can drive.
+    #[error(transparent)]
+    Car(#[from] CarRouteError),
+}
+
+/// `planner` as robot `spec` drives with it when its `route` is
+/// `shortest`: steered along its route on `scene` ([`Routed`]), or, a car,
+/// driven along its car's route ([`crate::car_route::CarRouted`]); else
+/// unchanged.
 pub fn fit_route(
     planner: Box<dyn Planner>,
     spec: &RobotSpec,
     scene: &RouteScene,
-) -> Result<Box<dyn Planner>, RouteError> {
+) -> Result<Box<dyn Planner>, RouteFailure> {
     if spec.route != mrsim_scenario::Route::Shortest {
         return Ok(planner);
+    }
+    if spec.kinematics == Kinematics::Ackermann {
+        let (setup, route) = scene.car_route(spec)?;
+        return Ok(Box::new(crate::car_route::CarRouted::new(
+            planner,
+            spec,
+            scene.clone(),
+            setup,
+            &route,
+        )));
     }
     let (grid, path) = scene.route(spec)?;
     Ok(Box::new(Routed::new(planner, spec, grid, path)))

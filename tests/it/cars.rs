@@ -1,6 +1,8 @@
 //! Car-like robots end to end: a holonomic planner (orca) drives two cars
 //! past each other through the tracking controller in an in-process run,
-//! and the world's goal test asks a car's heading as well as its place.
+//! the world's goal test asks a car's heading as well as its place, a car
+//! with `route = "shortest"` reverses into a parking bay by its route, and
+//! a car goal no route reaches is refused at load.
 
 use crate::common::*;
 use mrsim::{InProcess, Registry, ScenarioSource};
@@ -107,5 +109,135 @@ fn a_car_on_its_goal_facing_the_wrong_way_has_not_arrived() {
     let m = metrics(&right);
     assert_eq!(m["robots"]["car"]["reached_goal"], true, "{m}");
     assert_eq!(m["commands_rejected"], 0, "{m}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The corners of robot `spec`'s body at pose `p` (its shape placed).
+fn corners(spec: &mrsim_scenario::RobotSpec, p: Pose) -> Vec<[f64; 2]> {
+    spec.body_shape()
+        .placed(mrsim_planners::Pose::new([p.1, p.2], p.3))
+        .expect("a rectangle")
+        .points()
+        .to_vec()
+}
+
+#[test]
+fn a_car_on_its_route_reverses_into_a_bay_between_two_parked_cars_and_stands_in_it() {
+    // scenarios/cars/parking.toml: a 4.6 x 1.6 m car (wheelbase 2.8 m, 35
+    // degrees of steering) is to stand nose out in the 2.5 m bay between
+    // two parked cars, by its route (Hybrid A*) and pure pursuit.
+    let file = root().join("scenarios/cars/parking.toml");
+    let s = mrsim_scenario::load(&file).expect("scenario").scenario;
+    let out = fresh_dir("car-parking").join("out");
+    assert_ok(&run(
+        &file,
+        &out,
+        &run_id("car-parking"),
+        &["--transport", "inproc"],
+    ));
+    let m = metrics(&out);
+    assert_eq!(m["success_rate"], 1.0, "{m}");
+    assert_eq!(m["collisions_total"], 0, "{m}");
+    let car = &s.robots[0];
+    let track = poses(&out, &car.name);
+    // The bay: between the parked cars' inner sides, from the kerb (y = 0)
+    // to the line of their fronts.
+    let parked: Vec<Vec<[f64; 2]>> = s
+        .obstacles
+        .iter()
+        .map(|o| {
+            o.body_shape()
+                .placed(mrsim_planners::Pose::new(o.start, o.heading))
+                .expect("a parked car's rectangle")
+                .points()
+                .to_vec()
+        })
+        .collect();
+    let xs =
+        |c: &Vec<[f64; 2]>, f: fn(f64, f64) -> f64, init: f64| c.iter().map(|q| q[0]).fold(init, f);
+    let west = xs(&parked[0], f64::max, f64::NEG_INFINITY);
+    let east = xs(&parked[1], f64::min, f64::INFINITY);
+    let front = parked
+        .iter()
+        .map(|c| c.iter().map(|q| q[1]).fold(f64::NEG_INFINITY, f64::max))
+        .fold(f64::INFINITY, f64::min);
+    assert!((east - west - 2.5).abs() < 1e-9, "a bay of {}", east - west);
+    let end = *track.last().expect("poses");
+    for q in corners(car, end) {
+        assert!(
+            q[0] > west && q[0] < east && q[1] > 0.0 && q[1] < front,
+            "corner {q:?} outside the bay [{west}, {east}] x [0, {front}]: {end:?}"
+        );
+    }
+    let goal = car.goal_heading.expect("a goal heading");
+    assert!(
+        mrsim_scenario::angle_between(end.3, goal.heading) <= goal.tolerance,
+        "heading {} at the end",
+        end.3.to_degrees()
+    );
+    // It backed in: the rear axle's last moves were against the heading.
+    let half = car.ackermann.expect("a car").wheelbase / 2.0;
+    let rear = |p: Pose| [p.1 - half * p.3.cos(), p.2 - half * p.3.sin()];
+    let moved: Vec<f64> = track
+        .windows(2)
+        .map(|w| {
+            let (a, b) = (rear(w[0]), rear(w[1]));
+            (b[0] - a[0]) * w[0].3.cos() + (b[1] - a[1]) * w[0].3.sin()
+        })
+        .filter(|d| d.abs() > 1e-3)
+        .collect();
+    assert!(
+        moved.first().is_some_and(|d| *d > 0.0),
+        "it set off forwards"
+    );
+    assert!(moved.last().is_some_and(|d| *d < 0.0), "it ended backwards");
+    // The lot's walls bound it: no corner ever more than 1 mm beyond them.
+    let (lo, hi) = s.walls.iter().flat_map(|w| w.segment).fold(
+        ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]),
+        |(lo, hi), p| {
+            (
+                [lo[0].min(p[0]), lo[1].min(p[1])],
+                [hi[0].max(p[0]), hi[1].max(p[1])],
+            )
+        },
+    );
+    for &p in &track {
+        for q in corners(car, p) {
+            let inside = q[0] >= lo[0] - 1e-3
+                && q[1] >= lo[1] - 1e-3
+                && q[0] <= hi[0] + 1e-3
+                && q[1] <= hi[1] + 1e-3;
+            assert!(inside, "corner {q:?} into a wall at tick {}", p.0);
+        }
+    }
+    let _ = std::fs::remove_dir_all(out.parent().expect("a folder"));
+}
+
+#[test]
+fn a_car_goal_its_route_cannot_reach_is_refused_naming_the_robot_file_and_line() {
+    // The parking scene with a car that may not reverse: nose out in the
+    // bay needs backing in, and no forward way exists.
+    let text =
+        std::fs::read_to_string(root().join("scenarios/cars/parking.toml")).expect("parking.toml");
+    assert!(text.contains("max_reverse_speed = 1.0"));
+    let text = text.replace("max_reverse_speed = 1.0", "max_reverse_speed = 0.0");
+    let line = 1 + text
+        .lines()
+        .position(|l| l.starts_with("goal = "))
+        .expect("a goal line");
+    let dir = fresh_dir("car-unreachable");
+    let file = dir.join("forwards.toml");
+    std::fs::write(&file, &text).expect("write scenario");
+    let err = run_refused(&file);
+    let at = format!("{}:{line}", file.display());
+    for w in [
+        at.as_str(),
+        "robot `car`",
+        "route = \"shortest\"",
+        "cannot reach its goal",
+        "without reversing",
+    ] {
+        assert!(err.contains(w), "no `{w}` in: {err}");
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -50,6 +50,13 @@
 //! heading at 16 headings and the bearing from the pose (nav2's goal
 //! heading modes), the shortest clear one taken.
 //!
+//! **The goal's point.** A goal may be for another point of the body than
+//! the reference point the radius is for, a distance [`Goal::offset`]
+//! ahead of it along the heading (a car planned by its rear axle, whose
+//! goal is its centre's): every goal pose tried is then the reference
+//! point's, `offset` behind the goal's position along that pose's heading,
+//! and the holonomic heuristic is lowered by `offset`.
+//!
 //! **The footprint** is the robot's true shape (a convex polygon or a
 //! disc, [`mrsim_shape::Shape`], about the pose's point, which is the point
 //! the turning radius is for), checked against the walls and discs in
@@ -154,7 +161,7 @@ pub enum CarRouteError {
     /// cell of position and heading, so a way that needs a finer cell than
     /// [`Search::cell`] may exist.
     #[error(
-        "the car cannot reach its goal turning no tighter than radius {radius}{}: \
+        "the car cannot reach its goal turning no tighter than radius {radius:.3}{}: \
          all {expanded} poses it can reach were searched (one a cell of position and heading)",
         if *reverse { "" } else { " without reversing" }
     )]
@@ -197,6 +204,13 @@ pub struct Goal {
     pub heading: Option<f64>,
     /// How far from `heading` the route may end (rad, >= 0).
     pub heading_tolerance: f64,
+    /// How far ahead of the reference point, along the heading, lies the
+    /// point that must reach `position` (0: the reference point itself).
+    /// A car planned by its rear axle whose goal is its centre's: half
+    /// its wheelbase ahead. The route then ends with the reference point
+    /// at `position` less `offset` along the final heading, whatever that
+    /// heading is within the tolerance.
+    pub offset: f64,
 }
 
 impl Goal {
@@ -206,7 +220,17 @@ impl Goal {
             position: p.position,
             heading: Some(p.heading),
             heading_tolerance: 0.0,
+            offset: 0.0,
         }
+    }
+
+    /// Where the reference point ends with final heading `h`.
+    pub fn reference_at(&self, h: f64) -> P {
+        let (s, c) = h.sin_cos();
+        [
+            self.position[0] - self.offset * c,
+            self.position[1] - self.offset * s,
+        ]
     }
 }
 
@@ -558,7 +582,8 @@ impl<'a> Planner<'a> {
             && start.heading.is_finite()
             && finite(goal.position)
             && goal.heading.is_none_or(f64::is_finite)
-            && at_least_0(goal.heading_tolerance);
+            && at_least_0(goal.heading_tolerance)
+            && at_least_0(goal.offset);
         if !usable {
             return bad("the start and the goal must be finite");
         }
@@ -632,7 +657,7 @@ impl<'a> Planner<'a> {
         }
         me.need = me.need.min(gs);
         if let Some(h) = goal.heading {
-            let gp = Pose::new(goal.position, h);
+            let gp = Pose::new(goal.reference_at(h), h);
             let gg = map.exact(&foot, gp, reach).min(map.gap(&foot, gp, reach));
             if gg < 0.0 && tol == 0.0 {
                 return Err(CarRouteError::GoalBlocked {
@@ -702,7 +727,7 @@ impl<'a> Planner<'a> {
     /// The length of the shortest obstacle-free path (Reeds-Shepp or
     /// Dubins) from `p` to the goal pose with heading `h`.
     fn analytic_length(&self, p: Pose, h: f64) -> f64 {
-        let g = Pose::new(self.goal.position, h);
+        let g = Pose::new(self.goal.reference_at(h), h);
         if self.reverse {
             reeds_shepp::length(p, g, self.radius)
         } else {
@@ -711,7 +736,7 @@ impl<'a> Planner<'a> {
     }
 
     fn analytic(&self, p: Pose, h: f64) -> CarPath {
-        let g = Pose::new(self.goal.position, h);
+        let g = Pose::new(self.goal.reference_at(h), h);
         if self.reverse {
             reeds_shepp::shortest(p, g, self.radius)
         } else {
@@ -726,7 +751,9 @@ impl<'a> Planner<'a> {
         let Some((i, j)) = grid.cell(p.position) else {
             return f64::INFINITY;
         };
-        let holo = f64::from(self.holo[j * grid.w + i]);
+        // The reference point ends within `offset` of the goal's
+        // position, from which the holonomic distance is measured.
+        let holo = (f64::from(self.holo[j * grid.w + i]) - self.goal.offset).max(0.0);
         let non = match (self.goal.heading, self.headings.len()) {
             (Some(h), 1..=5) => (self.analytic_length(p, h) - self.slack).max(0.0),
             _ => 0.0,
@@ -852,7 +879,7 @@ impl<'a> Planner<'a> {
 
     /// Is pose `p` at the goal (within the goal's tolerance)?
     fn at_goal(&self, p: Pose) -> bool {
-        crate::dist(p.position, self.goal.position) <= 1e-9
+        crate::dist(p.position, self.goal.reference_at(p.heading)) <= 1e-9
             && self
                 .goal
                 .heading

@@ -78,6 +78,8 @@ pub struct Pursuit {
     /// Arc length along the path of the car's projection (never less).
     progress: f64,
     lookahead: f64,
+    /// How far on the goal point is ([`Pursuit::set_lookahead`]).
+    reach: f64,
     at_cusp: f64,
     patience: f64,
     /// Progress at the last time it grew by a quarter of the look-ahead,
@@ -112,9 +114,20 @@ impl Pursuit {
             seg: 0,
             progress: 0.0,
             lookahead,
+            reach: lookahead,
             at_cusp,
             patience,
             mark: (0.0, f64::NAN),
+        }
+    }
+
+    /// Puts the goal point `reach` on (> 0) from now on, as regulated pure
+    /// pursuit scales its look-ahead with the speed (Macenski et al.
+    /// 2023); the projection and [`Pursuit::stuck`] keep the look-ahead
+    /// the pursuit was made with.
+    pub fn set_lookahead(&mut self, reach: f64) {
+        if reach.is_finite() && reach > 0.0 {
+            self.reach = reach;
         }
     }
 
@@ -195,7 +208,7 @@ impl Pursuit {
             if self.mark.1.is_nan() || self.progress >= self.mark.0 + self.lookahead / 4.0 {
                 self.mark = (self.progress, time);
             }
-            let want = self.progress + self.lookahead;
+            let want = self.progress + self.reach;
             let (mut point, heading) = self.at(want.min(end), lo, hi);
             if want > end {
                 // Beyond the segment's end the goal point runs on along

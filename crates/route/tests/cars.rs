@@ -171,6 +171,7 @@ fn a_goal_without_a_heading_or_with_a_tolerance_ends_within_it() {
         position: [5.0, 8.0],
         heading: None,
         heading_tolerance: 0.0,
+        offset: 0.0,
     };
     let route = map
         .route(&car(false), start, &anywhere, &search)
@@ -183,6 +184,7 @@ fn a_goal_without_a_heading_or_with_a_tolerance_ends_within_it() {
         position: [-5.0, 10.5],
         heading: Some(PI),
         heading_tolerance: 0.3,
+        offset: 0.0,
     };
     let route = map
         .route(&car(false), start, &loose, &search)

@@ -1,7 +1,8 @@
 //! The routes of the robots with `route = "shortest"`, computed once for
 //! the world when it is built: the same computation as each such robot's
 //! agent makes, so routes.csv holds the route its planner was steered
-//! along and its `spl` is measured against that route's length.
+//! along (a car's: its centre's along its route) and its `spl` is
+//! measured against that route's length.
 
 use mrsim_agents::route::RouteScene;
 use mrsim_scenario::{Route as RouteKind, Scenario};
@@ -25,14 +26,8 @@ pub fn of(scenario: &Scenario) -> BTreeMap<String, Route> {
         .filter(|r| r.route == RouteKind::Shortest)
     {
         // Validation refused every robot without a route.
-        if let Ok((_, path)) = scene.route(r) {
-            routes.insert(
-                r.name.clone(),
-                Route {
-                    points: path.points().to_vec(),
-                    length: path.length(),
-                },
-            );
+        if let Ok((points, length)) = scene.line(r) {
+            routes.insert(r.name.clone(), Route { points, length });
         }
     }
     routes

@@ -143,7 +143,7 @@ impl Validated {
         let scene = mrsim_agents::route::RouteScene::of(&loaded.scenario);
         for r in &loaded.scenario.robots {
             if r.route == mrsim_scenario::Route::Shortest
-                && let Err(e) = scene.route(r)
+                && let Err(e) = scene.check(r)
             {
                 let key = format!("robot.{}.goal", r.name);
                 let why = format!(

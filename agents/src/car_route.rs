@@ -1,0 +1,560 @@
+//! `route = "shortest"` for a car (`kinematics = "ackermann"`): a route it
+//! can drive, planned once by Hybrid A* (`mrsim_route::hybrid`) when its
+//! planner is built, and driven by pure pursuit (`mrsim_route::pursuit`)
+//! forwards and backwards between its changes of gear, slowing and
+//! stopping for the bodies it senses in its way.
+//!
+//! **What is planned.** The car is a kinematic bicycle whose pose names the
+//! centre of its body, the wheelbase L centred on it. Only its rear axle
+//! moves along its heading, so the route is planned for the rear axle,
+//! where the paths of Dubins and Reeds-Shepp are exact for the bicycle
+//! (its heading is the path's tangent, its turn rate the path's curvature
+//! times its speed): the footprint searched is the body's true shape moved
+//! L/2 forwards, so that its origin is the rear axle (a disc becomes the
+//! regular octagon around it), and the goal is the centre's (the goal's
+//! point L/2 ahead of the reference, `Goal::offset`), at the goal heading
+//! when the scenario gives one (`goal_heading_deg`). The route turns on
+//! [`RADIUS_FACTOR`] times the car's least turning radius L / tan(max
+//! steering), so that the pursuit has steering to spare where it must
+//! catch up (the steering turns at most `max_steering_rate_deg`, and a
+//! route's arcs begin and end abruptly), and keeps [`margin`] from walls
+//! and static obstacles (the rectangles and polygons as their outlines),
+//! which lets the body stray that far off its route without touching
+//! them. It ends at the goal heading exactly, leaving the scenario's
+//! whole tolerance to the pursuit; only when no route does may it end
+//! within half the tolerance (its last arcs would otherwise turn the
+//! heading within the tolerance in a few decimetres, more sharply than
+//! the steering can follow).
+//!
+//! **Driving it.** Each tick the rear axle is projected onto the route and
+//! steered by pure pursuit to the route's point [`lookahead`] on (a
+//! second of its speed, from a quarter of the wheelbase to the wheelbase)
+//! within the present segment (the run between two changes of gear): steering
+//! atan(L kappa), kappa the pursuit arc's curvature, in either gear. Its
+//! speed is the smallest of: the car's top speed in that gear; the speed
+//! from which it stops at the segment's end braking at half `max_accel`
+//! (at a change of gear and at the goal), but at least a creep
+//! ([`creep`]) until it gets there; the speed at which the steering,
+//! turning at its rate limit, reaches the pursuit's within a quarter of
+//! the look-ahead of travel; and the speed from which it stops, braking
+//! at half `max_accel`, before the first pose along the route ahead (in
+//! the present gear) where its footprint would come within [`keep`] of
+//! a sensed body (robot or moving obstacle, taken where it is, its keep
+//! grown by a second of its speed) nearer than the body is now. The static
+//! obstacles the route was planned around are not counted.
+//!
+//! **Why not the robot's planner.** The disc robots' routes show the
+//! planner a point ahead on the route as its goal ([`crate::route`]); a
+//! car's planner (through the tracking controller, or dwa's arcs) steers
+//! for a point, not along a route, and cuts the route's arcs, does not
+//! stop at its changes of gear and arrives at the goal at whatever heading
+//! it came in, which in a parking bay between two cars is a contact. So a
+//! car with a route follows it itself and only slows and stops for what
+//! it senses in its way; its `planner` is not consulted.
+//!
+//! **Replanning.** When the car has made no progress along its route for
+//! [`crate::route::PATIENCE`] s (something stands in its way), its route
+//! is planned again from where it stands, around the bodies it senses
+//! standing (slower than a tenth of its top speed) within twice its
+//! braking look ahead as well; if there is no such route it waits, and
+//! tries again after as long.
+//!
+//! The diagnostics `route_progress` (the route's length driven, m),
+//! `route_replans` and `route_gear` (1 forwards, -1 backwards, 0 stopped
+//! at the goal) say how it goes.
+
+use crate::route::{PATIENCE, RouteScene};
+use mrsim_planners::{
+    BodyKind, Command, Diagnostic, Kinematics, Observation, Planner, Polygon, Pose, Sensed, Shape,
+};
+use mrsim_route::{
+    Car, CarMap, CarPath, CarRoute, CarRouteError, Gear, Goal, Pursuit, Scene, Search, outline,
+};
+use mrsim_scenario::RobotSpec;
+
+/// A wall segment.
+type Wall = [[f64; 2]; 2];
+
+/// A disc: centre and radius.
+type Disc = ([f64; 2], f64);
+
+/// The route's turning radius over the car's least.
+pub const RADIUS_FACTOR: f64 = 1.25;
+
+/// The largest body-frame distance from the shape's centre to its edge
+/// that is inside it: a disc's radius, the least distance from the
+/// origin to a polygon's edges.
+fn inner_radius(shape: &Shape) -> f64 {
+    match shape {
+        Shape::Disc { radius } => *radius,
+        Shape::Polygon(p) => {
+            let pts = p.points();
+            let n = pts.len();
+            (0..n)
+                .map(|i| {
+                    let (a, b) = (pts[i], pts[(i + 1) % n]);
+                    let e = [b[0] - a[0], b[1] - a[1]];
+                    (e[0] * (-a[1]) - e[1] * (-a[0])) / e[0].hypot(e[1])
+                })
+                .fold(f64::INFINITY, f64::min)
+                .max(0.0)
+        }
+    }
+}
+
+/// The gap a car's route keeps from walls and static obstacles: a quarter
+/// of the body's inner radius (half its width, for a rectangle longer
+/// than wide: 0.2 m for a 1.6 m wide car).
+pub fn margin(spec: &RobotSpec) -> f64 {
+    inner_radius(&spec.body_shape()) / 4.0
+}
+
+/// The gap the car keeps from sensed bodies along its way ahead: its
+/// route's [`margin`] doubled.
+pub fn keep(spec: &RobotSpec) -> f64 {
+    2.0 * margin(spec)
+}
+
+/// The pursuit's look-ahead at speed `speed`: a second of it, between a
+/// quarter of the wheelbase and the wheelbase.
+pub fn lookahead(wheelbase: f64, speed: f64) -> f64 {
+    speed.abs().clamp(wheelbase / 4.0, wheelbase)
+}
+
+/// The least speed the car drives at until it reaches the end of a
+/// segment: a fiftieth of its wheelbase per second.
+pub fn creep(wheelbase: f64) -> f64 {
+    wheelbase / 50.0
+}
+
+/// `shape` in the frame of a point `back` behind its origin along x (the
+/// rear axle of a car whose shape is about its centre): a polygon's points
+/// moved forwards by `back`; a disc's regular octagon around it, moved so.
+pub fn rear_footprint(shape: &Shape, back: f64) -> Shape {
+    let pts: Vec<[f64; 2]> = match shape {
+        Shape::Polygon(p) => p.points().to_vec(),
+        Shape::Disc { radius } => {
+            let r = radius / (std::f64::consts::PI / 8.0).cos();
+            (0..8)
+                .map(|k| {
+                    let a = std::f64::consts::TAU * (k as f64 + 0.5) / 8.0;
+                    [r * a.cos(), r * a.sin()]
+                })
+                .collect()
+        }
+    };
+    let moved: Vec<[f64; 2]> = pts.iter().map(|p| [p[0] + back, p[1]]).collect();
+    // Moving a convex counter-clockwise polygon keeps it so.
+    Polygon::new(&moved).map_or(*shape, Shape::Polygon)
+}
+
+/// The car a robot's route is planned for, its wheelbase and its goal.
+#[derive(Debug, Clone, Copy)]
+pub struct CarSetup {
+    /// The rear-axle footprint, the route's radius, and reverse.
+    pub car: Car,
+    /// The wheelbase.
+    pub wheelbase: f64,
+    /// Where the rear axle starts.
+    pub start: Pose,
+    /// The centre's goal, `offset` half the wheelbase, at the goal heading
+    /// exactly if there is one.
+    pub goal: Goal,
+    /// Half the scenario's goal heading tolerance (0 without one): the
+    /// tolerance of the route's end when none ends at the heading exactly.
+    pub loose: f64,
+    /// The search's settings.
+    pub search: Search,
+    /// The grid's cell.
+    pub resolution: f64,
+}
+
+impl CarSetup {
+    /// The setup of car `spec` on a map of cell `map_resolution` (if any).
+    pub fn of(spec: &RobotSpec, map_resolution: Option<f64>) -> Result<Self, CarRouteError> {
+        let Some(ack) = spec.ackermann else {
+            return Err(CarRouteError::Bad(format!(
+                "robot `{}` is not a car (no wheelbase)",
+                spec.name
+            )));
+        };
+        let l = ack.wheelbase;
+        let body = spec.body_shape();
+        let h = spec.start_heading();
+        let (s, c) = h.sin_cos();
+        let start = Pose::new(
+            [spec.start[0] - l / 2.0 * c, spec.start[1] - l / 2.0 * s],
+            h,
+        );
+        let goal = Goal {
+            position: spec.goal,
+            heading: spec.goal_heading.map(|g| g.heading),
+            heading_tolerance: 0.0,
+            offset: l / 2.0,
+        };
+        Ok(Self {
+            car: Car {
+                shape: rear_footprint(&body, l / 2.0),
+                radius: RADIUS_FACTOR * ack.min_turning_radius(),
+                reverse: ack.max_reverse_speed > 0.0,
+            },
+            wheelbase: l,
+            start,
+            goal,
+            loose: spec.goal_heading.map_or(0.0, |g| g.tolerance / 2.0),
+            search: Search {
+                margin: margin(spec),
+                ..Search::default()
+            },
+            resolution: map_resolution.unwrap_or(inner_radius(&body) / 16.0),
+        })
+    }
+
+    /// The route on `map` from the rear axle's pose `from`: to the goal
+    /// heading exactly, or if there is none such, within [`Self::loose`]
+    /// of it.
+    pub fn route(&self, map: &CarMap, from: Pose) -> Result<CarRoute, CarRouteError> {
+        let exact = map.route(&self.car, from, &self.goal, &self.search);
+        match exact {
+            Err(_) if self.loose > 0.0 => {
+                let loose = Goal {
+                    heading_tolerance: self.loose,
+                    ..self.goal
+                };
+                map.route(&self.car, from, &loose, &self.search).or(exact)
+            }
+            done => done,
+        }
+    }
+
+    /// The map of `scene` for this car, with `blocked` (bodies standing in
+    /// its way: shape and pose) as obstacles too, covering `from`.
+    pub fn map(&self, scene: &RouteScene, blocked: &[(Shape, Pose)], from: Pose) -> CarMap {
+        let (walls, discs) = scene.car_obstacles(blocked);
+        let goal = self.goal.position;
+        CarMap::build(&Scene {
+            walls: &walls,
+            discs: &discs,
+            points: &[self.start.position, from.position, goal],
+            resolution: self.resolution,
+            pad: 2.0 * self.car.shape.circumradius(),
+        })
+    }
+}
+
+impl RouteScene {
+    /// The walls and discs a car's route goes round: the walls, the
+    /// outlines of the static rectangles and polygons and of `blocked`'s,
+    /// and the static discs and `blocked`'s.
+    fn car_obstacles(&self, blocked: &[(Shape, Pose)]) -> (Vec<Wall>, Vec<Disc>) {
+        let mut walls = self.walls().to_vec();
+        let mut discs = Vec::new();
+        for (shape, pose) in self.statics().iter().chain(blocked) {
+            match shape {
+                Shape::Disc { radius } => discs.push((pose.position, *radius)),
+                Shape::Polygon(_) => walls.extend(outline(shape, *pose)),
+            }
+        }
+        (walls, discs)
+    }
+
+    /// The route of car `spec`, from its start to its goal (module
+    /// documentation).
+    pub fn car_route(&self, spec: &RobotSpec) -> Result<(CarSetup, CarRoute), CarRouteError> {
+        let setup = CarSetup::of(spec, self.resolution())?;
+        let map = setup.map(self, &[], setup.start);
+        let route = setup.route(&map, setup.start)?;
+        Ok((setup, route))
+    }
+}
+
+/// The centre's positions along a car's rear-axle `path`, at most `step`
+/// apart, for a wheelbase `wheelbase`, and their length.
+pub fn centre_line(path: &CarPath, wheelbase: f64, step: f64) -> (Vec<[f64; 2]>, f64) {
+    let pts: Vec<[f64; 2]> = path
+        .poses(step)
+        .iter()
+        .map(|p| {
+            let (s, c) = p.heading.sin_cos();
+            [
+                p.position[0] + wheelbase / 2.0 * c,
+                p.position[1] + wheelbase / 2.0 * s,
+            ]
+        })
+        .collect();
+    let len = pts
+        .windows(2)
+        .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
+        .sum();
+    (pts, len)
+}
+
+/// A car driven along its route (module documentation).
+pub struct CarRouted {
+    inner: Box<dyn Planner>,
+    scene: RouteScene,
+    setup: CarSetup,
+    pursuit: Pursuit,
+    /// Static obstacles' positions (not counted as in the way).
+    statics: Vec<[f64; 2]>,
+    keep: f64,
+    lookahead: f64,
+    slow: f64,
+    replans: u32,
+    last_try: f64,
+    gear: f64,
+}
+
+impl CarRouted {
+    /// Drives robot `spec` along `route` (planned by `setup` on `scene`);
+    /// `inner` is kept for what it says of itself (whether it needs a
+    /// scan).
+    pub fn new(
+        inner: Box<dyn Planner>,
+        spec: &RobotSpec,
+        scene: RouteScene,
+        setup: CarSetup,
+        route: &CarRoute,
+    ) -> Self {
+        let lookahead = lookahead(setup.wheelbase, 0.0);
+        let at_cusp = spec.goal_tolerance.min(setup.wheelbase / 20.0);
+        Self {
+            inner,
+            statics: scene.statics().iter().map(|s| s.1.position).collect(),
+            scene,
+            setup,
+            pursuit: Pursuit::new(&route.path, lookahead, at_cusp, PATIENCE),
+            keep: keep(spec),
+            lookahead,
+            slow: spec.max_speed / 10.0,
+            replans: 0,
+            last_try: f64::NEG_INFINITY,
+            gear: 1.0,
+        }
+    }
+
+    /// Is `o` one of the static obstacles the route went round?
+    fn known(&self, o: &Sensed) -> bool {
+        o.kind == BodyKind::Obstacle
+            && self
+                .statics
+                .iter()
+                .any(|p| (p[0] - o.position.x).hypot(p[1] - o.position.y) <= o.radius / 2.0)
+    }
+
+    /// How far the car may drive along its route before its footprint
+    /// comes within the keep of a sensed body nearer than it is now
+    /// (module documentation), up to `look`; `look` when nothing is in
+    /// the way.
+    fn free(&self, obs: &Observation, rear: Pose, look: f64, to_stop: f64) -> f64 {
+        let foot = self.setup.car.shape;
+        let reach = look + 2.0 * foot.circumradius();
+        let near: Vec<(&Sensed, f64, f64)> = obs
+            .others
+            .iter()
+            .filter(|o| !self.known(o))
+            .filter(|o| {
+                let d = (o.position.x - rear.position[0]).hypot(o.position.y - rear.position[1]);
+                d <= reach + o.radius
+            })
+            .map(|o| {
+                let at = Pose::new([o.position.x, o.position.y], o.heading);
+                let now = mrsim_shape::gap(&foot, rear, &o.shape, at);
+                (o, now, self.keep + o.velocity.norm())
+            })
+            .collect();
+        if near.is_empty() {
+            return look;
+        }
+        let s0 = self.pursuit.progress();
+        let end = s0 + look.min(to_stop);
+        for p in self.pursuit.poses() {
+            if p.s <= s0 {
+                continue;
+            }
+            if p.s > end {
+                break;
+            }
+            for &(o, now, keep) in &near {
+                let at = Pose::new([o.position.x, o.position.y], o.heading);
+                let g = mrsim_shape::gap(&foot, p.pose(), &o.shape, at);
+                if g < keep && g < now - 1e-6 {
+                    return (p.s - s0 - self.lookahead / 4.0).max(0.0);
+                }
+            }
+        }
+        look
+    }
+
+    /// Plans again from `rear` around the bodies standing near (module
+    /// documentation, "Replanning").
+    fn replan(&mut self, obs: &Observation, rear: Pose, within: f64) {
+        self.last_try = obs.time;
+        let blocked: Vec<(Shape, Pose)> = obs
+            .others
+            .iter()
+            .filter(|o| !self.known(o) && o.velocity.norm() < self.slow)
+            .filter(|o| {
+                (o.position.x - rear.position[0]).hypot(o.position.y - rear.position[1])
+                    <= within + o.radius
+            })
+            .map(|o| (o.shape, Pose::new([o.position.x, o.position.y], o.heading)))
+            .collect();
+        let map = self.setup.map(&self.scene, &blocked, rear);
+        if let Ok(route) = self.setup.route(&map, rear) {
+            self.pursuit.replace(&route.path, obs.time);
+            self.replans += 1;
+        }
+    }
+}
+
+impl Planner for CarRouted {
+    fn plan(&mut self, obs: &Observation) -> Command {
+        let me = &obs.me;
+        let Kinematics::Ackermann {
+            wheelbase: l,
+            max_steering,
+            max_steering_rate,
+            max_reverse_speed,
+        } = me.kinematics
+        else {
+            // Not a car after all: brake.
+            return Command::Velocity(mrsim_planners::Vec2::zeros());
+        };
+        let (sh, ch) = me.heading.sin_cos();
+        let rear = Pose::new(
+            [me.position.x - l / 2.0 * ch, me.position.y - l / 2.0 * sh],
+            me.heading,
+        );
+        let brake = me.max_accel / 2.0;
+        let top = me.max_speed.max(max_reverse_speed);
+        let look = top * top / (2.0 * brake) + 2.0 * self.setup.car.shape.circumradius();
+        if self.pursuit.stuck(obs.time) && obs.time - self.last_try >= PATIENCE {
+            self.replan(obs, rear, 2.0 * look);
+        }
+        let speed_now = me.velocity.dot(&mrsim_planners::Vec2::new(ch, sh));
+        self.pursuit.set_lookahead(lookahead(l, speed_now));
+        let t = self.pursuit.target(rear, obs.time);
+        let steering = t.steering(l, max_steering);
+        let (cap, sign) = match t.gear {
+            Gear::Forward => (me.max_speed, 1.0),
+            Gear::Reverse => (max_reverse_speed, -1.0),
+        };
+        if t.last && t.to_stop <= 1e-9 {
+            self.gear = 0.0;
+            return Command::Ackermann {
+                speed: 0.0,
+                steering,
+            };
+        }
+        self.gear = sign;
+        let creep = creep(l).min(cap);
+        let stop = (2.0 * brake * t.to_stop).sqrt().max(creep);
+        let lag = (steering - me.steering).abs();
+        let steer = if lag > 1e-9 {
+            self.lookahead / 4.0 * max_steering_rate / lag
+        } else {
+            f64::INFINITY
+        };
+        let free = self.free(obs, rear, look, t.to_stop);
+        let clear = if free >= look {
+            f64::INFINITY
+        } else {
+            (2.0 * brake * free).sqrt()
+        };
+        let speed = cap.min(stop).min(steer.max(creep)).min(clear);
+        Command::Ackermann {
+            speed: sign * speed,
+            steering,
+        }
+    }
+
+    fn diagnostics(&self) -> Vec<Diagnostic> {
+        vec![
+            Diagnostic {
+                name: "route_progress".into(),
+                value: self.pursuit.progress(),
+            },
+            Diagnostic {
+                name: "route_replans".into(),
+                value: f64::from(self.replans),
+            },
+            Diagnostic {
+                name: "route_gear".into(),
+                value: self.gear,
+            },
+        ]
+    }
+
+    fn native_ackermann(&self) -> bool {
+        true
+    }
+
+    fn needs_scan(&self) -> bool {
+        self.inner.needs_scan()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mrsim_route::drive::wrap;
+
+    #[test]
+    fn the_rear_axle_footprint_is_the_body_moved_forwards_by_half_the_wheelbase() {
+        let body = Shape::Polygon(Polygon::rectangle(4.6, 1.6).expect("a rectangle"));
+        let Shape::Polygon(p) = rear_footprint(&body, 1.4) else {
+            panic!("a polygon");
+        };
+        let want = [[-0.9, -0.8], [3.7, -0.8], [3.7, 0.8], [-0.9, 0.8]];
+        assert_eq!(p.points().len(), 4);
+        for (q, w) in p.points().iter().zip(want) {
+            assert!(
+                (q[0] - w[0]).abs() < 1e-12 && (q[1] - w[1]).abs() < 1e-12,
+                "{q:?}"
+            );
+        }
+        // A disc: the octagon around it, every edge at the radius.
+        let Shape::Polygon(o) = rear_footprint(&Shape::disc(1.0), 0.5) else {
+            panic!("a polygon");
+        };
+        for (i, a) in o.points().iter().enumerate() {
+            let b = o.points()[(i + 1) % 8];
+            let mid = [(a[0] + b[0]) / 2.0 - 0.5, (a[1] + b[1]) / 2.0];
+            assert!((mid[0].hypot(mid[1]) - 1.0).abs() < 1e-12, "{mid:?}");
+        }
+    }
+
+    #[test]
+    fn a_car_route_puts_the_centre_on_the_goal_at_the_goal_heading() {
+        let src = include_str!("../../scenarios/cars/parking.toml");
+        let s = mrsim_scenario::parse(src, "parking.toml")
+            .expect("the parking scene")
+            .scenario;
+        let spec = &s.robots[0];
+        let (setup, route) = RouteScene::of(&s).car_route(spec).expect("a route");
+        let end = route.path.end();
+        let goal = spec.goal_heading.expect("a goal heading").heading;
+        assert!(wrap(end.heading - goal).abs() < 1e-9, "{end:?}");
+        let (line, _) = centre_line(&route.path, setup.wheelbase, 0.1);
+        let c = line.last().expect("points");
+        assert!(
+            (c[0] - spec.goal[0]).hypot(c[1] - spec.goal[1]) < 1e-9,
+            "{c:?}"
+        );
+        // It starts at the rear axle of the car as it stands.
+        let st = route.path.start();
+        let h = spec.start_heading();
+        let back = [spec.start[0] - 1.4 * h.cos(), spec.start[1] - 1.4 * h.sin()];
+        assert!((st.position[0] - back[0]).hypot(st.position[1] - back[1]) < 1e-9);
+        // Its radius is the car's least, by the factor.
+        let least = spec.ackermann.expect("a car").min_turning_radius();
+        assert!((route.path.radius() - RADIUS_FACTOR * least).abs() < 1e-12);
+        eprintln!(
+            "parking: {} poses expanded, length {:.2}, {} gear changes",
+            route.expanded,
+            route.path.length(),
+            route.path.gear_changes()
+        );
+    }
+}
