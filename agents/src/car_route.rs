@@ -81,32 +81,11 @@ type Disc = ([f64; 2], f64);
 /// The route's turning radius over the car's least.
 pub const RADIUS_FACTOR: f64 = 1.25;
 
-/// The largest body-frame distance from the shape's centre to its edge
-/// that is inside it: a disc's radius, the least distance from the
-/// origin to a polygon's edges.
-fn inner_radius(shape: &Shape) -> f64 {
-    match shape {
-        Shape::Disc { radius } => *radius,
-        Shape::Polygon(p) => {
-            let pts = p.points();
-            let n = pts.len();
-            (0..n)
-                .map(|i| {
-                    let (a, b) = (pts[i], pts[(i + 1) % n]);
-                    let e = [b[0] - a[0], b[1] - a[1]];
-                    (e[0] * (-a[1]) - e[1] * (-a[0])) / e[0].hypot(e[1])
-                })
-                .fold(f64::INFINITY, f64::min)
-                .max(0.0)
-        }
-    }
-}
-
 /// The gap a car's route keeps from walls and static obstacles: a quarter
-/// of the body's inner radius (half its width, for a rectangle longer
-/// than wide: 0.2 m for a 1.6 m wide car).
+/// of the body's [`Shape::inradius`] (half its width, for a rectangle
+/// longer than wide: 0.2 m for a 1.6 m wide car).
 pub fn margin(spec: &RobotSpec) -> f64 {
-    inner_radius(&spec.body_shape()) / 4.0
+    spec.body_shape().inradius() / 4.0
 }
 
 /// The gap the car keeps from sensed bodies along its way ahead: its
@@ -206,7 +185,7 @@ impl CarSetup {
                 margin: margin(spec),
                 ..Search::default()
             },
-            resolution: map_resolution.unwrap_or(inner_radius(&body) / 16.0),
+            resolution: map_resolution.unwrap_or(body.inradius() / 16.0),
         })
     }
 

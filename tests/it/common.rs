@@ -544,3 +544,31 @@ pub fn timing_rows(dir: &Path) -> Vec<CallRow> {
         })
         .collect()
 }
+
+/// Runs the shipped `scenario` (relative to the root; `(demo)`: the
+/// built-in demo) in lockstep in-process with `extra` arguments and
+/// returns its folder.
+pub fn run_shipped(scenario: &str, extra: &[&str]) -> PathBuf {
+    let out = fresh_dir("shipped");
+    let mut cmd = mrsim();
+    cmd.arg("run");
+    if scenario != "(demo)" {
+        cmd.arg(root().join(scenario));
+    }
+    let o = cmd
+        .args([
+            "--mode",
+            "lockstep",
+            "--transport",
+            "inproc",
+            "--quiet",
+            "--no-report",
+        ])
+        .args(extra)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .expect("start mrsim");
+    assert_ok(&o);
+    out
+}

@@ -10,26 +10,7 @@ use std::path::{Path, PathBuf};
 /// Runs `scenario` (relative to the root) in lockstep in-process with
 /// `planner`; returns its folder.
 fn run_with(scenario: &str, planner: &str) -> PathBuf {
-    let out = fresh_dir("dwa-shapes");
-    let o = mrsim()
-        .arg("run")
-        .arg(root().join(scenario))
-        .args([
-            "--mode",
-            "lockstep",
-            "--transport",
-            "inproc",
-            "--quiet",
-            "--no-report",
-            "--set",
-        ])
-        .arg(format!("planner={planner}"))
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .expect("start mrsim");
-    assert_ok(&o);
-    out
+    run_shipped(scenario, &["--set", &format!("planner={planner}")])
 }
 
 /// Robots at their goal, contacts, and the least surface gap of any robot

@@ -72,33 +72,6 @@ fn hash_of(bytes: &[u8]) -> String {
     format!("{:016x}:{}", fnv1a64(bytes), bytes.len())
 }
 
-/// Runs `scenario` in lockstep in-process with `extra` arguments and
-/// returns its folder.
-fn run_lockstep(scenario: &str, extra: &[&str]) -> PathBuf {
-    let out = fresh_dir("golden");
-    let mut cmd = mrsim();
-    cmd.arg("run");
-    if scenario != "(demo)" {
-        cmd.arg(root().join(scenario));
-    }
-    let o = cmd
-        .args([
-            "--mode",
-            "lockstep",
-            "--transport",
-            "inproc",
-            "--quiet",
-            "--no-report",
-        ])
-        .args(extra)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .expect("start mrsim");
-    assert_ok(&o);
-    out
-}
-
 /// The keys of metrics.json a lockstep run makes exact (no wall clock, no
 /// pid), as one canonical JSON text (keys sorted).
 fn exact_metrics(dir: &Path) -> String {
@@ -233,7 +206,7 @@ fn every_shipped_scenario_in_lockstep_writes_the_recorded_trajectory_and_outcome
     let mut trajectories = BTreeMap::new();
     let mut outputs = BTreeMap::new();
     for s in scenarios() {
-        let out = run_lockstep(&s, &[]);
+        let out = run_shipped(&s, &[]);
         let bytes = std::fs::read(out.join("trajectory.csv")).expect("trajectory.csv");
         trajectories.insert(s.clone(), hash_of(&bytes));
         outputs.insert(
@@ -250,7 +223,7 @@ fn every_shipped_scenario_in_lockstep_writes_the_recorded_trajectory_and_outcome
         outputs.contains_key("scenarios/lidar-demo.toml scan.csv"),
         "the lidar demo records scans"
     );
-    let pq = run_lockstep(
+    let pq = run_shipped(
         "scenarios/crossing.toml",
         &["--set", "output.trajectory=parquet"],
     );

@@ -302,27 +302,6 @@ pub fn outline(shape: &Shape, pose: Pose) -> Vec<[P; 2]> {
     }
 }
 
-/// The radius of the largest disc about the body's origin inside the
-/// shape (0 if the origin is outside it).
-fn inscribed(shape: &Shape) -> f64 {
-    match shape {
-        Shape::Disc { radius } => *radius,
-        Shape::Polygon(p) => {
-            let pts = p.points();
-            let n = pts.len();
-            (0..n)
-                .map(|i| {
-                    let (a, b) = (pts[i], pts[(i + 1) % n]);
-                    let e = [b[0] - a[0], b[1] - a[1]];
-                    // Counter-clockwise: the origin is on each edge's left.
-                    (e[0] * (-a[1]) - e[1] * (-a[0])) / e[0].hypot(e[1])
-                })
-                .fold(f64::INFINITY, f64::min)
-                .max(0.0)
-        }
-    }
-}
-
 /// What a car's route goes around: the clearance grid, and the walls and
 /// discs themselves in buckets for the exact test.
 #[derive(Debug, Clone)]
@@ -599,7 +578,7 @@ impl<'a> Planner<'a> {
         let foot = Footprint {
             shape: car.shape,
             circum: car.shape.circumradius(),
-            inscribed: inscribed(&car.shape),
+            inscribed: car.shape.inradius(),
         };
         let tol = goal.heading_tolerance.min(PI);
         let headings = match goal.heading {
