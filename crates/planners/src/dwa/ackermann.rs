@@ -45,7 +45,7 @@
 
 use super::footprint::{Footprint, Motion, Rollout};
 use super::planner::Dwa;
-use super::unicycle::rightmost_best;
+use super::unicycle::{rightmost_best, wrap};
 use crate::ackermann::{Car, CarState, bicycle_step};
 use crate::{Command, Observation};
 use std::f64::consts::PI;
@@ -60,12 +60,6 @@ const BACK_OFF_FOR: f64 = 3.0;
 const LOOK_AHEAD: f64 = 1.0;
 /// Scores closer than this (relative to the objective's range) are a tie.
 const TIE: f64 = 1e-6;
-
-/// Angle wrapped to (-pi, pi].
-fn wrap(a: f64) -> f64 {
-    let w = a.rem_euclid(2.0 * PI);
-    if w > PI { w - 2.0 * PI } else { w }
-}
 
 /// The car's states driving (speed, steering) from `s`, every `h`: held
 /// for `hold` s, then (when `brake`) the speed asked 0 until at rest;

@@ -36,7 +36,7 @@ fn along(p: Vec2, th: f64, k: f64, s: f64) -> Vec2 {
 
 /// Distance travelled by time `t` at speed `u` held for `delay`, then
 /// braking at `a` to rest (`a` <= 0: never braking).
-fn braking_distance(u: f64, a: f64, delay: f64, t: f64) -> f64 {
+pub(super) fn braking_distance(u: f64, a: f64, delay: f64, t: f64) -> f64 {
     if t <= delay || a <= 0.0 {
         return u * t;
     }

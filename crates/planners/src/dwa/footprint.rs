@@ -15,6 +15,7 @@
 //! stands nearer than that, below the gap it has now: what would take it
 //! nearer is a contact, moving along or away is not.
 
+use super::brake::braking_distance;
 use super::walls::WallGrid;
 use crate::{BodyKind, Segment, Sensed, Shape, Vec2};
 use mrsim_shape::{Placement, Pose, placed_gap, placed_gap_to_segment};
@@ -78,13 +79,7 @@ fn body_at(o: &Sensed, motion: Motion, t: f64) -> Vec2 {
             if u <= 1e-12 {
                 return o.position;
             }
-            let s = if t <= delay || a <= 0.0 {
-                u * t
-            } else {
-                let tb = (t - delay).min(u / a);
-                u * delay + u * tb - 0.5 * a * tb * tb
-            };
-            o.position + o.velocity * (s / u)
+            o.position + o.velocity * (braking_distance(u, a, delay, t) / u)
         }
     }
 }

@@ -182,7 +182,7 @@ pub(super) fn rightmost_best(scored: &[(f64, f64, f64)], tie: f64) -> Option<(f6
 }
 
 /// Angle `a` wrapped to (-pi, pi].
-fn wrap(a: f64) -> f64 {
+pub(super) fn wrap(a: f64) -> f64 {
     let w = a.rem_euclid(2.0 * PI);
     if w > PI { w - 2.0 * PI } else { w }
 }
