@@ -371,10 +371,10 @@ impl Scan<'_> {
         }
         out.push(Sensed {
             id: b.id,
-            kind: if b.kind == body_kind::ROBOT {
-                BodyKind::Robot
-            } else {
-                BodyKind::Obstacle
+            kind: match b.kind {
+                body_kind::ROBOT => BodyKind::Robot,
+                body_kind::PERSON => BodyKind::Person,
+                _ => BodyKind::Obstacle,
             },
             position: p,
             velocity: Vec2::new(b.velocity[0], b.velocity[1]),
@@ -430,7 +430,7 @@ impl Observer {
             &scenario.world,
             scenario.robots.get(me),
             me,
-            scenario.robots.len() + scenario.obstacles.len(),
+            scenario.body_count(),
             walls_of(&scenario.walls, scenario.world.arena),
             shapes_of(scenario),
         )

@@ -159,6 +159,7 @@ impl PyObservation {
                 o.iter().map(|s| match s.kind {
                     BodyKind::Robot => 0u8,
                     BodyKind::Obstacle => 1,
+                    BodyKind::Person => 2,
                 }),
             )
             .unbind(),

@@ -2,15 +2,17 @@
 //!
 //! The world never sees a planner (it borrows only the pure
 //! `distance_to_path` helper of the planners crate for the designated-path
-//! metrics): it enforces each robot's actuator limits whatever the agent
-//! asks, moves scripted obstacles, detects collisions, and records
-//! everything a researcher needs afterwards.
+//! metrics, the car's `bicycle_step`, and ORCA's half-planes and linear
+//! programs, `orca::Walker`, for the people): it enforces each robot's
+//! actuator limits whatever the agent asks, moves scripted obstacles and
+//! people, detects collisions, and records everything a researcher needs
+//! afterwards.
 //!
 //! The crate is shaped by role, the way rapier shapes its sets and
 //! pipelines, so that each part can be read and tested on its own:
 //!
 //! - [`physics`]: [`World`], data plus a step (apply commands, move the
-//!   obstacles ([`motion`]), step rapier, report contacts). No clock, no
+//!   obstacles ([`motion`]) and the people ([`people`]), step rapier, report contacts). No clock, no
 //!   transport.
 //! - [`run`](mod@run): the tick loop, driving a `World` through an injected
 //!   [`WorldTransport`](mrsim_transport::WorldTransport) so the same loop
@@ -39,6 +41,7 @@ pub mod metrics;
 pub mod motion;
 pub mod names;
 pub mod path_metrics;
+pub mod people;
 pub mod physics;
 pub mod record;
 pub mod run;

@@ -5,7 +5,8 @@
 
 pub use crate::histogram::DurationHistogram;
 pub use mrsim_runfolder::metrics::{
-    Deadlock, PathDeviation, Percentiles, RobotMetrics, RunMetrics, TimingMetrics,
+    Deadlock, EndedBy, Episode, Outcome, PathDeviation, Percentiles, RobotMetrics, RunMetrics,
+    TimingMetrics,
 };
 
 /// Everything measured about one robot.

@@ -56,6 +56,7 @@
 //! facing its goal, its wheels straight.
 
 use crate::motion::{Body, MotionError, MotionSetup, MotionState};
+use crate::people::Crowd;
 use mrsim_planners::Vec2;
 use mrsim_planners::ackermann::{Car, CarState, bicycle_step, centre_velocity};
 use mrsim_proto::{BodyState, body_kind};
@@ -100,6 +101,8 @@ pub enum Owner {
     Robot(usize),
     /// Obstacle index.
     Obstacle(usize),
+    /// Person index.
+    Person(usize),
     /// Wall index (arena walls included).
     Wall(usize),
 }
@@ -182,6 +185,9 @@ pub struct World {
     actuators: Vec<Actuator>,
     obstacles: Vec<RigidBodyHandle>,
     motions: Vec<MotionState>,
+    /// The people's rapier bodies, by person index.
+    people: Vec<RigidBodyHandle>,
+    crowd: Crowd,
     bodies: Vec<Body>,
     /// Each collider's owner, by the collider's arena index (colliders are
     /// never removed, so the index alone names one).
@@ -284,15 +290,20 @@ fn set_owner(owners: &mut Vec<Option<Owner>>, c: ColliderHandle, owner: Owner) {
 }
 
 /// Every body's state before the first refresh: robots, then obstacles,
-/// each with its id, kind and radius.
+/// then people, each with its id, kind and radius.
 fn initial_states(scenario: &Scenario) -> Vec<BodyState> {
     let robots = scenario.robots.iter().map(|r| (body_kind::ROBOT, r.radius));
     let obstacles = scenario
         .obstacles
         .iter()
         .map(|o| (body_kind::OBSTACLE, o.radius));
+    let people = scenario
+        .people
+        .iter()
+        .map(|p| (body_kind::PERSON, p.radius));
     robots
         .chain(obstacles)
+        .chain(people)
         .enumerate()
         .map(|(id, (kind, radius))| BodyState {
             id: id as u32,
@@ -434,6 +445,15 @@ impl World {
             motions.push(motion);
         }
 
+        let mut people = Vec::with_capacity(scenario.people.len());
+        for (k, p) in scenario.people.iter().enumerate() {
+            let h = phys
+                .insert_body(RigidBodyBuilder::kinematic_position_based().translation(v2(p.start)));
+            let c = phys.insert_collider(ColliderBuilder::ball(p.radius as f32), Some(h));
+            set_owner(&mut owners, c, Owner::Person(k));
+            people.push(h);
+        }
+
         let walls = scenario.all_walls();
         for (i, w) in walls.iter().enumerate() {
             let h = phys.insert_body(RigidBodyBuilder::fixed());
@@ -449,6 +469,8 @@ impl World {
             actuators: scenario.robots.iter().map(Actuator::of).collect(),
             obstacles,
             motions,
+            people,
+            crowd: Crowd::new(scenario),
             bodies: Vec::with_capacity(scenario.robots.len() + scenario.obstacles.len()),
             owners,
             commands: vec![Applied::BRAKE; scenario.robots.len()],
@@ -495,7 +517,8 @@ impl World {
         self.tick as f64 * self.scenario.world.dt
     }
 
-    /// Every body's state: robots first (ids 0..n), then obstacles.
+    /// Every body's state: robots first (ids 0..n), then obstacles, then
+    /// people.
     pub fn states(&self) -> &[BodyState] {
         &self.states
     }
@@ -582,6 +605,8 @@ impl World {
         for m in &mut self.motions {
             m.begin_tick(&self.bodies);
         }
+        // People choose this tick's velocity from the same states.
+        self.crowd.begin_tick(&self.states);
         self.physics_ns = 0;
         for j in 0..sub {
             if self.any_pending {
@@ -684,6 +709,14 @@ impl World {
                     body.set_next_kinematic_translation(v2(m.position));
                 }
             }
+            if !self.crowd.is_empty() {
+                self.crowd.advance(h);
+                for (handle, p) in self.people.iter().zip(&self.crowd.people) {
+                    if let Some(body) = self.phys.bodies.get_mut(*handle) {
+                        body.set_next_kinematic_translation(v2(p.position));
+                    }
+                }
+            }
             let t = std::time::Instant::now();
             self.phys.step();
             self.physics_ns += t.elapsed().as_nanos() as u64;
@@ -752,6 +785,7 @@ impl World {
         match o {
             Owner::Robot(i) => self.scenario.robots[i].radius.max(min),
             Owner::Obstacle(i) => self.scenario.obstacles[i].radius.max(min),
+            Owner::Person(k) => self.scenario.people[k].radius,
             Owner::Wall(_) => 0.0,
         }
     }
@@ -762,6 +796,7 @@ impl World {
         let (id, heading) = match o {
             Owner::Robot(i) => (i, self.headings[i]),
             Owner::Obstacle(i) => (self.robots.len() + i, self.scenario.obstacles[i].heading),
+            Owner::Person(k) => (self.robots.len() + self.obstacles.len() + k, 0.0),
             Owner::Wall(_) => return None,
         };
         Some((self.shapes[id], mrsim_shape::Pose::new(p, heading)))
@@ -795,6 +830,7 @@ impl World {
         let h = match o {
             Owner::Robot(i) => self.robots[i],
             Owner::Obstacle(i) => self.obstacles[i],
+            Owner::Person(k) => return self.crowd.people.get(k).map(|p| p.position),
             Owner::Wall(_) => return None,
         };
         self.phys.bodies.get(h).map(|b| {
@@ -849,6 +885,11 @@ impl World {
             s.position = m.position;
             s.velocity = m.velocity;
             s.heading = o.heading;
+        }
+        let first = n + self.motions.len();
+        for (s, p) in self.states[first..].iter_mut().zip(&self.crowd.people) {
+            s.position = p.position;
+            s.velocity = p.velocity;
         }
     }
 }

@@ -535,10 +535,10 @@ impl Labels {
         let label = &mut self.by_id[id];
         if label.kind != b.kind {
             let name = names.get(id).map_or("?", String::as_str);
-            let kind = if b.kind == body_kind::ROBOT {
-                "robot"
-            } else {
-                "obstacle"
+            let kind = match b.kind {
+                body_kind::ROBOT => "robot",
+                body_kind::PERSON => "person",
+                _ => "obstacle",
             };
             *label = Label {
                 kind: b.kind,

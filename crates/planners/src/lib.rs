@@ -78,6 +78,9 @@ pub enum BodyKind {
     Robot,
     /// A scripted obstacle moved by the world.
     Obstacle,
+    /// A person (pedestrian) moved by the world's crowd models, who may
+    /// or may not make way for robots (the scenario's `sees_robots`).
+    Person,
 }
 
 /// Another body as the robot senses it.
@@ -111,7 +114,7 @@ pub enum BodyKind {
 pub struct Sensed {
     /// The body's id in the world (stable for the run).
     pub id: u32,
-    /// Robot or obstacle.
+    /// Robot, obstacle or person.
     pub kind: BodyKind,
     /// Position.
     pub position: Vec2,

@@ -33,8 +33,10 @@ use iceoryx2::prelude::ZeroCopySend;
 /// marks the robots whose planner reads a snapshot with [`flags::PLANS`],
 /// and such a robot plans only then. Version 12: a [`BodyState`] carries
 /// a car's steering angle ([`BodyState::steering`]), and a car is driven by
-/// [`command_kind::ACKERMANN`] commands (speed, steering).
-pub const PROTOCOL_VERSION: u32 = 12;
+/// [`command_kind::ACKERMANN`] commands (speed, steering). Version 13: a
+/// snapshot carries people, bodies of kind [`body_kind::PERSON`] after the
+/// obstacles.
+pub const PROTOCOL_VERSION: u32 = 13;
 
 /// Longest robot name, in bytes, that fits a [`JoinRequest`].
 pub const MAX_NAME_LEN: usize = 64;
@@ -48,6 +50,9 @@ pub mod body_kind {
     pub const ROBOT: u32 = 0;
     /// A scripted obstacle moved by the world.
     pub const OBSTACLE: u32 = 1;
+    /// A person (pedestrian) moved by the world's crowd models (since
+    /// protocol 13).
+    pub const PERSON: u32 = 2;
 }
 
 /// Per-body flags in a snapshot.
@@ -67,9 +72,10 @@ pub mod flags {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Default)]
 pub struct BodyState {
-    /// Index of the body in the scenario: robots first, then obstacles.
+    /// Index of the body in the scenario: robots first, then obstacles,
+    /// then people.
     pub id: u32,
-    /// Robot or obstacle, one of [`body_kind`].
+    /// Robot, obstacle or person, one of [`body_kind`].
     pub kind: u32,
     /// Bit set of [`flags`].
     pub flags: u32,

@@ -6,7 +6,7 @@
 //!
 //! | topic | schema | what |
 //! | --- | --- | --- |
-//! | `/scene` | `foxglove.SceneUpdate` | each recorded tick: robots in their colour with a heading arrow and their name, obstacles in grey, each as its shape (a disc as a cylinder, a rectangle as a cube of its length x width x 0.2 turned by its heading, another polygon as its outline, a line loop in the body's frame posed at its heading); at the first tick also the walls (the arena's, the file's and the map's outlines) and the goals, which last |
+//! | `/scene` | `foxglove.SceneUpdate` | each recorded tick: robots in their colour with a heading arrow and their name, obstacles in grey, people in sandy brown, each as its shape (a disc as a cylinder, a rectangle as a cube of its length x width x 0.2 turned by its heading, another polygon as its outline, a line loop in the body's frame posed at its heading); at the first tick also the walls (the arena's, the file's and the map's outlines) and the goals, which last |
 //! | `/tf` | `foxglove.FrameTransforms` | each recorded tick: `world` -> each robot's frame (its position; its heading for a unicycle or a body that is not a disc, none for a holonomic disc, which does not turn) |
 //! | `/<robot>/scan` | `foxglove.LaserScan` | each scan in scan.csv, in the robot's frame |
 //! | `/map` | `foxglove.Grid` | once: the map's occupancy (ROS values: 0 free, 100 occupied, -1 unknown; INT8) |
@@ -215,6 +215,18 @@ pub fn write_mcap(run: &RunData, dir: &Path) -> Result<McapWritten, RenderError>
                         heading: look.map_or(0.0, |l| l.heading(None)),
                     };
                     entities.push(body_entity(&body, [0x88, 0x88, 0x88], &stamp));
+                }
+                BodyKind::Person => {
+                    let body = Body {
+                        name,
+                        x: s.x,
+                        y: s.y,
+                        radius: run.radius_of(name),
+                        shape: &ShapeSpec::Disc,
+                        look: None,
+                        heading: 0.0,
+                    };
+                    entities.push(body_entity(&body, crate::PERSON, &stamp));
                 }
             }
         }

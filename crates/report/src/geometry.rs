@@ -116,6 +116,13 @@ impl RunData {
                     .find(|o| o.name == name)
                     .map(|o| o.radius)
             })
+            .or_else(|| {
+                self.scenario
+                    .people
+                    .iter()
+                    .find(|p| p.name == name)
+                    .map(|p| p.radius)
+            })
             .unwrap_or(0.0)
     }
 

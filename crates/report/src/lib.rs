@@ -25,7 +25,7 @@ pub mod sweep_plot;
 
 pub use foxglove::{MCAP_FILE, McapWritten, export_mcap, write_mcap};
 pub use geometry::BodyLook;
-pub use palette::{COLLISION, PALETTE, hex, robot_color};
+pub use palette::{COLLISION, PALETTE, PERSON, hex, robot_color};
 pub use plot::{MAX_PLOT_POINTS, PLOT_WIDTH, plot_every, plot_size, write_plots};
 pub use records::{BodyKind, BodyTrack, DiagnosticSample, Event, EventKind, Sample, Trajectory};
 pub use replay::{

@@ -229,9 +229,10 @@ impl Tracks {
         let kind = match kind {
             "robot" => BodyKind::Robot,
             "obstacle" => BodyKind::Obstacle,
+            "person" => BodyKind::Person,
             other => {
                 return Err(format!(
-                    "column `kind`: `{other}` is neither robot nor obstacle"
+                    "column `kind`: `{other}` is none of robot, obstacle, person"
                 ));
             }
         };

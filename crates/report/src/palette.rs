@@ -22,6 +22,10 @@ pub const PALETTE: [[u8; 3]; 16] = [
     [0x75, 0x6b, 0xb1],
 ];
 
+/// Colour of people, RGB: one sandy brown for all, apart from the robots'
+/// palette and the obstacles' grey.
+pub const PERSON: [u8; 3] = [0xf4, 0xa4, 0x60];
+
 /// Colour of collision marks, RGB.
 pub const COLLISION: [u8; 3] = [0xe3, 0x1a, 0x1c];
 

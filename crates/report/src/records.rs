@@ -10,6 +10,8 @@ pub enum BodyKind {
     Robot,
     /// Moved by the world.
     Obstacle,
+    /// A person, moved by the world's crowd models.
+    Person,
 }
 
 /// One row of `trajectory.csv` (the body is the track it belongs to).

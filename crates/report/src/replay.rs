@@ -83,7 +83,7 @@ impl ReplayView {
     pub fn radius_px(&self, radius: f64, kind: BodyKind) -> f64 {
         let min = match kind {
             BodyKind::Robot => 4.0,
-            BodyKind::Obstacle => 2.0,
+            BodyKind::Obstacle | BodyKind::Person => 2.0,
         };
         (radius * self.scale).max(min)
     }

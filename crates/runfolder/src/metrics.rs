@@ -126,6 +126,91 @@ pub struct RobotMetrics {
     /// counted from each time it was declared so.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stuck_time: Option<f64>,
+    /// Its episode's outcome under `[world] end_on` (absent without it).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub outcome: Option<Outcome>,
+    /// When its episode ended, s: its arrival for a success, its first
+    /// contact for a collision, the time limit for a timeout, the run's
+    /// end otherwise (absent without `[world] end_on`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub outcome_time: Option<f64>,
+    /// The body its first contact was with, by name (`wallK` for a wall);
+    /// present for a collision.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub collided_with: Option<String>,
+}
+
+/// How a robot's episode ended (`[world] end_on`), as the crowd-navigation
+/// benchmarks count an episode (CrowdNav's `ReachGoal`, `Collision`,
+/// `Timeout`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Outcome {
+    /// At its goal within the time limit, without a contact before it.
+    Success,
+    /// A contact before it reached its goal.
+    Collision,
+    /// Not at its goal when the time limit ended the run (`end_on` names
+    /// `"timeout"`).
+    Timeout,
+    /// Not at its goal when the run ended otherwise: another robot's
+    /// contact ended it, every robot was stuck, it was interrupted, or it
+    /// reached its duration with `end_on` not naming `"timeout"`.
+    Unfinished,
+}
+
+impl Outcome {
+    /// The name as written in metrics.json.
+    pub fn name(self) -> &'static str {
+        match self {
+            Outcome::Success => "success",
+            Outcome::Collision => "collision",
+            Outcome::Timeout => "timeout",
+            Outcome::Unfinished => "unfinished",
+        }
+    }
+}
+
+/// What ended a run counted as an episode.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum EndedBy {
+    /// A robot's first contact (`end_on` names `"collision"`).
+    Collision,
+    /// Every robot at its goal.
+    Goals,
+    /// The run's duration, its time limit.
+    TimeLimit,
+    /// Every robot not at its goal stuck (`end_when_stuck`).
+    Stuck,
+    /// A signal.
+    Interrupted,
+}
+
+/// metrics.json's `episode`: the run counted as the benchmarks count an
+/// episode (`[world] end_on`), over its robots.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Episode {
+    /// The conditions of `end_on`, as written.
+    pub end_on: Vec<String>,
+    /// The run's outcome: `collision` if any robot collided, else
+    /// `timeout` if any timed out, else `unfinished` if any is, else
+    /// `success` (with one robot, that robot's).
+    pub outcome: Outcome,
+    /// What ended the run.
+    pub ended_by: EndedBy,
+    /// Simulated time at the end, s.
+    pub time: f64,
+    /// Robots of each outcome.
+    pub success: u32,
+    /// Robots that collided.
+    pub collision: u32,
+    /// Robots that timed out.
+    pub timeout: u32,
+    /// Robots left unfinished.
+    pub unfinished: u32,
+    /// Mean time to goal of the robots that succeeded, s; null if none.
+    pub time_to_goal: Option<f64>,
 }
 
 /// A key that may be absent (an older file: `None`) or present and null
@@ -250,6 +335,9 @@ pub struct RunMetrics {
     /// stuck (`[world] end_when_stuck`).
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub ended_stuck: bool,
+    /// The run counted as an episode (`[world] end_on`; absent without it).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub episode: Option<Episode>,
 }
 
 /// `metrics.json`'s `timing`: the run as a real-time system.

@@ -61,7 +61,7 @@ pub struct Estimate {
 /// The estimate for `scenario` over `transport`.
 pub fn estimate(scenario: &Scenario, transport: Transport) -> Estimate {
     let robots = scenario.robots.len() as u64;
-    let bodies = robots + scenario.obstacles.len() as u64;
+    let bodies = robots + (scenario.obstacles.len() + scenario.people.len()) as u64;
     let reach = extent(scenario);
     let seeing_all = scenario
         .robots

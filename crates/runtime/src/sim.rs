@@ -210,7 +210,7 @@ impl Sim {
                     &s.world,
                     Some(spec),
                     i,
-                    s.robots.len() + s.obstacles.len(),
+                    s.body_count(),
                     self.walls.clone(),
                     shapes.clone(),
                 ),

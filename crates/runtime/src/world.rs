@@ -110,7 +110,7 @@ pub fn serve(
     }))
     .map(|v| v.len())
     .unwrap_or(1 << 16);
-    let bodies = scenario.robots.len() + scenario.obstacles.len();
+    let bodies = scenario.body_count();
     let cap = if launched {
         capacity(
             scenario.robots.len(),

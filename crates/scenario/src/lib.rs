@@ -26,6 +26,7 @@
 
 mod checks;
 pub mod cores;
+pub mod crowdnav;
 mod error;
 mod generate;
 pub mod map;
@@ -181,14 +182,16 @@ fn describe_span(src: &str, span: Option<&Range<usize>>) -> String {
     for (key, value) in doc.get_ref() {
         let k = key.get_ref().as_ref();
         match value.get_ref() {
-            DeValue::Array(items) if matches!(k, "robot" | "obstacle" | "wall") => {
+            DeValue::Array(items)
+                if matches!(k, "robot" | "obstacle" | "person" | "crowd" | "wall") =>
+            {
                 for (i, item) in items.iter().enumerate() {
                     let label = match item
                         .get_ref()
                         .get("name")
                         .and_then(|n| n.get_ref().as_str())
                     {
-                        Some(n) if k != "wall" => format!("{k} `{n}`"),
+                        Some(n) if k != "wall" && k != "crowd" => format!("{k} `{n}`"),
                         _ => format!("{k} #{}", i + 1),
                     };
                     consider(item.span().start, label);

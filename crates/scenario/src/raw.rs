@@ -42,6 +42,8 @@ pub(crate) struct RawDoc {
     pub defaults: Option<S<RawRobot>>,
     pub robot: Vec<S<RawRobot>>,
     pub obstacle: Vec<S<RawObstacle>>,
+    pub person: Vec<S<RawPerson>>,
+    pub crowd: Vec<S<RawCrowd>>,
     pub wall: Vec<S<RawWall>>,
     pub generate: Option<S<RawGenerate>>,
     pub map: Option<S<RawMap>>,
@@ -82,6 +84,7 @@ pub(crate) struct RawWorld {
     pub robots_per_agent: Option<S<u32>>,
     pub stuck_after: Option<S<f64>>,
     pub end_when_stuck: Option<S<bool>>,
+    pub end_on: Option<S<Vec<S<String>>>>,
     pub cpus: Option<S<RawCpus>>,
 }
 
@@ -95,7 +98,7 @@ pub(crate) struct RawCpus {
 }
 
 /// `arena = { min, max }`.
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawArena {
     pub min: S<Pt>,
@@ -244,6 +247,65 @@ pub(crate) struct RawMotion {
     pub max_accel: Option<S<f64>>,
     pub alpha2: Option<S<f64>>,
     pub beta2: Option<S<f64>>,
+}
+
+/// One `[[person]]`.
+#[derive(Debug, Default, Clone, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub(crate) struct RawPerson {
+    pub name: Option<S<String>>,
+    pub start: Option<S<Pt>>,
+    pub goal: Option<S<Pt>>,
+    pub waypoints: Option<S<Vec<Pt>>>,
+    pub cyclic: Option<S<bool>>,
+    pub radius: Option<S<f64>>,
+    pub preferred_speed: Option<S<f64>>,
+    pub sees_robots: Option<S<bool>>,
+    pub behavior: Option<S<String>>,
+    pub group: Option<S<String>>,
+    pub motion: Option<S<RawPersonMotion>>,
+}
+
+/// One `[[crowd]]`: a pattern's keys and a person's.
+#[derive(Debug, Default, Clone, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub(crate) struct RawCrowd {
+    pub count: Option<S<i64>>,
+    pub pattern: Option<S<String>>,
+    pub name_prefix: Option<S<String>>,
+    pub circle_radius: Option<S<f64>>,
+    pub square_width: Option<S<f64>>,
+    pub center: Option<S<Pt>>,
+    pub area: Option<S<RawArena>>,
+    pub radius: Option<S<f64>>,
+    pub preferred_speed: Option<S<f64>>,
+    pub sees_robots: Option<S<bool>>,
+    pub behavior: Option<S<String>>,
+    pub group: Option<S<String>>,
+    pub motion: Option<S<RawPersonMotion>>,
+}
+
+/// A person's `motion = { model = ..., ... }`: the union of every model's
+/// keys; which apply is checked per model.
+#[derive(Debug, Default, Clone, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub(crate) struct RawPersonMotion {
+    pub model: Option<S<String>>,
+    pub neighbor_dist: Option<S<f64>>,
+    pub max_neighbors: Option<S<i64>>,
+    pub time_horizon: Option<S<f64>>,
+    pub time_horizon_obst: Option<S<f64>>,
+    pub radius_margin: Option<S<f64>>,
+    pub relaxation_time: Option<S<f64>>,
+    pub force_desired: Option<S<f64>>,
+    pub force_social: Option<S<f64>>,
+    pub force_obstacle: Option<S<f64>>,
+    pub sigma_obstacle: Option<S<f64>>,
+    pub force_group_gaze: Option<S<f64>>,
+    pub force_group_coherence: Option<S<f64>>,
+    pub force_group_repulsion: Option<S<f64>>,
+    pub group_overlap: Option<S<f64>>,
+    pub robot_scale: Option<S<f64>>,
 }
 
 /// One `[[wall]]`.

@@ -110,7 +110,7 @@ pub fn task_set(sc: &Scenario) -> Option<(TaskSet, &'static str)> {
     }
     let dt_ns = crate::timing::s_to_ns(sc.world.dt).max(1);
     let deadline_ns = crate::timing::s_to_ns(sc.world.dt * sc.world.deadline).max(1);
-    let others = (sc.robots.len() + sc.obstacles.len()).saturating_sub(1) as f64;
+    let others = sc.body_count().saturating_sub(1) as f64;
     let mut robots: Vec<&crate::types::RobotSpec> = sc.robots.iter().collect();
     robots.sort_by(|a, b| a.name.cmp(&b.name));
     let model: Vec<crate::cores::Task> = robots

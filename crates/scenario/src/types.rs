@@ -110,11 +110,54 @@ pub struct WorldConfig {
     /// false; left out of the resolved scenario when false).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub end_when_stuck: bool,
+    /// What ends the run as a benchmark's episode ends (`[world] end_on`):
+    /// a robot's first contact, the time limit. Left out of the resolved
+    /// scenario when it names nothing.
+    #[serde(default, skip_serializing_if = "EndOn::is_empty")]
+    pub end_on: EndOn,
     /// The cores the agents' CPU work shares (`[world.cpus]`), if the
     /// scenario models them; `None`: CPU work has a core of its own per
     /// agent. Left out of the resolved scenario when `None`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cpus: Option<Cpus>,
+}
+
+/// `[world] end_on = ["collision", "timeout"]`: the run counted as an
+/// episode of the crowd-navigation benchmarks (CrowdNav's `CrowdSim.step`),
+/// each robot's outcome success, collision or timeout.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct EndOn {
+    /// `"collision"`: the first contact of a robot not yet at its goal
+    /// (with a robot, a person, an obstacle or a wall; never one among
+    /// people or obstacles alone) ends the run at the tick it starts.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub collision: bool,
+    /// `"timeout"`: the run's time limit (`[world] duration`) ends the
+    /// episode, and the robots not at their goals then are timeouts.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub timeout: bool,
+}
+
+impl EndOn {
+    /// The names `end_on` takes, in the order they are listed.
+    pub const NAMES: [&'static str; 2] = ["collision", "timeout"];
+
+    /// True if it names nothing: the run is counted as mrsim counts it,
+    /// with no episode outcome.
+    pub fn is_empty(&self) -> bool {
+        !self.collision && !self.timeout
+    }
+
+    /// The names it holds, as written in a scenario file.
+    pub fn names(&self) -> Vec<&'static str> {
+        let on = [self.collision, self.timeout];
+        Self::NAMES
+            .iter()
+            .zip(on)
+            .filter(|(_, on)| *on)
+            .map(|(n, _)| *n)
+            .collect()
+    }
 }
 
 /// `[world.cpus]`: the cores the planners' CPU work (`compute = { ...,
@@ -533,6 +576,138 @@ pub struct ObstacleSpec {
     pub motion: Motion,
 }
 
+/// How a person decides where to walk each tick.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "model", rename_all = "kebab-case")]
+pub enum PersonMotion {
+    /// ORCA among the people, as RVO2 (and CrowdNav's humans) run it.
+    Orca {
+        /// Largest centre distance at which another body is considered.
+        neighbor_dist: f64,
+        /// Most bodies considered, nearest first.
+        max_neighbors: usize,
+        /// Time horizon of the other bodies' velocity obstacles, s.
+        time_horizon: f64,
+        /// Time horizon of the walls' velocity obstacles, s.
+        time_horizon_obst: f64,
+        /// Padding of every disc when avoiding (CrowdNav pads 0.01).
+        radius_margin: f64,
+    },
+    /// Helbing & Molnar's social forces as pedsim_ros weighs them, with
+    /// Moussaid et al.'s interaction and pedsim's group forces.
+    SocialForce(SocialForceParams),
+}
+
+/// The social force model's parameters (pedsim_ros's names and defaults:
+/// `pedsim_simulator`'s config and libpedsim's agent).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SocialForceParams {
+    /// Relaxation time of the desired force, s (0.5).
+    pub relaxation_time: f64,
+    /// Weight of the desired force (1.0).
+    pub force_desired: f64,
+    /// Weight of the social force (5.1).
+    pub force_social: f64,
+    /// Weight of the obstacle (wall) force (10.0).
+    pub force_obstacle: f64,
+    /// Range of the obstacle force, m (0.2).
+    pub sigma_obstacle: f64,
+    /// Weight of the group's gaze force (3.0).
+    pub force_group_gaze: f64,
+    /// Weight of the group's coherence force (2.0).
+    pub force_group_coherence: f64,
+    /// Weight of the group's repulsion force (1.0).
+    pub force_group_repulsion: f64,
+    /// Centre distance under which group members repel, m (0.5).
+    pub group_overlap: f64,
+    /// A robot's position difference is divided by this before the social
+    /// force (libpedsim's `robotPosDiffScalingFactor`, 5).
+    pub robot_scale: f64,
+    /// Largest centre distance of a body that exerts a social force, m
+    /// (libpedsim's neighbourhood range, 10).
+    pub neighbor_dist: f64,
+}
+
+impl Default for SocialForceParams {
+    fn default() -> Self {
+        Self {
+            relaxation_time: 0.5,
+            force_desired: 1.0,
+            force_social: 5.1,
+            force_obstacle: 10.0,
+            sigma_obstacle: 0.2,
+            force_group_gaze: 3.0,
+            force_group_coherence: 2.0,
+            force_group_repulsion: 1.0,
+            group_overlap: 0.5,
+            robot_scale: 5.0,
+            neighbor_dist: 10.0,
+        }
+    }
+}
+
+impl Default for PersonMotion {
+    /// CrowdNav's ORCA humans: neighbour distance 10, 10 neighbours, time
+    /// horizons 5 s, no padding.
+    fn default() -> Self {
+        PersonMotion::Orca {
+            neighbor_dist: 10.0,
+            max_neighbors: 10,
+            time_horizon: 5.0,
+            time_horizon_obst: 5.0,
+            radius_margin: 0.0,
+        }
+    }
+}
+
+/// How a person reacts to robots (HuNavSim's behaviours).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Behavior {
+    /// Walks to its goal, avoiding robots as it avoids people.
+    #[default]
+    Regular,
+}
+
+impl Behavior {
+    /// The scenario's spelling.
+    pub fn name(self) -> &'static str {
+        match self {
+            Behavior::Regular => "regular",
+        }
+    }
+}
+
+/// One person (pedestrian): a disc the world moves towards its goal or
+/// along its waypoints, by a crowd model.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PersonSpec {
+    /// Unique name (shared namespace with robots and obstacles).
+    pub name: String,
+    /// Start position.
+    pub start: [f64; 2],
+    /// The points walked to in order (a `goal` is the one point).
+    pub waypoints: Vec<[f64; 2]>,
+    /// After the last point, the first again.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub cyclic: bool,
+    /// Disc radius, > 0.
+    pub radius: f64,
+    /// Walking speed, and the speed limit, > 0.
+    pub preferred_speed: f64,
+    /// Does the person make way for robots? False: robots are not there
+    /// for it (CrowdNav's invisible robot).
+    pub sees_robots: bool,
+    /// Its reaction to robots.
+    #[serde(default)]
+    pub behavior: Behavior,
+    /// The group it walks with, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub group: Option<String>,
+    /// Its crowd model.
+    pub motion: PersonMotion,
+}
+
 fn is_zero(x: &f64) -> bool {
     *x == 0.0
 }
@@ -621,12 +796,31 @@ impl RobotSpec {
 }
 
 impl Scenario {
-    /// Every body's shape, robots first, then obstacles (the world's body
-    /// ids).
+    /// Every body's shape, robots first, then obstacles, then people (the
+    /// world's body ids).
     pub fn body_shapes(&self) -> Vec<mrsim_shape::Shape> {
         let robots = self.robots.iter().map(RobotSpec::body_shape);
         robots
             .chain(self.obstacles.iter().map(ObstacleSpec::body_shape))
+            .chain(
+                self.people
+                    .iter()
+                    .map(|p| mrsim_shape::Shape::disc(p.radius)),
+            )
+            .collect()
+    }
+
+    /// How many bodies a snapshot holds: robots, obstacles and people.
+    pub fn body_count(&self) -> usize {
+        self.robots.len() + self.obstacles.len() + self.people.len()
+    }
+
+    /// Every body's name by body id: robots, obstacles, people.
+    pub fn body_names(&self) -> Vec<String> {
+        let robots = self.robots.iter().map(|r| r.name.clone());
+        robots
+            .chain(self.obstacles.iter().map(|o| o.name.clone()))
+            .chain(self.people.iter().map(|p| p.name.clone()))
             .collect()
     }
 
@@ -705,6 +899,10 @@ pub struct Scenario {
     pub robots: Vec<RobotSpec>,
     /// Scripted obstacles, in file order.
     pub obstacles: Vec<ObstacleSpec>,
+    /// People, in file order (left out of the JSON when there are none,
+    /// so a scenario without people writes what it always wrote).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub people: Vec<PersonSpec>,
     /// Walls (not including the arena's): the file's, then the map's.
     pub walls: Vec<WallSpec>,
     /// The map the last walls come from, if the scenario has one.

@@ -326,6 +326,19 @@ fn draw_map(f: &mut Frame, area: Rect, m: &TopModel) {
                                     ..Default::default()
                                 }
                             }))
+                            .chain(
+                                m.scenario
+                                    .people
+                                    .iter()
+                                    .enumerate()
+                                    .map(|(k, p)| BodyState {
+                                        id: (n + m.scenario.obstacles.len() + k) as u32,
+                                        kind: body_kind::PERSON,
+                                        position: p.start,
+                                        radius: p.radius,
+                                        ..Default::default()
+                                    }),
+                            )
                             .collect()
                     } else {
                         Vec::new()

@@ -1,6 +1,7 @@
 //! The summary table printed after a run, from metrics.json.
 
 use mrsim_runfolder::RunMetrics;
+use mrsim_runfolder::metrics::EndedBy;
 use std::fmt::Write;
 
 /// `v` with `digits` decimals, `-` if there is none.
@@ -128,6 +129,9 @@ fn what_happened(m: &RunMetrics) -> Vec<String> {
     if m.ended_stuck {
         lines.push("ended early: every robot not at its goal was stuck".into());
     }
+    if let Some(e) = &m.episode {
+        lines.push(episode_line(m, e));
+    }
     let blind: Vec<&str> = m
         .robots
         .iter()
@@ -142,6 +146,43 @@ fn what_happened(m: &RunMetrics) -> Vec<String> {
         ));
     }
     lines
+}
+
+/// The run as an episode (`[world] end_on`): its outcome, what ended it,
+/// each robot's outcome, the counts and the mean time to goal.
+fn episode_line(m: &RunMetrics, e: &mrsim_runfolder::metrics::Episode) -> String {
+    let ended = match e.ended_by {
+        EndedBy::Collision => "a robot's first contact",
+        EndedBy::Goals => "every robot at its goal",
+        EndedBy::TimeLimit => "the time limit",
+        EndedBy::Stuck => "every robot stuck",
+        EndedBy::Interrupted => "a signal",
+    };
+    let robots: Vec<String> = m
+        .robots
+        .iter()
+        .filter_map(|(n, r)| {
+            let o = r.outcome?;
+            let at = num(r.outcome_time, 2);
+            Some(match &r.collided_with {
+                Some(w) => format!("{n} {} with {w} at {at} s", o.name()),
+                None => format!("{n} {} at {at} s", o.name()),
+            })
+        })
+        .collect();
+    let n = robots.len().max(1) as f64;
+    format!(
+        "episode ({}): {}, ended by {ended} at t = {:.2} s; {}; success {:.0}%, collision {:.0}%, \
+         timeout {:.0}%, time to goal {} s",
+        e.end_on.join(", "),
+        e.outcome.name(),
+        e.time,
+        robots.join(", "),
+        f64::from(e.success) * 100.0 / n,
+        f64::from(e.collision) * 100.0 / n,
+        f64::from(e.timeout) * 100.0 / n,
+        num(e.time_to_goal, 2),
+    )
 }
 
 /// The verdict's predicted misses beside the run's measured ones, per
@@ -200,6 +241,26 @@ mod tests {
         assert!(t.contains("ended early"), "{t}");
         assert!(
             t.contains("avoids nothing: the collisions of l0, r0"),
+            "{t}"
+        );
+    }
+
+    #[test]
+    fn an_episode_s_outcome_is_a_line_of_the_summary() {
+        let m = serde_json::json!({
+            "robots": {"r0": {"planner": "homing", "reached_goal": false, "collisions": 1,
+                              "outcome": "collision", "outcome_time": 1.5,
+                              "collided_with": "o1"}},
+            "episode": {"end_on": ["collision", "timeout"], "outcome": "collision",
+                        "ended_by": "collision", "time": 1.5, "success": 0, "collision": 1,
+                        "timeout": 0, "unfinished": 0, "time_to_goal": null}});
+        let m: RunMetrics = serde_json::from_value(m).expect("metrics.json's schema");
+        let t = summary(&m);
+        assert!(
+            t.contains(
+                "episode (collision, timeout): collision, ended by a robot's first contact at \
+                 t = 1.50 s; r0 collision with o1 at 1.50 s; success 0%, collision 100%"
+            ),
             "{t}"
         );
     }

@@ -16,6 +16,7 @@
 //! tick, is rejected, counted and logged, and never drives a robot.
 
 pub mod admission;
+pub mod episode;
 #[cfg(test)]
 mod fake;
 mod options;
@@ -74,6 +75,8 @@ struct Loop<'a> {
     timed: Timed,
     /// The robots' positions after the step, reused from tick to tick.
     positions: Vec<[f64; 2]>,
+    /// The run counted as an episode (`[world] end_on`).
+    episode: episode::Episode,
 }
 
 /// The world's side of the robots' timing models
@@ -180,9 +183,10 @@ impl<'a> Loop<'a> {
         let robots = names[..n].to_vec();
         let schedule = Schedule::new(scenario);
         let timed = Timed::new(scenario);
+        let episode = episode::Episode::new(scenario);
         Self {
             admission: Admission::new(robots, std::process::id()).with_room(opts.group_room),
-            recording: Recording::new(rec, timings, names, n),
+            recording: Recording::new(rec, timings, names, n).with_people(scenario.people.len()),
             // Before the first tick nothing is late.
             window: TickWindow {
                 tick: 0,
@@ -198,6 +202,7 @@ impl<'a> Loop<'a> {
             last_in_ns: 0,
             inbox: Vec::with_capacity(n),
             positions: Vec::with_capacity(n),
+            episode,
             last_pid_check: clock.now(),
             pid_checks: 0,
             clock_start: None,
@@ -719,6 +724,10 @@ impl<'a> Loop<'a> {
         self.window.tick += 1;
         let at = self.stamp();
         self.recording.contacts(at, contacts);
+        let acc = &self.recording.acc;
+        let ended_on_contact = self
+            .episode
+            .contacts(at.time, contacts, |i| acc[i].reached_goal);
         let poses = self.world.states().iter().map(|s| (s.position, s.heading));
         let scenario = &self.world.scenario;
         let reached = self.recording.goals(at, scenario, poses);
@@ -740,7 +749,7 @@ impl<'a> Loop<'a> {
             .record_ns(own.as_nanos() as u64);
         self.publish_stats(run_phase::RUNNING, false);
         let acc = &self.recording.acc;
-        Ok(all_stuck || self.admission.done(|i| acc[i].reached_goal))
+        Ok(ended_on_contact || all_stuck || self.admission.done(|i| acc[i].reached_goal))
     }
 }
 
@@ -800,12 +809,9 @@ impl Loop<'_> {
     }
 }
 
-/// Every body's name: the robots, then the obstacles.
+/// Every body's name: the robots, the obstacles, the people.
 fn body_names(scenario: &mrsim_scenario::Scenario) -> Vec<String> {
-    let robots = scenario.robots.iter().map(|r| r.name.clone());
-    robots
-        .chain(scenario.obstacles.iter().map(|o| o.name.clone()))
-        .collect()
+    scenario.body_names()
 }
 
 /// Writes routes.csv: the route of each robot that has one, in scenario
@@ -1036,6 +1042,14 @@ fn finish(
     if let Some(c) = lp.link.network_counts() {
         recording::add_network_counts(&mut metrics, c);
     }
+    let names = body_names(&lp.world.scenario);
+    lp.episode.fill(
+        &mut metrics,
+        &lp.world.scenario,
+        &names,
+        lp.window.tick,
+        lp.world.time(),
+    );
     write_routes(&lp.opts.out_dir, &lp.world.scenario, &lp.opts.routes)
         .map_err(out_err(ROUTES_FILE))?;
     mrsim_runfolder::write_metrics(&lp.opts.out_dir, &metrics).map_err(|e| match e {

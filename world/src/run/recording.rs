@@ -66,8 +66,10 @@ pub struct Recording {
     live: LiveStats,
     /// Per robot.
     pub acc: Vec<RobotAccumulator>,
-    /// Every body's name: the robots, then the obstacles.
+    /// Every body's name: the robots, the obstacles, the people.
     names: Vec<String>,
+    /// How many of `names`, the last ones, are people.
+    people: usize,
     /// Run-wide counts.
     pub counts: Counts,
     /// The loop's own costs.
@@ -103,9 +105,16 @@ impl Recording {
             deadlocks: Vec::new(),
             ended_stuck: false,
             names,
+            people: 0,
             counts: Counts::default(),
             costs: LoopCosts::default(),
         }
+    }
+
+    /// The last `people` of the names are people's.
+    pub fn with_people(mut self, people: usize) -> Self {
+        self.people = people.min(self.names.len());
+        self
     }
 
     /// Body `i`'s name.
@@ -247,6 +256,7 @@ impl Recording {
             let name = |o: Owner| match o {
                 Owner::Robot(i) => self.names[i].clone(),
                 Owner::Obstacle(k) => self.names[n + k].clone(),
+                Owner::Person(k) => self.names[self.names.len() - self.people + k].clone(),
                 Owner::Wall(w) => format!("wall{w}"),
             };
             self.event(
@@ -532,6 +542,9 @@ impl Summary<'_> {
                         path_irregularity: Some(x.path_irregularity()),
                         heading_change: Some(x.heading_change),
                         stuck_time: Some(stuck_time),
+                        outcome: None,
+                        outcome_time: None,
+                        collided_with: None,
                     },
                 )
             })

@@ -5,5 +5,6 @@
 mod ackermann;
 mod dynamics;
 mod obstacles;
+mod people;
 mod shapes;
 mod unicycle;

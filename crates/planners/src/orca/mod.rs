@@ -45,7 +45,10 @@
 //!    is assumed to take the other half: the reciprocity of the paper); 1
 //!    for a scripted obstacle ([`BodyKind::Obstacle`]), which does not avoid,
 //!    so A takes all of it (the paper's section 5.1 suggestion for
-//!    non-reciprocating agents; RVO2 itself always uses 1/2).
+//!    non-reciprocating agents; RVO2 itself always uses 1/2); 1/2 for a
+//!    person ([`BodyKind::Person`]), whom the robot takes for an RVO2
+//!    agent as CrowdNav's ORCA robot does (a person who ignores robots
+//!    breaks that assumption, CrowdNav's invisible robot).
 //!    When the discs already overlap, RVO2's "collision" case is used: the
 //!    velocity obstacle is truncated at one control period `obs.dt` instead.
 //! 3. **Linear program** (section 5.1). The new velocity is the point of the
@@ -210,10 +213,10 @@ impl Planner for Orca {
         for &(_, k) in &self.neighbors {
             let other = &obs.others[k];
             let share = match other.kind {
-                BodyKind::Robot => 0.5,
+                BodyKind::Robot | BodyKind::Person => 0.5,
                 BodyKind::Obstacle => 1.0,
             };
-            self.lines.push(Self::body_line(
+            self.lines.push(body_line(
                 me.position,
                 me.velocity,
                 // Both discs padded.
@@ -376,20 +379,9 @@ impl Orca {
                 .map(|(i, o)| ((o.position - obs.me.position).norm_squared(), i))
                 .filter(|(d, _)| *d < range_sq),
         );
-        let by_distance = |a: &(f64, usize), b: &(f64, usize)| {
-            a.0.total_cmp(&b.0)
-                .then(obs.others[a.1].id.cmp(&obs.others[b.1].id))
-        };
-        if self.neighbors.len() > self.max_neighbors {
-            if self.max_neighbors == 0 {
-                self.neighbors.clear();
-            } else {
-                self.neighbors
-                    .select_nth_unstable_by(self.max_neighbors - 1, by_distance);
-                self.neighbors.truncate(self.max_neighbors);
-            }
-        }
-        self.neighbors.sort_unstable_by(by_distance);
+        nearest_first(&mut self.neighbors, self.max_neighbors, |k| {
+            obs.others[k].id
+        });
     }
 
     /// The obstacle edges that can matter within `time_horizon_obst`, seen
@@ -417,74 +409,243 @@ impl Orca {
             &mut self.lines,
         );
     }
+}
 
-    /// `share` of the avoidance taken by this robot; `radius` is its own
-    /// radius plus any padding of both discs.
-    fn body_line(
+/// `share` of the avoidance taken by this robot; `radius` is its own
+/// radius plus any padding of both discs.
+fn body_line(
+    position: Vec2,
+    velocity: Vec2,
+    radius: f64,
+    other: &Sensed,
+    inv_tau: f64,
+    dt: f64,
+    share: f64,
+) -> Line {
+    let rel_pos = other.position - position;
+    let rel_vel = velocity - other.velocity;
+    let dist_sq = rel_pos.norm_squared();
+    let combined = radius + other.radius;
+    let combined_sq = combined * combined;
+    let (direction, u);
+    if dist_sq > combined_sq {
+        // No collision. w: from the cut-off centre to the relative velocity.
+        let w = rel_vel - rel_pos * inv_tau;
+        let w_len_sq = w.norm_squared();
+        let dot1 = w.dot(&rel_pos);
+        if dot1 < 0.0 && dot1 * dot1 > combined_sq * w_len_sq {
+            // Project on cut-off circle.
+            let w_len = w_len_sq.sqrt();
+            let unit_w = w / w_len;
+            direction = Vec2::new(unit_w.y, -unit_w.x);
+            u = unit_w * (combined * inv_tau - w_len);
+        } else {
+            // Project on legs.
+            let leg = (dist_sq - combined_sq).sqrt();
+            direction = if det(rel_pos, w) > 0.0 {
+                // Project on left leg.
+                Vec2::new(
+                    rel_pos.x * leg - rel_pos.y * combined,
+                    rel_pos.x * combined + rel_pos.y * leg,
+                ) / dist_sq
+            } else {
+                // Project on right leg.
+                -Vec2::new(
+                    rel_pos.x * leg + rel_pos.y * combined,
+                    -rel_pos.x * combined + rel_pos.y * leg,
+                ) / dist_sq
+            };
+            u = direction * rel_vel.dot(&direction) - rel_vel;
+        }
+    } else {
+        // Collision: project on the cut-off circle of one control
+        // period, so the overlap is resolved by the next tick.
+        let inv_dt = 1.0 / dt;
+        let w = rel_vel - rel_pos * inv_dt;
+        let w_len = w.norm();
+        // Degenerate w = 0: push straight apart; coincident centres:
+        // any fixed direction (both robots then pick opposite ones
+        // because their relative positions are opposite, or equal and
+        // symmetric when exactly coincident).
+        let unit_w = if w_len > f64::EPSILON {
+            w / w_len
+        } else {
+            normalize_or(-rel_pos, Vec2::new(1.0, 0.0))
+        };
+        direction = Vec2::new(unit_w.y, -unit_w.x);
+        u = unit_w * (combined * inv_dt - w_len);
+    }
+    Line {
+        point: velocity + u * share,
+        direction,
+    }
+}
+
+/// Keeps the `max` nearest of `candidates` (squared distance, index),
+/// ties broken by the body id `id` gives an index, nearest first: RVO2's
+/// `computeNeighbors` over a list, for the planner and the people alike.
+fn nearest_first(candidates: &mut Vec<(f64, usize)>, max: usize, id: impl Fn(usize) -> u32) {
+    let by_distance =
+        |a: &(f64, usize), b: &(f64, usize)| a.0.total_cmp(&b.0).then(id(a.1).cmp(&id(b.1)));
+    if candidates.len() > max {
+        if max == 0 {
+            candidates.clear();
+        } else {
+            candidates.select_nth_unstable_by(max - 1, by_distance);
+            candidates.truncate(max);
+        }
+    }
+    candidates.sort_unstable_by(by_distance);
+}
+
+/// A body a [`Walker`] keeps clear of: a disc, its velocity, and the share
+/// of the avoidance the walker takes (1/2 for one who avoids in turn, 1
+/// for one who does not).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Neighbor {
+    /// The body's id (breaks ties between equally near bodies).
+    pub id: u32,
+    /// Centre.
+    pub position: Vec2,
+    /// Velocity.
+    pub velocity: Vec2,
+    /// Disc radius.
+    pub radius: f64,
+    /// The walker's share of the avoidance.
+    pub share: f64,
+}
+
+/// RVO2's parameters of one walker (`addAgent`'s): the neighbour search,
+/// the two time horizons, the padding of the discs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WalkerParams {
+    /// Largest centre distance at which another body is considered.
+    pub neighbor_dist: f64,
+    /// Most bodies considered, nearest first.
+    pub max_neighbors: usize,
+    /// Time horizon of the other bodies' velocity obstacles, s.
+    pub time_horizon: f64,
+    /// Time horizon of the walls' velocity obstacles, s.
+    pub time_horizon_obst: f64,
+    /// Padding added to the walker's disc and each neighbour's (walls:
+    /// once).
+    pub radius_margin: f64,
+}
+
+/// ORCA for a holonomic disc that no agent drives: RVO2's
+/// `computeNewVelocity` (steps 1 to 3 of the module's documentation, the
+/// unicycle's reach aside) for a body the world moves, a person. The
+/// half-planes, the neighbour selection and the linear programs are the
+/// planner's own functions; only the scratch space is the walker's.
+#[derive(Debug, Clone, Default)]
+pub struct Walker {
+    obstacles: ObstacleSet,
+    chains: Vec<WallChain>,
+    chain_points: Vec<Vec2>,
+    lines: Vec<Line>,
+    proj_lines: Vec<Line>,
+    obstacle_neighbors: Vec<(f64, usize)>,
+    neighbors: Vec<(f64, usize)>,
+}
+
+impl Walker {
+    /// A walker among `walls` (joined into chains once, as the planner
+    /// joins them).
+    pub fn new(walls: &[Segment]) -> Self {
+        Self {
+            chains: WallChain::join(walls),
+            ..Self::default()
+        }
+    }
+
+    /// The new velocity of the disc at `position` with `velocity`,
+    /// `radius` and speed limit `max_speed`, preferring `pref`, among
+    /// `candidates` (the bodies it may see; those beyond `neighbor_dist`
+    /// are dropped, the `max_neighbors` nearest kept) and the walls, over
+    /// a step of `dt` (RVO2's time step: the collision case's horizon).
+    #[allow(clippy::too_many_arguments)]
+    pub fn velocity(
+        &mut self,
         position: Vec2,
         velocity: Vec2,
         radius: f64,
-        other: &Sensed,
-        inv_tau: f64,
+        max_speed: f64,
+        pref: Vec2,
+        candidates: &[Neighbor],
+        params: &WalkerParams,
         dt: f64,
-        share: f64,
-    ) -> Line {
-        let rel_pos = other.position - position;
-        let rel_vel = velocity - other.velocity;
-        let dist_sq = rel_pos.norm_squared();
-        let combined = radius + other.radius;
-        let combined_sq = combined * combined;
-        let (direction, u);
-        if dist_sq > combined_sq {
-            // No collision. w: from the cut-off centre to the relative velocity.
-            let w = rel_vel - rel_pos * inv_tau;
-            let w_len_sq = w.norm_squared();
-            let dot1 = w.dot(&rel_pos);
-            if dot1 < 0.0 && dot1 * dot1 > combined_sq * w_len_sq {
-                // Project on cut-off circle.
-                let w_len = w_len_sq.sqrt();
-                let unit_w = w / w_len;
-                direction = Vec2::new(unit_w.y, -unit_w.x);
-                u = unit_w * (combined * inv_tau - w_len);
-            } else {
-                // Project on legs.
-                let leg = (dist_sq - combined_sq).sqrt();
-                direction = if det(rel_pos, w) > 0.0 {
-                    // Project on left leg.
-                    Vec2::new(
-                        rel_pos.x * leg - rel_pos.y * combined,
-                        rel_pos.x * combined + rel_pos.y * leg,
-                    ) / dist_sq
-                } else {
-                    // Project on right leg.
-                    -Vec2::new(
-                        rel_pos.x * leg + rel_pos.y * combined,
-                        -rel_pos.x * combined + rel_pos.y * leg,
-                    ) / dist_sq
-                };
-                u = direction * rel_vel.dot(&direction) - rel_vel;
-            }
-        } else {
-            // Collision: project on the cut-off circle of one control
-            // period, so the overlap is resolved by the next tick.
-            let inv_dt = 1.0 / dt;
-            let w = rel_vel - rel_pos * inv_dt;
-            let w_len = w.norm();
-            // Degenerate w = 0: push straight apart; coincident centres:
-            // any fixed direction (both robots then pick opposite ones
-            // because their relative positions are opposite, or equal and
-            // symmetric when exactly coincident).
-            let unit_w = if w_len > f64::EPSILON {
-                w / w_len
-            } else {
-                normalize_or(-rel_pos, Vec2::new(1.0, 0.0))
+    ) -> Vec2 {
+        self.lines.clear();
+        // 1. Static obstacles, first: they stay hard in the 3-D program.
+        let radius = radius + params.radius_margin;
+        self.obstacles.clear();
+        if !self.chains.is_empty() {
+            self.obstacles
+                .push_chains(&self.chains, position, &mut self.chain_points);
+            self.obstacles.select_neighbors(
+                position,
+                radius,
+                max_speed,
+                params.time_horizon_obst,
+                &mut self.obstacle_neighbors,
+            );
+            let walls = WallRadius {
+                radius,
+                behind: 0.0,
+                heading: Vec2::new(1.0, 0.0),
             };
-            direction = Vec2::new(unit_w.y, -unit_w.x);
-            u = unit_w * (combined * inv_dt - w_len);
+            self.obstacles.push_lines(
+                &self.obstacle_neighbors,
+                params.time_horizon_obst,
+                position,
+                velocity,
+                walls,
+                &mut self.lines,
+            );
         }
-        Line {
-            point: velocity + u * share,
-            direction,
+        let num_obst_lines = self.lines.len();
+        // 2. Other bodies, nearest first, each with its share.
+        let range_sq = params.neighbor_dist * params.neighbor_dist;
+        self.neighbors.clear();
+        self.neighbors.extend(
+            candidates
+                .iter()
+                .enumerate()
+                .map(|(i, o)| ((o.position - position).norm_squared(), i))
+                .filter(|(d, _)| *d < range_sq),
+        );
+        nearest_first(&mut self.neighbors, params.max_neighbors, |k| {
+            candidates[k].id
+        });
+        let inv_tau = 1.0 / params.time_horizon;
+        let dt = if dt > 0.0 { dt } else { 1.0 };
+        for &(_, k) in &self.neighbors {
+            let o = &candidates[k];
+            let other = Sensed::disc(o.id, BodyKind::Person, o.position, o.velocity, o.radius);
+            self.lines.push(body_line(
+                position,
+                velocity,
+                radius + params.radius_margin,
+                &other,
+                inv_tau,
+                dt,
+                o.share,
+            ));
         }
+        // 3. The velocity closest to the preferred one, else the one
+        //    that least violates the body lines.
+        let mut v = Vec2::zeros();
+        let fail = linear_program2(&self.lines, max_speed, pref, false, &mut v);
+        if fail < self.lines.len() {
+            linear_program3(
+                &self.lines,
+                num_obst_lines,
+                fail,
+                max_speed,
+                &mut v,
+                &mut self.proj_lines,
+            );
+        }
+        v
     }
 }

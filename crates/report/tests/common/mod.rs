@@ -135,6 +135,7 @@ pub fn scenario(n: usize) -> Scenario {
             robots_per_agent: 1,
             stuck_after: mrsim_scenario::DEFAULT_STUCK_AFTER,
             end_when_stuck: false,
+            end_on: Default::default(),
             cpus: None,
         },
         robots: (0..n)
@@ -153,6 +154,7 @@ pub fn scenario(n: usize) -> Scenario {
                 velocity: [0.0, -0.5],
             },
         }],
+        people: Vec::new(),
         walls: vec![mrsim_scenario::WallSpec {
             segment: [[-1.0, -5.0], [-1.0, -4.0]],
         }],

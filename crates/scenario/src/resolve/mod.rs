@@ -9,9 +9,11 @@
 //! must keep clear of (`map`). The number checks and built-in defaults they
 //! share are the crate's `checks`, which `generate` uses too.
 
+mod crowd;
 mod map;
 mod obstacles;
 mod output;
+mod people;
 mod robots;
 mod scene;
 mod timing;
@@ -88,6 +90,12 @@ pub(crate) fn resolve(
     for (i, o) in raw.obstacle.iter().enumerate() {
         obstacles.push(resolve_obstacle(o, i)?);
         obstacle_spans.push(o.span());
+    }
+    let mut people = Vec::new();
+    let mut person_spans = Vec::new();
+    for (i, p) in raw.person.iter().enumerate() {
+        people.push(people::resolve_person(p.get_ref(), p.span(), i)?);
+        person_spans.push(p.span());
     }
     let mut walls = Vec::new();
     for (i, w) in raw.wall.iter().enumerate() {
@@ -181,6 +189,7 @@ pub(crate) fn resolve(
         world,
         robots,
         obstacles,
+        people,
         walls,
         map: None,
         output: output::resolve_output(raw.output.as_ref())?,
@@ -195,6 +204,65 @@ pub(crate) fn resolve(
         )?;
     }
     check_scene(&scenario, &robot_spans, &obstacle_spans, &raw)?;
+    scene::check_people(&scenario, &person_spans, &raw)?;
+    // [[crowd]]s: placed clear of everyone before them, so checked as
+    // they are drawn; their names share the one namespace.
+    let mut names: std::collections::BTreeSet<String> = scenario.body_names().into_iter().collect();
+    for (i, c) in raw.crowd.iter().enumerate() {
+        let people = crowd::generate(
+            c,
+            i,
+            raw.crowd.len(),
+            scenario.world.seed,
+            scenario.world.arena,
+            &scenario.robots,
+            &scenario.people,
+        )?;
+        for p in &people {
+            let fail = |reason: String| {
+                Err(Fail::new(
+                    Some(c.span()),
+                    format!("crowd #{}", i + 1),
+                    format!("person `{}` {reason}", p.name),
+                ))
+            };
+            if let Some(a) = scenario.world.arena {
+                let inside = |q: [f64; 2]| {
+                    q[0] - p.radius >= a.min[0]
+                        && q[0] + p.radius <= a.max[0]
+                        && q[1] - p.radius >= a.min[1]
+                        && q[1] + p.radius <= a.max[1]
+                };
+                if let Some(q) = std::iter::once(&p.start)
+                    .chain(&p.waypoints)
+                    .find(|q| !inside(**q))
+                {
+                    return fail(format!(
+                        "would walk at [{:.3}, {:.3}], outside the arena",
+                        q[0], q[1]
+                    ));
+                }
+            }
+            if let Some(k) = scenario
+                .walls
+                .iter()
+                .position(|w| scene::dist_to_segment(p.start, w.segment) < p.radius)
+            {
+                return fail(format!("would start on wall #{}", k + 1));
+            }
+            if !names.insert(p.name.clone()) {
+                return Err(Fail::new(
+                    Some(c.span()),
+                    format!("crowd #{}", i + 1),
+                    format!(
+                        "person `{}`: duplicate name (set another `name_prefix`)",
+                        p.name
+                    ),
+                ));
+            }
+        }
+        scenario.people.extend(people);
+    }
     Ok(Resolved {
         scenario,
         file_robots,

@@ -108,14 +108,23 @@ pub(super) fn check_scene(
                 .iter()
                 .zip(obstacle_spans)
                 .map(|(o, sp)| (o.name.as_str(), "obstacle", Some(sp.clone()))),
-        );
+        )
+        .chain(s.people.iter().enumerate().map(|(k, p)| {
+            (
+                p.name.as_str(),
+                "person",
+                raw.person
+                    .get(k)
+                    .map(|t| t.get_ref().name.as_ref().map_or(t.span(), |n| n.span())),
+            )
+        }));
     for (name, kind, span) in names {
         if let Some(prev) = seen.insert(name, kind) {
             return Err(Fail::new(
                 span,
                 format!("{kind} `{name}`"),
                 format!(
-                    "duplicate name: there is already a {prev} `{name}` (robots and obstacles share one namespace)"
+                    "duplicate name: there is already a {prev} `{name}` (robots, obstacles and people share one namespace)"
                 ),
             ));
         }
@@ -314,4 +323,86 @@ impl StartGrid {
         }
         first
     }
+}
+
+/// A person's checks against the scene: its start clear of every robot,
+/// obstacle, wall and earlier person, its start and points inside the
+/// arena.
+pub(super) fn check_people(
+    s: &Scenario,
+    person_spans: &[Range<usize>],
+    raw: &RawDoc,
+) -> Result<(), Fail> {
+    let disc = |p: &PersonSpec| (p.start, p.radius, mrsim_shape::Shape::disc(p.radius), 0.0);
+    for (k, (p, sp)) in s.people.iter().zip(person_spans).enumerate() {
+        let what = format!("person `{}`", p.name);
+        let table = raw.person.get(k).map(|t| t.get_ref());
+        let start_span = table
+            .and_then(|t| t.start.as_ref().map(|v| v.span()))
+            .unwrap_or(sp.clone());
+        let fail = |reason: String| Err(Fail::new(Some(start_span.clone()), what.clone(), reason));
+        for r in &s.robots {
+            if overlap(disc(p), robot_body(r)) > 0.0 {
+                return fail(overlap_reason("robot", &r.name, disc(p), robot_body(r)));
+            }
+        }
+        for o in &s.obstacles {
+            if overlap(disc(p), obstacle_body(o)) > 0.0 {
+                return fail(overlap_reason(
+                    "obstacle",
+                    &o.name,
+                    disc(p),
+                    obstacle_body(o),
+                ));
+            }
+        }
+        for q in &s.people[..k] {
+            if overlap(disc(p), disc(q)) > 0.0 {
+                return fail(overlap_reason("person", &q.name, disc(p), disc(q)));
+            }
+        }
+        for (w, wall) in s.walls.iter().enumerate() {
+            let d = dist_to_segment(p.start, wall.segment);
+            if d < p.radius {
+                return fail(format!(
+                    "starts overlapping wall #{}: distance {d:.4} < radius {}",
+                    w + 1,
+                    p.radius
+                ));
+            }
+        }
+        if let Some(a) = s.world.arena {
+            let inside = |q: P| {
+                q[0] - p.radius >= a.min[0]
+                    && q[0] + p.radius <= a.max[0]
+                    && q[1] - p.radius >= a.min[1]
+                    && q[1] + p.radius <= a.max[1]
+            };
+            if !inside(p.start) {
+                return fail(format!(
+                    "start [{}, {}] is outside the arena (with radius {})",
+                    p.start[0], p.start[1], p.radius
+                ));
+            }
+            if let Some(q) = p.waypoints.iter().find(|q| !inside(**q)) {
+                let span = table
+                    .and_then(|t| {
+                        t.goal
+                            .as_ref()
+                            .map(|v| v.span())
+                            .or(t.waypoints.as_ref().map(|v| v.span()))
+                    })
+                    .unwrap_or(sp.clone());
+                return Err(Fail::new(
+                    Some(span),
+                    what,
+                    format!(
+                        "point [{}, {}] is outside the arena (with radius {})",
+                        q[0], q[1], p.radius
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
 }

@@ -69,8 +69,45 @@ pub(super) fn resolve_world(w: Option<&S<RawWorld>>) -> Result<WorldConfig, Fail
             DEFAULT_STUCK_AFTER,
         )?,
         end_when_stuck: raw.end_when_stuck.as_ref().is_some_and(|b| *b.get_ref()),
+        end_on: raw
+            .end_on
+            .as_ref()
+            .map(resolve_end_on)
+            .transpose()?
+            .unwrap_or_default(),
         cpus: raw.cpus.as_ref().map(resolve_cpus).transpose()?,
     })
+}
+
+/// `[world] end_on`: a list of `"collision"` and `"timeout"`, each once.
+fn resolve_end_on(list: &S<Vec<S<String>>>) -> Result<EndOn, Fail> {
+    let what = "world";
+    let mut end_on = EndOn::default();
+    for name in list.get_ref() {
+        let slot = match name.get_ref().as_str() {
+            "collision" => &mut end_on.collision,
+            "timeout" => &mut end_on.timeout,
+            other => {
+                return Err(Fail::new(
+                    Some(name.span()),
+                    what,
+                    format!(
+                        "end_on: unknown condition `{other}` (known: {})",
+                        EndOn::NAMES.join(", ")
+                    ),
+                ));
+            }
+        };
+        if *slot {
+            return Err(Fail::new(
+                Some(name.span()),
+                what,
+                format!("end_on: `{}` is listed twice", name.get_ref()),
+            ));
+        }
+        *slot = true;
+    }
+    Ok(end_on)
 }
 
 /// `[world.cpus]`: `count` required, `scheduler` fair by default,

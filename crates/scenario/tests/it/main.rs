@@ -11,6 +11,7 @@ mod generate;
 mod maps;
 mod output;
 mod overrides;
+mod people;
 mod robots;
 mod shapes;
 mod timing;

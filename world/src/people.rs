@@ -1,0 +1,461 @@
+//! People (pedestrians), moved by the world like the scripted obstacles
+//! ([`crate::motion`]): no agent, no process, so that a crowd of
+//! thousands costs the world's time only.
+//!
+//! Every tick the world calls [`Crowd::begin_tick`] with every body's state
+//! at the start of the tick (robots, obstacles, people: the snapshot's
+//! order), then [`Crowd::advance`] once per physics substep. A person's
+//! model chooses its velocity once per tick and holds it over the
+//! substeps (p += v h), as RVO2's `doStep` does over its time step:
+//!
+//! - **Route.** A person walks to its `waypoints` in order (a `goal` is
+//!   the one point). A point counts as reached once the person's centre
+//!   is within its radius of it (CrowdNav's `reached_destination`); then
+//!   the next, and after the last the first again if `cyclic`. Else the
+//!   person stays with the last point as its goal, and so comes to rest
+//!   there.
+//! - **Preferred velocity** (RVO2's Circle example, as the `orca`
+//!   planner reads it): towards the goal at `preferred_speed`, and the
+//!   goal vector itself once the goal is nearer than `preferred_speed`
+//!   (so the person slows into its goal and stops there).
+//! - **`orca`**: RVO2's `computeNewVelocity` for the person
+//!   ([`mrsim_planners::orca::Walker`], the `orca` planner's own
+//!   half-planes, neighbour selection and linear programs), speed limit
+//!   `preferred_speed` (CrowdNav's human: `max_speed = v_pref`), time step
+//!   the tick, among the other people (who avoid in turn: half the
+//!   avoidance each, RVO2's reciprocity), the scripted obstacles (which do
+//!   not: all of it) and, when the person `sees_robots`, the robots (taken
+//!   for RVO2 agents that avoid in turn, as CrowdNav's humans take its
+//!   robot: half). A person who does not see robots walks as if there
+//!   were none (CrowdNav's invisible robot). The walls are RVO2's
+//!   obstacles. The new velocity is the person's velocity over the tick.
+//!
+//! People are kinematic: nothing pushes them; a contact of a robot with a
+//! person is the robot's (the world counts it), contacts among people are
+//! nobody's.
+
+use mrsim_planners::Vec2;
+use mrsim_planners::orca::{Neighbor, Walker, WalkerParams};
+use mrsim_proto::{BodyState, body_kind};
+use mrsim_scenario::{PersonMotion, PersonSpec, Scenario, SocialForceParams};
+use mrsim_spatial::NeighbourGrid;
+
+/// The moving state of one person.
+#[derive(Debug, Clone)]
+pub struct Person {
+    /// Current position.
+    pub position: [f64; 2],
+    /// Velocity over the current tick.
+    pub velocity: [f64; 2],
+    /// The index of the point walked to.
+    next: usize,
+}
+
+/// Every person of a scenario and what moving them needs.
+#[derive(Debug, Clone)]
+pub struct Crowd {
+    specs: Vec<PersonSpec>,
+    /// By person index.
+    pub people: Vec<Person>,
+    walker: Walker,
+    dt: f64,
+    /// The body id of the first person (robots and obstacles come first).
+    first: usize,
+    robots: usize,
+    grid: NeighbourGrid,
+    near: Vec<u32>,
+    candidates: Vec<Neighbor>,
+    velocities: Vec<[f64; 2]>,
+    reach: f64,
+    /// Every wall segment, the arena's included (the social force's).
+    walls: Vec<mrsim_planners::Segment>,
+    /// Each group's members, by person index.
+    groups: Vec<Vec<usize>>,
+    /// Each person's group, by index into `groups`.
+    group_of: Vec<Option<usize>>,
+}
+
+fn v(p: [f64; 2]) -> Vec2 {
+    Vec2::new(p[0], p[1])
+}
+
+impl Crowd {
+    /// The people of `scenario`, at their starts.
+    pub fn new(scenario: &Scenario) -> Self {
+        let walls: Vec<mrsim_planners::Segment> = scenario
+            .all_walls()
+            .iter()
+            .map(|w| mrsim_planners::Segment {
+                a: v(w[0]),
+                b: v(w[1]),
+            })
+            .collect();
+        let reach = scenario
+            .people
+            .iter()
+            .map(|p| match p.motion {
+                PersonMotion::Orca { neighbor_dist, .. } => neighbor_dist,
+                PersonMotion::SocialForce(f) => f.neighbor_dist,
+            })
+            .fold(0.0, f64::max);
+        let mut groups: Vec<Vec<usize>> = Vec::new();
+        let mut names: std::collections::HashMap<&str, usize> = Default::default();
+        let group_of = scenario
+            .people
+            .iter()
+            .enumerate()
+            .map(|(k, p)| {
+                let g = p.group.as_deref()?;
+                let i = *names.entry(g).or_insert_with(|| {
+                    groups.push(Vec::new());
+                    groups.len() - 1
+                });
+                groups[i].push(k);
+                Some(i)
+            })
+            .collect();
+        Self {
+            people: scenario
+                .people
+                .iter()
+                .map(|p| Person {
+                    position: p.start,
+                    velocity: [0.0, 0.0],
+                    next: 0,
+                })
+                .collect(),
+            specs: scenario.people.clone(),
+            walker: if scenario.people.is_empty() {
+                Walker::default()
+            } else {
+                Walker::new(&walls)
+            },
+            dt: scenario.world.dt,
+            first: scenario.robots.len() + scenario.obstacles.len(),
+            robots: scenario.robots.len(),
+            grid: NeighbourGrid::default(),
+            near: Vec::new(),
+            candidates: Vec::new(),
+            velocities: Vec::new(),
+            reach,
+            walls: if scenario.people.is_empty() {
+                Vec::new()
+            } else {
+                walls.clone()
+            },
+            groups,
+            group_of,
+        }
+    }
+
+    /// True if there is nobody to move.
+    pub fn is_empty(&self) -> bool {
+        self.people.is_empty()
+    }
+
+    /// Person `k`'s spec.
+    pub fn spec(&self, k: usize) -> &PersonSpec {
+        &self.specs[k]
+    }
+
+    /// The goal person `k` walks to now.
+    pub fn goal(&self, k: usize) -> [f64; 2] {
+        let s = &self.specs[k];
+        s.waypoints[self.people[k].next.min(s.waypoints.len() - 1)]
+    }
+
+    /// Chooses every person's velocity for the tick that starts now from
+    /// `bodies`, every body's state at its start (robots, obstacles,
+    /// people, by body id).
+    pub fn begin_tick(&mut self, bodies: &[BodyState]) {
+        if self.people.is_empty() {
+            return;
+        }
+        // Route: a point reached, the next.
+        for (p, s) in self.people.iter_mut().zip(&self.specs) {
+            let g = s.waypoints[p.next];
+            let d = (g[0] - p.position[0]).hypot(g[1] - p.position[1]);
+            if d < s.radius {
+                if p.next + 1 < s.waypoints.len() {
+                    p.next += 1;
+                } else if s.cyclic {
+                    p.next = 0;
+                }
+            }
+        }
+        let grid = self.grid.build(
+            bodies
+                .iter()
+                .map(|b| [b.position[0], b.position[1], b.radius]),
+            self.reach,
+        );
+        let mut velocities = std::mem::take(&mut self.velocities);
+        velocities.clear();
+        for k in 0..self.people.len() {
+            let s = &self.specs[k];
+            let reach = match s.motion {
+                PersonMotion::Orca { neighbor_dist, .. } => neighbor_dist,
+                PersonMotion::SocialForce(f) => f.neighbor_dist,
+            };
+            let p = &self.people[k];
+            if !(grid && self.grid.near(p.position, reach, &mut self.near)) {
+                self.near.clear();
+                self.near.extend(0..bodies.len() as u32);
+            }
+            let nv = match s.motion {
+                PersonMotion::Orca { .. } => self.orca(k, bodies),
+                PersonMotion::SocialForce(f) => self.social_force(k, bodies, &f),
+            };
+            velocities.push([nv.x, nv.y]);
+        }
+        for (p, nv) in self.people.iter_mut().zip(&velocities) {
+            p.velocity = *nv;
+        }
+        self.velocities = velocities;
+    }
+
+    /// Person `k`'s preferred velocity (RVO2's, see the module
+    /// documentation).
+    fn preferred(&self, k: usize) -> Vec2 {
+        let s = &self.specs[k];
+        let to_goal = v(self.goal(k)) - v(self.people[k].position);
+        let d = to_goal.norm();
+        if d > s.preferred_speed {
+            to_goal * (s.preferred_speed / d)
+        } else {
+            to_goal
+        }
+    }
+
+    /// Person `k`'s ORCA velocity among the bodies of `self.near`.
+    fn orca(&mut self, k: usize, bodies: &[BodyState]) -> Vec2 {
+        let s = &self.specs[k];
+        let PersonMotion::Orca {
+            neighbor_dist,
+            max_neighbors,
+            time_horizon,
+            time_horizon_obst,
+            radius_margin,
+        } = s.motion
+        else {
+            return Vec2::zeros();
+        };
+        let me = self.first + k;
+        self.candidates.clear();
+        for &j in &self.near {
+            let j = j as usize;
+            let Some(b) = bodies.get(j) else { continue };
+            if j == me || (j < self.robots && !s.sees_robots) {
+                continue;
+            }
+            // Obstacles do not avoid: all of it is the person's.
+            let share = if b.kind == body_kind::OBSTACLE {
+                1.0
+            } else {
+                0.5
+            };
+            self.candidates.push(Neighbor {
+                id: b.id,
+                position: v(b.position),
+                velocity: v(b.velocity),
+                radius: b.radius,
+                share,
+            });
+        }
+        let params = WalkerParams {
+            neighbor_dist,
+            max_neighbors,
+            time_horizon,
+            time_horizon_obst,
+            radius_margin,
+        };
+        let p = &self.people[k];
+        let pref = self.preferred(k);
+        self.walker.velocity(
+            v(p.position),
+            v(p.velocity),
+            s.radius,
+            s.preferred_speed,
+            pref,
+            &self.candidates,
+            &params,
+            self.dt,
+        )
+    }
+
+    /// Person `k`'s velocity at the end of the tick under the social
+    /// forces of the bodies of `self.near`, the walls and its group
+    /// (see the module documentation).
+    fn social_force(&self, k: usize, bodies: &[BodyState], f: &SocialForceParams) -> Vec2 {
+        let s = &self.specs[k];
+        let me = self.first + k;
+        let p = &self.people[k];
+        let (position, velocity) = (v(p.position), v(p.velocity));
+        // Desired force (H&M eq 2; libpedsim's `Twaypoint::getForce`):
+        // towards the point walked to at the desired speed, relaxed within
+        // the relaxation time; at the last point, reached, braking
+        // (libpedsim's agent without a destination).
+        let s_last = p.next + 1 == s.waypoints.len() && !s.cyclic;
+        let to_goal = v(self.goal(k)) - position;
+        let arrived = s_last && to_goal.norm() < s.radius;
+        let e = if arrived {
+            Vec2::zeros()
+        } else {
+            unit(to_goal)
+        };
+        let desired = (e * s.preferred_speed - velocity) / f.relaxation_time;
+        // Social force (Moussaid et al. 2009, as libpedsim's `socialForce`).
+        let mut social = Vec2::zeros();
+        for &j in &self.near {
+            let j = j as usize;
+            let Some(b) = bodies.get(j) else { continue };
+            if j == me || (j < self.robots && !s.sees_robots) {
+                continue;
+            }
+            let mut diff = v(b.position) - position;
+            if diff.norm_squared() >= f.neighbor_dist * f.neighbor_dist {
+                continue;
+            }
+            if j < self.robots {
+                diff /= f.robot_scale;
+            }
+            social += moussaid(diff, velocity - v(b.velocity));
+        }
+        // Obstacle force: the nearest wall only (libpedsim's
+        // `obstacleForce`), measured from the person's disc.
+        let mut obstacle = Vec2::zeros();
+        let mut nearest = f64::INFINITY;
+        for w in &self.walls {
+            let d = position - w.closest_point(position);
+            if d.norm_squared() < nearest {
+                nearest = d.norm_squared();
+                obstacle = d;
+            }
+        }
+        if nearest.is_finite() {
+            let amount = (-(nearest.sqrt() - s.radius) / f.sigma_obstacle).exp();
+            obstacle = unit(obstacle) * amount;
+        }
+        let group = self.group_force(k, e, f);
+        let a = desired * f.force_desired
+            + social * f.force_social
+            + obstacle * f.force_obstacle
+            + group;
+        // libpedsim's `move`: v += h a, capped at the desired speed.
+        let nv = velocity + a * self.dt;
+        let speed = nv.norm();
+        if speed > s.preferred_speed {
+            nv * (s.preferred_speed / speed)
+        } else {
+            nv
+        }
+    }
+
+    /// pedsim's group forces on person `k` walking along the unit `e`
+    /// (Moussaid et al. 2010, pedsim_simulator's `GroupGazeForce`,
+    /// `GroupCoherenceForce` and `GroupRepulsionForce` in their paper
+    /// versions), each times its weight.
+    fn group_force(&self, k: usize, e: Vec2, f: &SocialForceParams) -> Vec2 {
+        let Some(g) = self.group_of[k] else {
+            return Vec2::zeros();
+        };
+        let members = &self.groups[g];
+        let n = members.len();
+        if n <= 1 {
+            return Vec2::zeros();
+        }
+        let me = v(self.people[k].position);
+        let com = members
+            .iter()
+            .fold(Vec2::zeros(), |c, &m| c + v(self.people[m].position))
+            / n as f64;
+        let mut force = Vec2::zeros();
+        // Gaze: the others' centre of mass kept within 90 degrees of the
+        // walking direction, by turning (slowing) against it.
+        let others = (com * n as f64 - me) / (n - 1) as f64;
+        let rel = others - me;
+        if e.norm() > 0.0 && rel.norm() > 0.0 {
+            let angle = (e.dot(&rel) / (e.norm() * rel.norm()))
+                .clamp(-1.0, 1.0)
+                .acos();
+            let vision = std::f64::consts::FRAC_PI_2;
+            if angle > vision {
+                force -= e * ((angle - vision) * f.force_group_gaze);
+            }
+        }
+        // Coherence: back towards the centre of mass once farther from it
+        // than (n - 1) / 2.
+        let rel = com - me;
+        if rel.norm() >= (n as f64 - 1.0) / 2.0 {
+            force += unit(rel) * f.force_group_coherence;
+        }
+        // Repulsion: away from each member nearer than the overlap
+        // distance.
+        for &m in members {
+            if m == k {
+                continue;
+            }
+            let d = me - v(self.people[m].position);
+            if d.norm() < f.group_overlap {
+                force += d * f.force_group_repulsion;
+            }
+        }
+        force
+    }
+
+    /// One physics substep of `h`: every person moves at its velocity.
+    pub fn advance(&mut self, h: f64) {
+        for p in &mut self.people {
+            p.position[0] += p.velocity[0] * h;
+            p.position[1] += p.velocity[1] * h;
+        }
+    }
+}
+
+/// `d / |d|`, or zero for a zero vector (libpedsim's `normalized`).
+fn unit(d: Vec2) -> Vec2 {
+    let n = d.norm();
+    if n > 0.0 { d / n } else { d }
+}
+
+/// The angle in (-pi, pi] (libpedsim's `Tangle`).
+fn wrap(a: f64) -> f64 {
+    let mut a = a;
+    while a <= -std::f64::consts::PI {
+        a += std::f64::consts::TAU;
+    }
+    while a > std::f64::consts::PI {
+        a -= std::f64::consts::TAU;
+    }
+    a
+}
+
+/// Moussaid et al. 2009's interaction of a pedestrian with another at
+/// `diff` (the other's position less its own) whose velocity differs by
+/// `vel_diff` (its own less the other's), as libpedsim's `socialForce`
+/// computes it: the interaction direction t = normalise(lambda vel_diff +
+/// diff / |diff|), lambda = 2, of length D; B = gamma D, gamma = 0.35;
+/// theta the angle from t to diff; the force -exp(-|diff| / B - (n' B
+/// theta)^2) t - sign(theta) exp(-|diff| / B - (n B theta)^2) t_left, with
+/// n = 2, n' = 3. Zero when t is undefined (both vectors zero).
+pub fn moussaid(diff: Vec2, vel_diff: Vec2) -> Vec2 {
+    const LAMBDA: f64 = 2.0;
+    const GAMMA: f64 = 0.35;
+    const N: f64 = 2.0;
+    const N_PRIME: f64 = 3.0;
+    let direction = unit(diff);
+    let interaction = vel_diff * LAMBDA + direction;
+    let length = interaction.norm();
+    if length == 0.0 {
+        return Vec2::zeros();
+    }
+    let t = interaction / length;
+    let theta = wrap(wrap(direction.y.atan2(direction.x)) - wrap(t.y.atan2(t.x)));
+    let b = GAMMA * length;
+    let d = diff.norm();
+    let velocity_amount = -(-d / b - (N_PRIME * b * theta).powi(2)).exp();
+    let sign = if theta == 0.0 { 0.0 } else { theta.signum() };
+    let angle_amount = -sign * (-d / b - (N * b * theta).powi(2)).exp();
+    let left = Vec2::new(-t.y, t.x);
+    t * velocity_amount + left * angle_amount
+}
