@@ -15,6 +15,7 @@ mod bench;
 mod cars;
 mod cores;
 mod cores_real;
+mod crowdnav;
 mod cut;
 mod designated_path;
 mod dwa_shapes;
