@@ -154,10 +154,95 @@ fn the_shipped_scene_holds_crowdnav_s_test_case_0() {
     assert_eq!(shipped(), case(0, false), "regenerate the people from the generator");
 }
 
+/// The 95 % Wilson score interval of `k` successes in `n` trials.
+fn wilson(k: u32, n: u32) -> (f64, f64) {
+    let z = 1.959_963_985;
+    let (k, n) = (f64::from(k), f64::from(n));
+    let p = k / n;
+    let centre = (p + z * z / (2.0 * n)) / (1.0 + z * z / n);
+    let half = z / (1.0 + z * z / n) * (p * (1.0 - p) / n + z * z / (4.0 * n * n)).sqrt();
+    (centre - half, centre + half)
+}
+
+/// The 95 % interval of the mean of `xs` (normal approximation).
+fn mean_interval(xs: &[f64]) -> (f64, f64) {
+    let n = xs.len() as f64;
+    let mean = xs.iter().sum::<f64>() / n;
+    let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    let half = 1.959_963_985 * (var / n).sqrt();
+    (mean - half, mean + half)
+}
+
+/// Does the interval `(lo, hi)` meet the values a figure printed with two
+/// decimals stands for, `[paper - 0.005, paper + 0.005]`?
+fn meets(paper: f64, (lo, hi): (f64, f64)) -> bool {
+    paper + 0.005 >= lo && paper - 0.005 <= hi
+}
+
+/// The paper's ORCA rows (Chen et al. 2019, Tables I and II): with the
+/// robot invisible to the people success 0.43, collision 0.57, time to goal
+/// 10.86 s; with it visible success 0.99.
 #[test]
 fn crowdnav_s_orca_robot_among_people_who_do_and_do_not_see_it() {
     let n = cases();
     let invisible = sweep(n, false);
     let visible = sweep(n, true);
-    let _ = (&invisible, &visible);
+
+    let rate = |name: &str, t: &Tally, k: u32, paper: f64| {
+        let ci = wilson(k, t.episodes);
+        eprintln!(
+            "  {name}: {:.3} (95 % [{:.3}, {:.3}]), paper {paper}",
+            t.rate(k),
+            ci.0,
+            ci.1
+        );
+        assert!(
+            meets(paper, ci),
+            "{name}: {k} of {} ({:.3}), 95 % interval [{:.3}, {:.3}], misses the paper's {paper}",
+            t.episodes,
+            t.rate(k),
+            ci.0,
+            ci.1
+        );
+    };
+    rate("invisible success", &invisible, invisible.success, 0.43);
+    rate("invisible collision", &invisible, invisible.collision, 0.57);
+    rate("visible success", &visible, visible.success, 0.99);
+
+    assert!(invisible.times.len() >= 2, "too few successes for a time: {invisible:?}");
+    let ci = mean_interval(&invisible.times);
+    eprintln!(
+        "  invisible time to goal: {:.2} s (95 % [{:.2}, {:.2}]), paper 10.86 s",
+        invisible.mean_time(),
+        ci.0,
+        ci.1
+    );
+    assert!(
+        meets(10.86, ci),
+        "invisible time to goal {:.2} s, 95 % interval [{:.2}, {:.2}], misses the paper's 10.86 s",
+        invisible.mean_time(),
+        ci.0,
+        ci.1
+    );
+
+    // People who see the robot take half of each avoidance: the robot's
+    // detours, and so its times, are the shorter.
+    assert!(visible.times.len() >= 2, "too few successes for a time: {visible:?}");
+    let seen = mean_interval(&visible.times);
+    eprintln!(
+        "  visible time to goal: {:.2} s (95 % [{:.2}, {:.2}])",
+        visible.mean_time(),
+        seen.0,
+        seen.1
+    );
+    assert!(
+        seen.1 < ci.0,
+        "visible time to goal {:.2} s [{:.2}, {:.2}] not below the invisible {:.2} s [{:.2}, {:.2}]",
+        visible.mean_time(),
+        seen.0,
+        seen.1,
+        invisible.mean_time(),
+        ci.0,
+        ci.1
+    );
 }
