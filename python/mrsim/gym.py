@@ -15,6 +15,7 @@ through the robot's actuator limits as it would an agent's command.
 """
 
 import os
+import tempfile
 
 import gymnasium
 import numpy as np
@@ -24,7 +25,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from . import _common
-from ._mrsim import VecSim
+from ._mrsim import Sim, VecSim, crowdnav_scene
 from ._render import Canvas
 
 
@@ -328,6 +329,146 @@ class NavVectorEnv(VectorEnv):
         return tuple(frames)
 
 
+class CrowdNavEnv(gymnasium.Env):
+    """CrowdNav's episode (Chen et al., "Crowd-Robot Interaction", ICRA
+    2019): scenarios/crowdnav/circle-crossing.toml, five people crossing a
+    circle of radius 4 m on ORCA, the learner the robot going from (0, -4)
+    to (0, 4) in ticks of 0.25 s, at most 25 s.
+
+    ``reset(seed=k)`` gives CrowdNav's test case ``k`` (its people placed
+    from seed 1000 + k as CrowdNav places them; its test set is cases 0 to
+    499); without a seed the case is drawn from the env's generator.
+    ``visible``: whether the people see the robot (CrowdNav's
+    ``robot.visible``; False, its test setting, by default).
+
+    Action: the robot's velocity ``(vx, vy)`` in m/s, CrowdNav's holonomic
+    robot: each component clipped to [-1, 1] and the vector to 1 m/s
+    (``v_pref``). Observation (float32, 34): ``[goal_dx, goal_dy, vx, vy]``
+    of the robot, then for each of the five people, nearest first, ``[dx,
+    dy, dvx, dvy, radius, 1]`` (position and velocity relative to the
+    robot's), as :class:`NavEnv` observes with ``k = 5``.
+
+    Reward, CrowdNav's (``CrowdSim.step``): +1 at the goal (within 0.3 m),
+    -0.25 at a collision, ``(dmin - 0.2) * 0.5 * 0.25`` when the robot came
+    within 0.2 m (``discomfort_dist``) of a person during the tick (``dmin``
+    the least surface distance over the tick, the bodies moving in straight
+    lines from their positions before to after it), else 0; a timeout 0.
+    ``terminated`` at a collision or the goal, ``truncated`` at 25 s.
+    Info: ``outcome`` (``"success"``, ``"collision"``, ``"timeout"`` or
+    None), ``dmin``, ``case``, ``tick``, ``time``.
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 4}
+
+    SUCCESS_REWARD = 1.0
+    COLLISION_PENALTY = -0.25
+    DISCOMFORT_DIST = 0.2
+    DISCOMFORT_PENALTY_FACTOR = 0.5
+    K = 5
+
+    def __init__(self, visible=False, render_mode=None, render_size=256):
+        if render_mode not in (None, "rgb_array"):
+            raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+        if not isinstance(visible, (bool, np.bool_)):
+            raise ValueError(f"visible must be True or False, got {visible!r}")
+        self.visible = bool(visible)
+        self.render_mode = render_mode
+        self._render_size = render_size
+        self._load(0)
+        self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
+        self.observation_space = _common.observation_space(self._sim, self.K)
+        self._obs = np.zeros((1, self._sim.obs_size), dtype=np.float32)
+
+    def _load(self, case):
+        # The engine reads the scene from a file once, when it is built.
+        fd, path = tempfile.mkstemp(prefix="mrsim-crowdnav-", suffix=".toml")
+        try:
+            with os.fdopen(fd, "w", encoding="utf-8") as f:
+                f.write(crowdnav_scene(case, self.visible))
+            self._sim = Sim(path, ["robot"], [], self.K)
+        finally:
+            os.unlink(path)
+        self.case = case
+        self._horizon = _common.horizon(self._sim)
+        self._dt = self._sim.dt
+        kinds = self._sim.kinds()
+        self._people = np.flatnonzero(kinds == 2)
+        self._robot = self._sim.learner_indices[0]
+        self._radii = self._sim.radii()
+        self._canvas = None
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        case = seed if seed is not None else int(self.np_random.integers(0, 2**31))
+        self._load(int(case))
+        self._sim.observe(self._obs)
+        return self._obs[0].copy(), self._info(None, float("inf"))
+
+    def _dmin(self, before, after):
+        """The least surface distance between the robot and a person over
+        the tick: the closest point to the robot of each person's relative
+        path, a segment from before to after."""
+        r = self._robot
+        start = before[self._people] - before[r]
+        end = after[self._people] - after[r]
+        d = end - start
+        length2 = (d * d).sum(axis=1)
+        t = np.where(length2 > 0, -(start * d).sum(axis=1) / np.where(length2 > 0, length2, 1), 0.0)
+        closest = start + np.clip(t, 0.0, 1.0)[:, None] * d
+        gaps = np.hypot(*closest.T) - self._radii[self._people] - self._radii[r]
+        return float(gaps.min()) if len(gaps) else float("inf")
+
+    def step(self, action):
+        a = np.asarray(action, dtype=np.float64)
+        if a.shape != (2,):
+            raise ValueError(f"an action is 2 numbers (vx, vy), got shape {a.shape}")
+        if not np.isfinite(a).all():
+            raise ValueError(f"non-finite action {a.tolist()}")
+        v = np.clip(a, -1.0, 1.0)
+        speed = float(np.hypot(*v))
+        if speed > 1.0:
+            v = v / speed
+        before = self._sim.positions()
+        collisions, _, _, reached = self._sim.step(v.reshape(1, 2), False)
+        after = self._sim.positions()
+        self._sim.observe(self._obs)
+        dmin = self._dmin(before, after)
+        outcome = None
+        reward = 0.0
+        if int(collisions[0]) > 0:
+            outcome, reward = "collision", self.COLLISION_PENALTY
+        elif bool(reached[0]):
+            outcome, reward = "success", self.SUCCESS_REWARD
+        elif dmin < self.DISCOMFORT_DIST:
+            reward = (dmin - self.DISCOMFORT_DIST) * self.DISCOMFORT_PENALTY_FACTOR * self._dt
+        terminated = outcome is not None
+        truncated = not terminated and self._sim.tick >= self._horizon
+        if truncated:
+            outcome = "timeout"
+        return self._obs[0].copy(), float(reward), terminated, truncated, self._info(outcome, dmin)
+
+    def _info(self, outcome, dmin):
+        return {
+            "outcome": outcome,
+            "dmin": dmin,
+            "case": self.case,
+            "tick": self._sim.tick,
+            "time": self._sim.time,
+        }
+
+    def render(self):
+        if self.render_mode != "rgb_array":
+            return None
+        if self._canvas is None:
+            self._canvas = Canvas(self._sim, self._render_size)
+        return self._canvas.draw(self._sim)
+
+    @property
+    def sim(self):
+        """The underlying :class:`mrsim.Sim` of the current case."""
+        return self._sim
+
+
 # Registered on import (``import mrsim`` imports this module):
 # ``gymnasium.make("mrsim/Nav-v0", **kwargs)`` builds a NavEnv with the
 # constructor's keyword arguments, ``gymnasium.make_vec("mrsim/Nav-v0",
@@ -336,4 +477,11 @@ gymnasium.register(
     id="mrsim/Nav-v0",
     entry_point="mrsim.gym:NavEnv",
     vector_entry_point="mrsim.gym:NavVectorEnv",
+)
+
+# ``gymnasium.make("mrsim/CrowdNav-v0", visible=False)``: CrowdNav's
+# episode with its reward, the learner its robot (CrowdNavEnv).
+gymnasium.register(
+    id="mrsim/CrowdNav-v0",
+    entry_point="mrsim.gym:CrowdNavEnv",
 )

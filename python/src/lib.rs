@@ -305,6 +305,55 @@ mod engine_arrays {
     }
 }
 
+/// scenarios/crowdnav/circle-crossing.toml: CrowdNav's test scene, with
+/// test case 0's people.
+const CROWDNAV_SCENE: &str = include_str!("../../scenarios/crowdnav/circle-crossing.toml");
+
+/// The line after which the CrowdNav scene lists its people.
+const CROWDNAV_PEOPLE: &str = "# The people of test case ";
+
+/// The text of CrowdNav's test case `case`: the shipped circle-crossing
+/// scene with `world.seed` 1000 + `case` and that case's five people as
+/// CrowdNav places them (`mrsim_scenario::crowdnav::CircleCrossing`), who
+/// see the robot if `visible`. Case 0, invisible, is the shipped file.
+#[pyfunction]
+#[pyo3(signature = (case, visible=false))]
+fn crowdnav_scene(case: u64, visible: bool) -> PyResult<String> {
+    use mrsim_scenario::crowdnav::{CircleCrossing, TEST_SEED_OFFSET};
+    let seed = u32::try_from(case)
+        .ok()
+        .and_then(|k| k.checked_add(TEST_SEED_OFFSET))
+        .ok_or_else(|| {
+            PyValueError::new_err(format!(
+                "CrowdNav case {case}: cases run from 0 to {} (seed 1000 + case, a 32-bit seed)",
+                u32::MAX - TEST_SEED_OFFSET
+            ))
+        })?;
+    let (head, _) = CROWDNAV_SCENE
+        .split_once(CROWDNAV_PEOPLE)
+        .ok_or_else(|| PyValueError::new_err("the shipped CrowdNav scene lost its people's marker"))?;
+    let mut s = head.replace("seed = 1000\n", &format!("seed = {seed}\n"));
+    s.push_str(&format!(
+        "{CROWDNAV_PEOPLE}{case} (seed {seed}), as mrsim_scenario::crowdnav::CircleCrossing places them.\n"
+    ));
+    let motion = "{ model = \"orca\", neighbor_dist = 10.0, max_neighbors = 10, \
+                  time_horizon = 5.0, time_horizon_obst = 5.0, radius_margin = 0.01 }";
+    let blocks: Vec<String> = CircleCrossing::default()
+        .people(seed)
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            format!(
+                "[[person]]\nname = \"h{i}\"\nstart = [{:?}, {:?}]\ngoal = [{:?}, {:?}]\n\
+                 radius = 0.3\npreferred_speed = 1.0\nsees_robots = {visible}\nmotion = {motion}\n",
+                p.start[0], p.start[1], p.goal[0], p.goal[1]
+            )
+        })
+        .collect();
+    s.push_str(&blocks.join("\n"));
+    Ok(s)
+}
+
 /// The native module.
 #[pymodule]
 fn _mrsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -317,6 +366,7 @@ fn _mrsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<live::Agent>()?;
     m.add_function(wrap_pyfunction!(run::run_inproc, m)?)?;
     m.add_function(wrap_pyfunction!(run::rerun_inproc, m)?)?;
+    m.add_function(wrap_pyfunction!(crowdnav_scene, m)?)?;
     m.add("PlannerError", m.py().get_type::<run::PlannerError>())?;
     m.add("FILES", files(m.py())?)?;
     Ok(())
