@@ -9,7 +9,8 @@ navigation environments.
   ``concurrent.futures`` executor (a Dask cluster's), one row per run.
 - :class:`mrsim.gym.NavEnv`: one learning robot among robots driven by
   mrsim's built-in planners (Gymnasium); :class:`mrsim.gym.NavVectorEnv`
-  a batch of them stepped in one call.
+  a batch of them stepped in one call; :class:`mrsim.gym.CrowdNavEnv`
+  (``mrsim/CrowdNav-v0``) CrowdNav's episode and reward for its robot.
 - :class:`mrsim.pettingzoo.ParallelNavEnv`: every robot a learning agent
   (PettingZoo parallel API).
 - :class:`mrsim.Sim`: the stepping engine the environments are built on.

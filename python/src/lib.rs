@@ -329,9 +329,9 @@ fn crowdnav_scene(case: u64, visible: bool) -> PyResult<String> {
                 u32::MAX - TEST_SEED_OFFSET
             ))
         })?;
-    let (head, _) = CROWDNAV_SCENE
-        .split_once(CROWDNAV_PEOPLE)
-        .ok_or_else(|| PyValueError::new_err("the shipped CrowdNav scene lost its people's marker"))?;
+    let (head, _) = CROWDNAV_SCENE.split_once(CROWDNAV_PEOPLE).ok_or_else(|| {
+        PyValueError::new_err("the shipped CrowdNav scene lost its people's marker")
+    })?;
     let mut s = head.replace("seed = 1000\n", &format!("seed = {seed}\n"));
     s.push_str(&format!(
         "{CROWDNAV_PEOPLE}{case} (seed {seed}), as mrsim_scenario::crowdnav::CircleCrossing places them.\n"

@@ -30,9 +30,10 @@ def in_scratch(repo, tmp_path, monkeypatch):
     return tmp_path
 
 
-def test_the_guide_shows_two_python_planner_examples_and_one_learning_example(repo):
+def test_the_guide_shows_two_python_planner_examples_and_two_learning_examples(repo):
     assert len(python_blocks(repo, "own-planner.md", "## Python")) == 2
-    assert len(python_blocks(repo, "learning.md")) == 1
+    assert len(python_blocks(repo, "learning.md")) == 2
+    assert len(python_blocks(repo, "learning.md", "## CrowdNav")) == 1
 
 
 def test_the_guides_python_planner_and_live_agent_examples_run(repo, in_scratch, capsys):
@@ -59,5 +60,12 @@ def test_the_guides_python_planner_and_live_agent_examples_run(repo, in_scratch,
 
 
 def test_the_guides_learning_example_runs(repo):
-    (env_block,) = python_blocks(repo, "learning.md")
+    env_block, _ = python_blocks(repo, "learning.md")
     exec(env_block, {})
+
+
+def test_the_guides_crowdnav_example_prints_what_it_says(repo, capsys):
+    (block,) = python_blocks(repo, "learning.md", "## CrowdNav")
+    exec(block, {})
+    said = re.search(r"# (.*)\n", block.splitlines()[-1] + "\n").group(1)
+    assert capsys.readouterr().out.split() == said.split()

@@ -124,11 +124,16 @@ fn episode(dir: &Path, k: u32, visible: bool, t: &mut Tally) {
 }
 
 fn sweep(cases: u32, visible: bool) -> Tally {
-    let dir = fresh_dir(if visible { "crowdnav-visible" } else { "crowdnav-invisible" });
+    let dir = fresh_dir(if visible {
+        "crowdnav-visible"
+    } else {
+        "crowdnav-invisible"
+    });
     let mut t = Tally::default();
     for k in 0..cases {
         episode(&dir, k, visible, &mut t);
     }
+    let _ = std::fs::remove_dir_all(&dir);
     eprintln!(
         "crowdnav {} over {cases} cases: success {:.3}, collision {:.3}, timeout {:.3}, \
          time to goal {:.2} s, discomfort frequency {:.3}",
@@ -151,7 +156,11 @@ fn cases() -> u32 {
 
 #[test]
 fn the_shipped_scene_holds_crowdnav_s_test_case_0() {
-    assert_eq!(shipped(), case(0, false), "regenerate the people from the generator");
+    assert_eq!(
+        shipped(),
+        case(0, false),
+        "regenerate the people from the generator"
+    );
 }
 
 /// The 95 % Wilson score interval of `k` successes in `n` trials.
@@ -209,7 +218,10 @@ fn crowdnav_s_orca_robot_among_people_who_do_and_do_not_see_it() {
     rate("invisible collision", &invisible, invisible.collision, 0.57);
     rate("visible success", &visible, visible.success, 0.99);
 
-    assert!(invisible.times.len() >= 2, "too few successes for a time: {invisible:?}");
+    assert!(
+        invisible.times.len() >= 2,
+        "too few successes for a time: {invisible:?}"
+    );
     let ci = mean_interval(&invisible.times);
     eprintln!(
         "  invisible time to goal: {:.2} s (95 % [{:.2}, {:.2}]), paper 10.86 s",
@@ -227,7 +239,10 @@ fn crowdnav_s_orca_robot_among_people_who_do_and_do_not_see_it() {
 
     // People who see the robot take half of each avoidance: the robot's
     // detours, and so its times, are the shorter.
-    assert!(visible.times.len() >= 2, "too few successes for a time: {visible:?}");
+    assert!(
+        visible.times.len() >= 2,
+        "too few successes for a time: {visible:?}"
+    );
     let seen = mean_interval(&visible.times);
     eprintln!(
         "  visible time to goal: {:.2} s (95 % [{:.2}, {:.2}])",

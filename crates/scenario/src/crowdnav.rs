@@ -156,7 +156,10 @@ impl CircleCrossing {
                 let near = |q: [f64; 2], r: f64| {
                     (p[0] - q[0]).hypot(p[1] - q[1]) < self.radius + r + self.discomfort_dist
                 };
-                if !placed.iter().any(|&(at, goal, r)| near(at, r) || near(goal, r)) {
+                if !placed
+                    .iter()
+                    .any(|&(at, goal, r)| near(at, r) || near(goal, r))
+                {
                     break p;
                 }
             };
@@ -177,7 +180,10 @@ mod tests {
         // np.random.seed(0); np.random.random(3)
         let mut rng = Mt19937::new(0);
         let got = [rng.random(), rng.random(), rng.random()];
-        assert_eq!(got, [0.5488135039273248, 0.7151893663724195, 0.6027633760716439]);
+        assert_eq!(
+            got,
+            [0.5488135039273248, 0.7151893663724195, 0.6027633760716439]
+        );
         // The reference implementation's first output for its default seed.
         assert_eq!(Mt19937::new(5489).next_u32(), 3_499_211_612);
     }
@@ -193,10 +199,17 @@ mod tests {
                 let r = p.start[0].hypot(p.start[1]);
                 assert!((r - 4.0).abs() <= 0.5f64.hypot(0.5) + 1e-12, "{seed}: {r}");
                 assert_eq!(p.goal, [-p.start[0], -p.start[1]]);
-                let clear = |q: [f64; 2], min: f64| (p.start[0] - q[0]).hypot(p.start[1] - q[1]) >= min;
-                assert!(clear(c.robot_start, 0.8) && clear(c.robot_goal, 0.8), "{seed}: {p:?}");
+                let clear =
+                    |q: [f64; 2], min: f64| (p.start[0] - q[0]).hypot(p.start[1] - q[1]) >= min;
+                assert!(
+                    clear(c.robot_start, 0.8) && clear(c.robot_goal, 0.8),
+                    "{seed}: {p:?}"
+                );
                 for q in &people[..i] {
-                    assert!(clear(q.start, 0.8) && clear(q.goal, 0.8), "{seed}: {p:?} {q:?}");
+                    assert!(
+                        clear(q.start, 0.8) && clear(q.goal, 0.8),
+                        "{seed}: {p:?} {q:?}"
+                    );
                 }
             }
         }
