@@ -359,14 +359,15 @@ fn spread(world: &mut World, n: usize, ticks: usize) -> f64 {
 
 #[test]
 fn a_group_walks_together_where_the_same_people_alone_drift_apart() {
-    // Three people of speeds 0.8, 1.0 and 1.3 m/s walk 20 m side by side.
+    // Three people of speeds 0.8, 1.0 and 1.3 m/s walk side by side for 20 s
+    // towards goals 40 m on (none arrives).
     let people = |group: &str| {
         [(0.8, 0.0), (1.0, 0.8), (1.3, -0.8)]
             .iter()
             .enumerate()
             .map(|(k, (v, y))| {
                 format!(
-                    "[[person]]\nname = \"h{k}\"\nstart = [0.0, {y:?}]\ngoal = [20.0, {y:?}]\n\
+                    "[[person]]\nname = \"h{k}\"\nstart = [0.0, {y:?}]\ngoal = [40.0, {y:?}]\n\
                      preferred_speed = {v:?}\n{group}motion = {{ model = \"social-force\" }}\n"
                 )
             })
