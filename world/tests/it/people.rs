@@ -110,9 +110,9 @@ impl Rvo2Step {
                 other => panic!("orca answers a velocity, not {other:?}"),
             }
         }
-        for i in 0..n {
-            self.velocity[i] = next[i];
-            self.position[i] += next[i] * self.dt;
+        for ((v, p), nv) in self.velocity.iter_mut().zip(&mut self.position).zip(&next) {
+            *v = *nv;
+            *p += nv * self.dt;
         }
         self.tick += 1;
     }
