@@ -28,6 +28,7 @@ from ._folder import Rows, load_rows
 
 __all__ = [
     "FILES",
+    "KINDS",
     "Agent",
     "Observation",
     "PlannerError",
@@ -41,6 +42,13 @@ __all__ = [
     "scenario_path",
     "sweep",
 ]
+
+
+KINDS = ("robot", "obstacle", "person")
+"""The body kinds by their code, as ``Sim.kinds()`` and
+``Observation.others_kind`` give it: ``KINDS[2]`` is ``"person"``, a
+pedestrian the world moves (trajectory.csv's ``kind`` column says the same
+names)."""
 
 
 def scenario_path(name: str = "circle-16") -> str:

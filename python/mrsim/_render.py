@@ -6,6 +6,7 @@ _BACKGROUND = (255, 255, 255)
 _ROBOT = (70, 110, 200)
 _LEARNER = (220, 60, 50)
 _OBSTACLE = (120, 120, 120)
+_PERSON = (244, 164, 96)
 _GOAL = (40, 170, 70)
 _WALL = (0, 0, 0)
 
@@ -40,7 +41,12 @@ class Canvas:
             self._disc(img, xx, yy, g, 0.15, _GOAL)
         pos, radii, kinds = sim.positions(), sim.radii(), sim.kinds()
         for i, (p, r, kind) in enumerate(zip(pos, radii, kinds)):
-            colour = _OBSTACLE if kind == 1 else (_LEARNER if i in learners else _ROBOT)
+            if kind == 1:
+                colour = _OBSTACLE
+            elif kind == 2:
+                colour = _PERSON
+            else:
+                colour = _LEARNER if i in learners else _ROBOT
             self._disc(img, xx, yy, p, max(r, 0.05), colour)
         for w in sim.walls():
             a, b = w[:2], w[2:]

@@ -211,7 +211,8 @@ impl Sim {
         engine_arrays::goals(py, &self.engine)
     }
 
-    /// Every body's position, (bodies, 2): robots, then obstacles.
+    /// Every body's position, (bodies, 2): robots, then obstacles, then
+    /// people.
     fn positions<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
         engine_arrays::positions(py, &self.engine)
     }
@@ -226,7 +227,8 @@ impl Sim {
         engine_arrays::radii(py, &self.engine)
     }
 
-    /// Every body's kind: 0 robot, 1 obstacle.
+    /// Every body's kind: 0 robot, 1 obstacle, 2 person (`mrsim.KINDS`
+    /// names them).
     fn kinds<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u32>> {
         engine_arrays::kinds(py, &self.engine)
     }
@@ -253,7 +255,8 @@ mod engine_arrays {
         Ok(PyArray2::from_vec2(py, &rows)?)
     }
 
-    /// Every body's position, (bodies, 2): robots, then obstacles.
+    /// Every body's position, (bodies, 2): robots, then obstacles, then
+    /// people.
     pub fn positions<'py>(py: Python<'py>, e: &Engine) -> Bound<'py, PyArray2<f64>> {
         let s = e.world().states();
         let flat: Vec<f64> = s.iter().flat_map(|b| b.position).collect();
@@ -273,7 +276,8 @@ mod engine_arrays {
         PyArray1::from_iter(py, s.iter().map(|b| b.radius))
     }
 
-    /// Every body's kind: 0 robot, 1 obstacle.
+    /// Every body's kind: 0 robot, 1 obstacle, 2 person (`mrsim.KINDS`
+    /// names them).
     pub fn kinds<'py>(py: Python<'py>, e: &Engine) -> Bound<'py, PyArray1<u32>> {
         let s = e.world().states();
         PyArray1::from_iter(py, s.iter().map(|b| b.kind))

@@ -63,7 +63,8 @@ pub struct PyObservation {
     /// polygon's vertices at its pose, (k, 2) counter-clockwise; (0, 2) for
     /// a disc.
     others_vertices: Py<PyList>,
-    /// Their kinds, (n,): 0 robot, 1 obstacle.
+    /// Their kinds, (n,): 0 robot, 1 obstacle, 2 person (`mrsim.KINDS`
+    /// names them).
     others_kind: Py<PyArray1<u8>>,
     /// Wall segments (the arena's included), (m, 4): x0, y0, x1, y1.
     walls: Py<PyArray2<f64>>,

@@ -509,7 +509,7 @@ impl VecSim {
         Ok(engine_arrays::radii(py, self.env(i)?))
     }
 
-    /// Environment `i`'s body kinds: 0 robot, 1 obstacle.
+    /// Environment `i`'s body kinds: 0 robot, 1 obstacle, 2 person.
     fn kinds<'py>(&self, py: Python<'py>, i: usize) -> PyResult<Bound<'py, PyArray1<u32>>> {
         Ok(engine_arrays::kinds(py, self.env(i)?))
     }

@@ -119,3 +119,169 @@ fn the_shipped_crowd_scene_runs_with_its_people_in_the_trajectory() {
     );
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// A robot passing 0.15 m from a standing person, one driving into
+/// another standing person, and two robots head-on into each other, all on
+/// `homing` (which avoids nothing); the people do not see the robots.
+const CLOSE: &str = r#"
+[world]
+dt = 0.1
+duration = 6.0
+
+[defaults]
+radius = 0.3
+max_speed = 1.0
+max_accel = 4.0
+planner = "homing"
+
+[[robot]]
+name = "passer"
+start = [-3.0, 0.0]
+goal = [5.0, 0.0]
+
+[[robot]]
+name = "bumper"
+start = [-3.0, 5.0]
+goal = [5.0, 5.0]
+
+[[robot]]
+name = "r1"
+start = [-3.0, 10.0]
+goal = [3.0, 10.0]
+
+[[robot]]
+name = "r2"
+start = [3.0, 10.0]
+goal = [-3.0, 10.0]
+
+[[person]]
+name = "near"
+start = [0.0, 0.75]
+goal = [0.0, 0.75]
+radius = 0.3
+sees_robots = false
+
+[[person]]
+name = "hit"
+start = [0.0, 5.0]
+goal = [0.0, 5.0]
+radius = 0.3
+sees_robots = false
+"#;
+
+/// Seconds `robot` spent with its surface within `limit` of any person's,
+/// from trajectory.csv (radii 0.3 each), and the smallest such gap, over
+/// the ticks after the first.
+fn person_gaps(rows: &[Row], robot: &str, limit: f64) -> (f64, f64) {
+    let people: Vec<&Row> = rows.iter().filter(|r| r.kind == "person").collect();
+    let (mut time, mut min) = (0.0, f64::INFINITY);
+    let mut prev = None;
+    for r in track(rows, robot) {
+        let gap = people
+            .iter()
+            .filter(|p| p.tick == r.tick)
+            .map(|p| (p.x - r.x).hypot(p.y - r.y) - 0.6)
+            .fold(f64::INFINITY, f64::min);
+        if let Some(t0) = prev {
+            min = min.min(gap);
+            if gap < limit {
+                time += r.time - t0;
+            }
+        }
+        prev = Some(r.time);
+    }
+    (time, min)
+}
+
+#[test]
+fn metrics_count_a_robots_discomfort_and_contacts_with_people_apart_from_those_with_robots() {
+    let out = fresh_dir("people-close");
+    let file = out.join("close.toml");
+    std::fs::write(&file, CLOSE).expect("the scene");
+    let dir = out.join("run");
+    let o = run(
+        &file,
+        &dir,
+        &run_id("people-close"),
+        &["--transport", "inproc", "--quiet"],
+    );
+    assert_ok(&o);
+    let m = metrics(&dir);
+    let rows = trajectory(&dir);
+    let robot = |name: &str| &m["robots"][name];
+    let f = |v: &serde_json::Value| v.as_f64().expect("a number");
+    // The passer: within 0.2 m of `near` for a while, never touching.
+    let (discomfort, min_gap) = person_gaps(&rows, "passer", 0.2);
+    let passer = robot("passer");
+    assert!(discomfort > 0.0 && min_gap > 0.0, "{discomfort} {min_gap}");
+    assert!(
+        (f(&passer["discomfort_time"]) - discomfort).abs() < 1e-9,
+        "metrics {} trajectory {discomfort}: {m:#}",
+        passer["discomfort_time"]
+    );
+    assert!(
+        (f(&passer["person_min_clearance"]) - min_gap).abs() < 1e-5,
+        "{m:#}"
+    );
+    assert_eq!(passer["person_collisions"], 0, "{m:#}");
+    assert_eq!(passer["collisions"], 0, "{m:#}");
+    // Its clearance to robots and obstacles leaves the people out: the
+    // nearest robot is the bumper, 5 m off.
+    assert!(f(&passer["min_clearance"]) > 4.0, "{m:#}");
+    // Time within the intimate distance of a person is at least the
+    // discomfort time, and the robots' proxemic times have no person in them.
+    assert!(f(&passer["person_time_intimate"]) >= discomfort, "{m:#}");
+    assert_eq!(f(&passer["time_intimate"]), 0.0, "{m:#}");
+    // The bumper touched a person and nothing else; r1 and r2 each other.
+    let bumper = robot("bumper");
+    assert!(bumper["person_collisions"].as_u64() >= Some(1), "{m:#}");
+    assert_eq!(bumper["collisions"], 0, "{m:#}");
+    assert!(f(&bumper["person_min_clearance"]) < 0.0, "{m:#}");
+    for r in ["r1", "r2"] {
+        assert!(robot(r)["collisions"].as_u64() >= Some(1), "{m:#}");
+        assert_eq!(robot(r)["person_collisions"], 0, "{m:#}");
+    }
+    assert_eq!(
+        m["person_collisions_total"], bumper["person_collisions"],
+        "{m:#}"
+    );
+    assert_eq!(m["collisions_total"], robot("r1")["collisions"], "{m:#}");
+    let total: f64 = ["passer", "bumper", "r1", "r2"]
+        .iter()
+        .map(|r| f(&robot(r)["discomfort_time"]))
+        .sum();
+    assert!((f(&m["discomfort_time"]) - total).abs() < 1e-9, "{m:#}");
+    // encounters.csv says what the other body was.
+    let enc = std::fs::read_to_string(dir.join("encounters.csv")).expect("encounters.csv");
+    let kind_of = |a: &str, b: &str| {
+        enc.lines()
+            .find(|l| l.starts_with(&format!("{a},{b},")))
+            .and_then(|l| l.rsplit(',').next())
+            .map(str::to_string)
+    };
+    assert_eq!(
+        kind_of("passer", "near").as_deref(),
+        Some("person"),
+        "{enc}"
+    );
+    assert_eq!(kind_of("bumper", "hit").as_deref(), Some("person"), "{enc}");
+    assert_eq!(kind_of("r1", "r2").as_deref(), Some("robot"), "{enc}");
+    // The replay page has the people, at their trajectory's positions, in
+    // their own colour.
+    let page = std::fs::read_to_string(dir.join("replay.html")).expect("replay.html");
+    let open = r#"<script id="mrsim-data" type="application/json">"#;
+    let data = page
+        .split_once(open)
+        .and_then(|(_, rest)| rest.split_once("</script>"))
+        .map(|(d, _)| d)
+        .expect("the page's data");
+    let data: serde_json::Value = serde_json::from_str(data).expect("the data is JSON");
+    let people = data["people"].as_array().expect("people");
+    let names: Vec<&str> = people.iter().filter_map(|p| p["name"].as_str()).collect();
+    assert_eq!(names, ["near", "hit"]);
+    let near0 = track(&rows, "near")[0];
+    assert!((f(&people[0]["x"][0]) - near0.x).abs() < 1e-3);
+    assert!((f(&people[0]["y"][0]) - near0.y).abs() < 1e-3);
+    assert_eq!(data["personColor"], "#f4a460");
+    let _ = std::fs::remove_dir_all(&out);
+}

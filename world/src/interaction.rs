@@ -3,6 +3,11 @@
 //! collision, time not moving, jerk, path irregularity, heading change)
 //! and the encounters of encounters.csv.
 //!
+//! People (bodies of kind [`body_kind::PERSON`]) are counted apart: a
+//! robot's proxemic times and time to collision are over the robots and
+//! obstacles, its `person_` ones over the people, with the discomfort time
+//! of CrowdNav ([`DISCOMFORT`]) and the smallest gap to a person.
+//!
 //! Every per-robot metric is taken over the ticks from the start to the
 //! robot's arrival (the tick its `AT_GOAL` flag is first set), or to the
 //! end of the run if it never arrives. Neighbours come from one
@@ -10,7 +15,7 @@
 //! and the encounter gap, so the cost grows with the bodies and their
 //! neighbours, not with all pairs.
 
-use mrsim_proto::{BodyState, flags};
+use mrsim_proto::{BodyState, body_kind, flags};
 use mrsim_runfolder::metrics::Encounter;
 use mrsim_scenario::Scenario;
 use mrsim_spatial::NeighbourGrid;
@@ -32,6 +37,10 @@ pub const GAVE_WAY: f64 = 0.2;
 pub const GAVE_WAY_MORE: f64 = 1.5;
 /// Below this speed a body is standing: its direction is undefined.
 pub const STANDING: f64 = 1e-3;
+/// CrowdNav's discomfort distance between a robot's and a person's
+/// surfaces, m (`discomfort_dist` of `crowd_sim.py`, Chen et al. 2019):
+/// nearer, the robot makes the person uncomfortable.
+pub const DISCOMFORT: f64 = 0.2;
 
 /// One robot's interaction metrics so far.
 #[derive(Debug, Clone, Default)]
@@ -46,6 +55,20 @@ pub struct RobotInteraction {
     pub time_personal: f64,
     /// ... below [`SOCIAL`].
     pub time_social: f64,
+    /// The same four over the people alone: smallest time to collision
+    /// with a person (infinity: never finite), ...
+    pub person_ttc_min: f64,
+    /// ... seconds with the smallest gap to a person below [`INTIMATE`],
+    pub person_time_intimate: f64,
+    /// ... below [`PERSONAL`],
+    pub person_time_personal: f64,
+    /// ... below [`SOCIAL`].
+    pub person_time_social: f64,
+    /// Seconds with the smallest gap to a person below [`DISCOMFORT`].
+    pub discomfort_time: f64,
+    /// Smallest surface gap to a person over the whole run, arrival or
+    /// not (infinity before the first person).
+    pub person_min_gap: f64,
     jerk_sum: f64,
     jerk_count: u64,
     irregularity_sum: f64,
@@ -85,6 +108,8 @@ struct Open {
     min_gap: f64,
     min_ttc: f64,
     kind: &'static str,
+    /// What the second body is (`robot`, `obstacle`, `person`).
+    b_kind: &'static str,
     /// Each body's velocity at the start.
     start_v: [[f64; 2]; 2],
     /// Each body's largest loss of velocity along its starting course, as
@@ -173,9 +198,15 @@ pub struct Interaction {
     prev_time: Option<f64>,
     grid: NeighbourGrid,
     near: Vec<u32>,
-    /// Per robot, this tick's smallest gap and time to collision.
+    /// Per robot, this tick's smallest gap and time to collision, to the
+    /// robots and obstacles ...
     smallest: Vec<f64>,
     ttc: Vec<f64>,
+    /// ... and to the people.
+    person_smallest: Vec<f64>,
+    person_ttc: Vec<f64>,
+    /// The scene has people.
+    people: bool,
     /// Every body's shape by id, empty when every body is a disc.
     shapes: Vec<mrsim_shape::Shape>,
     /// This tick's placed shapes, by body id (with shapes only).
@@ -192,6 +223,8 @@ impl Interaction {
             robots: vec![
                 RobotInteraction {
                     ttc_min: f64::INFINITY,
+                    person_ttc_min: f64::INFINITY,
+                    person_min_gap: f64::INFINITY,
                     ..Default::default()
                 };
                 scenario.robots.len()
@@ -207,6 +240,9 @@ impl Interaction {
             near: Vec::new(),
             smallest: Vec::new(),
             ttc: Vec::new(),
+            person_smallest: Vec::new(),
+            person_ttc: Vec::new(),
+            people: !scenario.people.is_empty(),
             shapes: if scenario.has_shapes() {
                 scenario.body_shapes()
             } else {
@@ -221,6 +257,11 @@ impl Interaction {
     /// Every robot's metrics, in scenario order.
     pub fn robots(&self) -> &[RobotInteraction] {
         &self.robots
+    }
+
+    /// The scene has people: the `person_` metrics mean something.
+    pub fn has_people(&self) -> bool {
+        self.people
     }
 
     /// Takes in tick `tick` at simulated time `time`. The first tick only
@@ -282,10 +323,19 @@ impl Interaction {
             std::mem::take(&mut self.smallest),
             std::mem::take(&mut self.ttc),
         );
-        smallest.clear();
-        smallest.resize(n, f64::INFINITY);
-        ttc.clear();
-        ttc.resize(n, f64::INFINITY);
+        let (mut person_smallest, mut person_ttc) = (
+            std::mem::take(&mut self.person_smallest),
+            std::mem::take(&mut self.person_ttc),
+        );
+        for v in [
+            &mut smallest,
+            &mut ttc,
+            &mut person_smallest,
+            &mut person_ttc,
+        ] {
+            v.clear();
+            v.resize(n, f64::INFINITY);
+        }
         // With shapes, every body placed once this tick.
         let mut placed = std::mem::take(&mut self.placed);
         placed.clear();
@@ -312,6 +362,13 @@ impl Interaction {
             for &j in &near {
                 let j = j as usize;
                 let q = &states[j];
+                // A robot's gap to a person counts among the people's,
+                // not the others' (j > i: only j can be a person).
+                let (near_gap, near_ttc) = if q.kind == body_kind::PERSON {
+                    (&mut person_smallest, &mut person_ttc)
+                } else {
+                    (&mut smallest, &mut ttc)
+                };
                 let shapes = (self.shapes.get(i), self.shapes.get(j));
                 let shaped = match shapes {
                     (Some(a), Some(b)) if !(a.is_disc() && b.is_disc()) => Some((a, b)),
@@ -338,8 +395,8 @@ impl Interaction {
                         }
                         let lowers = |k: usize, x: f64, of: &[f64]| k < n && x < of[k];
                         let meets = g0 < self.encounter_gap;
-                        let nearer = lowers(i, g0, &smallest) || lowers(j, g0, &smallest);
-                        let sooner = lowers(i, t0, &ttc) || lowers(j, t0, &ttc);
+                        let nearer = lowers(i, g0, near_gap) || lowers(j, g0, near_gap);
+                        let sooner = lowers(i, t0, near_ttc) || lowers(j, t0, near_ttc);
                         if !(meets || nearer || sooner) {
                             continue;
                         }
@@ -360,8 +417,8 @@ impl Interaction {
                 };
                 for k in [i, j] {
                     if k < n {
-                        smallest[k] = smallest[k].min(g);
-                        ttc[k] = ttc[k].min(t);
+                        near_gap[k] = near_gap[k].min(g);
+                        near_ttc[k] = near_ttc[k].min(t);
                     }
                 }
                 if g < self.encounter_gap {
@@ -369,25 +426,45 @@ impl Interaction {
                 }
             }
         }
+        if self.people {
+            // No person within reach: the nearest one is farther, and only
+            // the smallest gap over the run wants it.
+            for (i, g) in person_smallest.iter_mut().enumerate() {
+                if g.is_infinite() && dt > 0.0 {
+                    *g = self.farthest_person(i, states, &placed);
+                }
+            }
+        }
         for i in 0..n {
             let (smallest, ttc) = (smallest[i], ttc[i]);
+            let (person_smallest, person_ttc) = (person_smallest[i], person_ttc[i]);
             let r = &mut self.robots[i];
+            if dt > 0.0 {
+                r.person_min_gap = r.person_min_gap.min(person_smallest);
+            }
             if r.arrived || dt <= 0.0 {
                 continue;
             }
             r.ttc_min = r.ttc_min.min(ttc);
-            for (limit, time) in [
-                (INTIMATE, &mut r.time_intimate),
-                (PERSONAL, &mut r.time_personal),
-                (SOCIAL, &mut r.time_social),
+            r.person_ttc_min = r.person_ttc_min.min(person_ttc);
+            for (limit, gap, time) in [
+                (INTIMATE, smallest, &mut r.time_intimate),
+                (PERSONAL, smallest, &mut r.time_personal),
+                (SOCIAL, smallest, &mut r.time_social),
+                (INTIMATE, person_smallest, &mut r.person_time_intimate),
+                (PERSONAL, person_smallest, &mut r.person_time_personal),
+                (SOCIAL, person_smallest, &mut r.person_time_social),
+                (DISCOMFORT, person_smallest, &mut r.discomfort_time),
             ] {
-                if smallest < limit {
+                if gap < limit {
                     *time += dt;
                 }
             }
         }
         self.smallest = smallest;
         self.ttc = ttc;
+        self.person_smallest = person_smallest;
+        self.person_ttc = person_ttc;
         self.placed = placed;
         self.near = near;
         // Encounters not seen this tick have ended.
@@ -401,6 +478,27 @@ impl Interaction {
         });
     }
 
+    /// Robot `i`'s smallest gap to a person when none is within the
+    /// neighbours' reach: every person's, by shape where the bodies have
+    /// shapes (`placed`), else between discs.
+    fn farthest_person(
+        &self,
+        i: usize,
+        states: &[BodyState],
+        placed: &[mrsim_shape::Placement],
+    ) -> f64 {
+        let s = &states[i];
+        states
+            .iter()
+            .enumerate()
+            .filter(|(_, q)| q.kind == body_kind::PERSON)
+            .map(|(j, q)| match (placed.get(i), placed.get(j)) {
+                (Some(a), Some(b)) => mrsim_shape::placed_gap(a, b),
+                _ => gap(s, q),
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
     /// Bodies `i` < `j` are within the encounter gap at `tick`.
     fn meet(&mut self, tick: u64, (i, j): (usize, usize), states: &[BodyState], g: f64, t: f64) {
         let (a, b) = (&states[i], &states[j]);
@@ -411,6 +509,7 @@ impl Interaction {
             min_gap: g,
             min_ttc: t,
             kind: kind(a.velocity, b.velocity),
+            b_kind: body_kind::name(b.kind),
             start_v: [a.velocity, b.velocity],
             yielded: [0.0; 2],
         });
@@ -456,6 +555,7 @@ impl Interaction {
                 min_ttc: o.min_ttc.is_finite().then_some(o.min_ttc),
                 kind: o.kind.to_string(),
                 gave_way: o.gave_way().to_string(),
+                b_kind: o.b_kind.to_string(),
             })
             .collect()
     }
@@ -471,7 +571,6 @@ fn wrap(a: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use mrsim_proto::body_kind;
 
     const DT: f64 = 0.1;
 

@@ -20,8 +20,12 @@ pub struct RobotAccumulator {
     pub hold: u32,
     /// Time the current hold started.
     pub hold_start: f64,
-    /// Contacts started with anything.
+    /// Contacts started with anything but a person.
     pub collisions: u64,
+    /// Contacts started with a person.
+    pub person_collisions: u64,
+    /// Smallest gap reported by its contacts with people.
+    pub min_person_contact_gap: f64,
     /// Smallest gap reported by its contacts (negative: overlap). The
     /// clearance proper comes from the states ([`crate::tracking`]); a
     /// robot's `min_clearance` is the smaller of the two.

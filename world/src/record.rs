@@ -535,11 +535,7 @@ impl Labels {
         let label = &mut self.by_id[id];
         if label.kind != b.kind {
             let name = names.get(id).map_or("?", String::as_str);
-            let kind = match b.kind {
-                body_kind::ROBOT => "robot",
-                body_kind::PERSON => "person",
-                _ => "obstacle",
-            };
+            let kind = body_kind::name(b.kind);
             *label = Label {
                 kind: b.kind,
                 csv: format!("{name},{kind}").into_bytes(),

@@ -26,8 +26,8 @@ pub struct RobotMotion {
     pub path_length: f64,
     /// Largest speed.
     pub max_speed: f64,
-    /// Smallest surface distance to any other body or wall (infinity if
-    /// there never was one).
+    /// Smallest surface distance to any other body but a person, or wall
+    /// (infinity if there never was one).
     pub min_clearance: f64,
     /// Designated-path metrics, for a robot with a `path`.
     pub path: Option<PathAccumulator>,
@@ -122,10 +122,19 @@ impl Tracker {
             return;
         };
         // Only a clearance below the smallest one recorded changes anything.
+        // People (the last bodies) are not in it: their gaps are the
+        // interaction's `person_` ones.
+        let people = states
+            .iter()
+            .rev()
+            .take_while(|s| s.kind == mrsim_proto::body_kind::PERSON)
+            .count();
+        let others = &states[..states.len() - people];
+        let shapes = &self.shapes[..self.shapes.len().min(others.len())];
         let robots = &self.robots;
         self.grid.clearances_below(
-            states,
-            &self.shapes,
+            others,
+            shapes,
             n,
             |i| robots[i].min_clearance,
             &mut self.clearance,

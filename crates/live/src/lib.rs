@@ -34,6 +34,9 @@ use std::time::{Duration, Instant};
 /// The page, self-contained (no file or network access of its own).
 const PAGE: &str = include_str!("live.html");
 
+/// The people's colour (the report's palette: sandy brown).
+const PERSON_COLOR: &str = "#f4a460";
+
 /// Colours of the robots, as in the plots and the replay page.
 const PALETTE: [&str; 16] = [
     "#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd", "#8c564b", "#e377c2", "#bcbd22", "#17becf",
@@ -501,6 +504,12 @@ fn page_setup(run_id: &Value, s: &Scenario) -> Value {
             for o in &s.obstacles {
                 grow(o.start, o.radius);
             }
+            for p in &s.people {
+                grow(p.start, p.radius);
+                for &w in &p.waypoints {
+                    grow(w, p.radius);
+                }
+            }
         }
     }
     for w in &s.walls {
@@ -528,6 +537,11 @@ fn page_setup(run_id: &Value, s: &Scenario) -> Value {
         "obstacles": s.obstacles.iter().map(|o| {
             with_shape(json!({ "name": o.name, "radius": o.radius }), o.body_shape())
         }).collect::<Vec<_>>(),
+        // People: discs, their ids after the obstacles', in the colour the
+        // plots and the replay page give them.
+        "people": s.people.iter().map(|p| json!({ "name": p.name, "radius": p.radius }))
+            .collect::<Vec<_>>(),
+        "personColor": PERSON_COLOR,
     })
 }
 

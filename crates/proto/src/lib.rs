@@ -53,6 +53,16 @@ pub mod body_kind {
     /// A person (pedestrian) moved by the world's crowd models (since
     /// protocol 13).
     pub const PERSON: u32 = 2;
+
+    /// A kind's name as the run folder writes it (trajectory.csv,
+    /// encounters.csv): `robot`, `person`, and `obstacle` for any other.
+    pub fn name(kind: u32) -> &'static str {
+        match kind {
+            ROBOT => "robot",
+            PERSON => "person",
+            _ => "obstacle",
+        }
+    }
 }
 
 /// Per-body flags in a snapshot.

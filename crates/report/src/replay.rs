@@ -108,7 +108,7 @@ pub fn replay_every(run: &RunData) -> usize {
             .trajectory
             .bodies
             .iter()
-            .filter(|b| b.kind == BodyKind::Obstacle)
+            .filter(|b| b.kind != BodyKind::Robot)
             .count();
     let positions = bodies.max(1) * run.trajectory.ticks.len();
     positions.div_ceil(MAX_REPLAY_POSITIONS).max(1)
@@ -245,6 +245,17 @@ fn replay_data(run: &RunData) -> Value {
             o
         })
         .collect();
+    // People: discs in their own colour, as the plot draws them.
+    let people: Vec<Value> = run
+        .trajectory
+        .bodies
+        .iter()
+        .filter(|b| b.kind == BodyKind::Person)
+        .map(|b| {
+            let (x, y) = track(&b.name);
+            json!({ "name": b.name, "radius": run.radius_of(&b.name), "x": x, "y": y })
+        })
+        .collect();
     let walls: Vec<Value> = run
         .scenario
         .all_walls()
@@ -335,7 +346,7 @@ fn replay_data(run: &RunData) -> Value {
                 "startTick": e.start_tick, "endTick": e.end_tick,
                 "minGap": round(e.min_gap, 3),
                 "minTtc": e.min_ttc.map(|t| round(t, 3)),
-                "kind": e.kind, "gaveWay": e.gave_way,
+                "kind": e.kind, "gaveWay": e.gave_way, "bKind": e.b_kind,
             })
         })
         .collect();
@@ -365,6 +376,8 @@ fn replay_data(run: &RunData) -> Value {
         "walls": walls,
         "robots": robots,
         "obstacles": obstacles,
+        "people": people,
+        "personColor": hex(crate::PERSON),
         "collisions": collisions,
         "misses": { "frame": miss_frames, "robot": miss_robots },
         "goals": goals,

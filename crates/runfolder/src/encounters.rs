@@ -20,17 +20,18 @@ pub fn rows(encounters: &[Encounter]) -> String {
         // Writing into a String cannot fail.
         let _ = writeln!(
             out,
-            "{},{},{},{},{:.6},{},{},{}",
-            e.a, e.b, e.start_tick, e.end_tick, e.min_gap, ttc, e.kind, e.gave_way
+            "{},{},{},{},{:.6},{},{},{},{}",
+            e.a, e.b, e.start_tick, e.end_tick, e.min_gap, ttc, e.kind, e.gave_way, e.b_kind
         );
     }
     out
 }
 
 /// Parses encounters.csv's text (whole rows: see [`read_encounters`] for a
-/// file that may be cut); the first bad line is the error.
+/// file that may be cut); the first bad line is the error. A file without
+/// the `b_kind` column (written before it) reads with `b_kind` empty.
 pub fn parse_encounters(text: &str) -> Result<Vec<Encounter>, CsvError> {
-    const COLUMNS: [&str; 8] = [
+    const COLUMNS: [&str; 9] = [
         "a",
         "b",
         "start_tick",
@@ -39,9 +40,17 @@ pub fn parse_encounters(text: &str) -> Result<Vec<Encounter>, CsvError> {
         "min_ttc",
         "kind",
         "gave_way",
+        "b_kind",
     ];
     let mut lines = numbered_lines(text);
-    let csv = Columns::new(lines.next().map(|(_, l)| l), &COLUMNS)?;
+    let header = lines.next().map(|(_, l)| l);
+    let with_kind = header.is_some_and(|h| h.split(',').any(|c| c.trim() == "b_kind"));
+    let wanted = if with_kind {
+        &COLUMNS[..]
+    } else {
+        &COLUMNS[..8]
+    };
+    let csv = Columns::new(header, wanted)?;
     lines
         .map(|(n, line)| {
             let f = csv.fields(n, line)?;
@@ -63,6 +72,7 @@ pub fn parse_encounters(text: &str) -> Result<Vec<Encounter>, CsvError> {
                 },
                 kind: f[6].to_string(),
                 gave_way: f[7].to_string(),
+                b_kind: f.get(8).map(|k| k.to_string()).unwrap_or_default(),
             })
         })
         .collect()
@@ -101,6 +111,7 @@ mod tests {
             min_ttc: None,
             kind: "head-on".into(),
             gave_way: "both".into(),
+            b_kind: "robot".into(),
         }
     }
 
@@ -113,6 +124,20 @@ mod tests {
     }
 
     #[test]
+    fn a_file_without_the_b_kind_column_reads_with_it_empty() {
+        let text = "a,b,start_tick,end_tick,min_gap,min_ttc,kind,gave_way\n\
+                    r0,r1,3,9,-0.250000,,head-on,both\n";
+        let got = parse_encounters(text).expect("rows");
+        assert_eq!(
+            got,
+            vec![Encounter {
+                b_kind: String::new(),
+                ..one()
+            }]
+        );
+    }
+
+    #[test]
     fn a_bad_middle_row_is_an_error_at_its_line_and_a_torn_last_row_a_cut() {
         let dir = std::env::temp_dir().join(format!("mrsim-enc-{}", std::process::id()));
         std::fs::create_dir_all(&dir).expect("dir");
@@ -120,7 +145,7 @@ mod tests {
         let path = dir.join(crate::ENCOUNTERS_FILE);
         std::fs::write(
             &path,
-            format!("{ENCOUNTERS_HEADER}\n{good}r0,r1,x,9,0,,head-on,a\n{good}"),
+            format!("{ENCOUNTERS_HEADER}\n{good}r0,r1,x,9,0,,head-on,a,robot\n{good}"),
         )
         .expect("write");
         let e = read_encounters(&dir).expect_err("bad row").to_string();

@@ -138,6 +138,31 @@ pub struct RobotMetrics {
     /// present for a collision.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub collided_with: Option<String>,
+    /// Contacts started with a person (not in `collisions`). This key and
+    /// the other `person_` ones and `discomfort_time` are present only in
+    /// a scene with people; the keys above them leave people out.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub person_collisions: Option<u64>,
+    /// Smallest surface distance to any person (negative: overlap).
+    #[serde(skip_serializing_if = "Option::is_none", with = "present")]
+    pub person_min_clearance: Option<Option<f64>>,
+    /// `ttc_min` over the people: smallest time to collision with a person
+    /// within the social distance, s; null if never finite.
+    #[serde(skip_serializing_if = "Option::is_none", with = "present")]
+    pub person_ttc_min: Option<Option<f64>>,
+    /// Seconds with the smallest surface gap to a person below 0.45 m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub person_time_intimate: Option<f64>,
+    /// ... below 1.2 m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub person_time_personal: Option<f64>,
+    /// ... below 3.6 m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub person_time_social: Option<f64>,
+    /// Seconds with the smallest surface gap to a person below CrowdNav's
+    /// discomfort distance, 0.2 m (overlaps included).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub discomfort_time: Option<f64>,
 }
 
 /// How a robot's episode ended (`[world] end_on`), as the crowd-navigation
@@ -240,7 +265,7 @@ pub struct Deadlock {
 }
 
 /// encounters.csv's header.
-pub const ENCOUNTERS_HEADER: &str = "a,b,start_tick,end_tick,min_gap,min_ttc,kind,gave_way";
+pub const ENCOUNTERS_HEADER: &str = "a,b,start_tick,end_tick,min_gap,min_ttc,kind,gave_way,b_kind";
 
 /// One row of encounters.csv: two bodies within `[output] encounter_gap`
 /// of each other from `start_tick` to `end_tick`.
@@ -262,6 +287,10 @@ pub struct Encounter {
     pub kind: String,
     /// `a`, `b`, `both` or `none`.
     pub gave_way: String,
+    /// What `b` is: `robot`, `obstacle` or `person` (empty in a file
+    /// written before the column).
+    #[serde(default)]
+    pub b_kind: String,
 }
 
 /// `metrics.json`.
@@ -338,6 +367,17 @@ pub struct RunMetrics {
     /// The run counted as an episode (`[world] end_on`; absent without it).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub episode: Option<Episode>,
+    /// Contacts started between a robot and a person, all robots (not in
+    /// `collisions_total`); present only in a scene with people, as are
+    /// the next two.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub person_collisions_total: Option<u64>,
+    /// Smallest of the robots' `person_min_clearance`.
+    #[serde(skip_serializing_if = "Option::is_none", with = "present")]
+    pub person_min_clearance: Option<Option<f64>>,
+    /// Sum of the robots' `discomfort_time`, s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub discomfort_time: Option<f64>,
 }
 
 /// `metrics.json`'s `timing`: the run as a real-time system.

@@ -16,24 +16,22 @@ pub(crate) fn text(s: &str) -> String {
 }
 
 /// One row per robot (planner, reached goal, time to goal, path length,
-/// collisions, min clearance, latency p99, deadline misses), then the run's
-/// totals.
+/// collisions, min clearance, in a scene with people its contacts with
+/// them, its clearance to them and its discomfort time, latency p99,
+/// deadline misses), then the run's totals.
 pub fn summary(m: &RunMetrics) -> String {
     let mut out = String::new();
-    let header = [
-        "robot",
-        "planner",
-        "goal",
-        "t_goal s",
-        "path",
-        "coll",
-        "min clr",
-        "lat p99 us",
-        "misses",
+    let people = m.person_collisions_total.is_some();
+    let mut header = vec![
+        "robot", "planner", "goal", "t_goal s", "path", "coll", "min clr",
     ];
-    let mut rows: Vec<[String; 9]> = Vec::new();
+    if people {
+        header.extend(["p coll", "p clr", "discomf s"]);
+    }
+    header.extend(["lat p99 us", "misses"]);
+    let mut rows: Vec<Vec<String>> = Vec::new();
     for (name, r) in &m.robots {
-        rows.push([
+        let mut row = vec![
             name.clone(),
             text(&r.planner),
             if r.reached_goal { "yes" } else { "NO" }.to_string(),
@@ -41,11 +39,21 @@ pub fn summary(m: &RunMetrics) -> String {
             num(Some(r.path_length), 2),
             r.collisions.to_string(),
             num(r.min_clearance, 3),
+        ];
+        if people {
+            row.extend([
+                r.person_collisions.map_or("-".into(), |c| c.to_string()),
+                num(r.person_min_clearance.flatten(), 3),
+                num(r.discomfort_time, 2),
+            ]);
+        }
+        row.extend([
             num(Some(r.latency_us.p99), 0),
             r.deadline_misses.to_string(),
         ]);
+        rows.push(row);
     }
-    let mut width = header.map(str::len);
+    let mut width: Vec<usize> = header.iter().map(|h| h.len()).collect();
     for r in &rows {
         for (w, c) in width.iter_mut().zip(r) {
             *w = (*w).max(c.len());
@@ -53,7 +61,7 @@ pub fn summary(m: &RunMetrics) -> String {
     }
     let line = |cells: &[String]| {
         let mut s = String::new();
-        for (i, (c, w)) in cells.iter().zip(width).enumerate() {
+        for (i, (c, &w)) in cells.iter().zip(&width).enumerate() {
             if i < 3 {
                 let _ = write!(s, "{c:<w$}  ");
             } else {
@@ -62,7 +70,8 @@ pub fn summary(m: &RunMetrics) -> String {
         }
         s.trim_end().to_string()
     };
-    let _ = writeln!(out, "{}", line(&header.map(String::from)));
+    let header: Vec<String> = header.into_iter().map(String::from).collect();
+    let _ = writeln!(out, "{}", line(&header));
     for r in &rows {
         let _ = writeln!(out, "{}", line(r));
     }
@@ -79,6 +88,14 @@ pub fn summary(m: &RunMetrics) -> String {
         m.agents_lost,
         m.commands_rejected,
     );
+    if let Some(contacts) = m.person_collisions_total {
+        let _ = writeln!(
+            out,
+            "people: contacts {contacts} (not in the collisions above), min clearance {} m, discomfort {} s (robot-seconds within 0.2 m of a person)",
+            num(m.person_min_clearance.flatten(), 3),
+            num(m.discomfort_time, 2),
+        );
+    }
     for line in what_happened(m) {
         let _ = writeln!(out, "{line}");
     }
@@ -224,6 +241,36 @@ mod tests {
             t.contains("homing") && t.contains("NO") && t.contains("success 50%"),
             "{t}"
         );
+    }
+
+    #[test]
+    fn a_scene_with_people_shows_their_contacts_clearance_and_discomfort_apart() {
+        let m = serde_json::json!({
+            "robots": {"r0": {"planner": "orca", "reached_goal": true, "collisions": 0,
+                              "min_clearance": 2.5, "person_collisions": 1,
+                              "person_min_clearance": -0.05, "discomfort_time": 0.7}},
+            "collisions_total": 0, "person_collisions_total": 1,
+            "person_min_clearance": -0.05, "discomfort_time": 0.7});
+        let m: RunMetrics = serde_json::from_value(m).expect("metrics.json's schema");
+        let t = summary(&m);
+        let mut lines = t.lines();
+        let head = lines.next().expect("a header");
+        assert!(
+            head.contains("p coll") && head.contains("p clr") && head.contains("discomf s"),
+            "{t}"
+        );
+        let row: Vec<&str> = lines.next().expect("a row").split_whitespace().collect();
+        assert_eq!(row[5..10], ["0", "2.500", "1", "-0.050", "0.70"], "{t}");
+        assert!(
+            t.contains("people: contacts 1 (not in the collisions above), min clearance -0.050 m, discomfort 0.70 s"),
+            "{t}"
+        );
+        // Without people: neither the columns nor the line.
+        let none: RunMetrics = serde_json::from_value(serde_json::json!({
+            "robots": {"r0": {"planner": "orca", "reached_goal": true}}}))
+        .expect("metrics.json's schema");
+        let t = summary(&none);
+        assert!(!t.contains("p coll") && !t.contains("people:"), "{t}");
     }
 
     #[test]

@@ -32,8 +32,10 @@ pub struct Stamp {
 /// Run-wide counts of metrics.json.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Counts {
-    /// Contacts started that involve a robot.
+    /// Contacts started that involve a robot and no person.
     pub collisions_total: u64,
+    /// Contacts started between a robot and a person.
+    pub person_collisions_total: u64,
     /// Agents lost.
     pub agents_lost: u64,
     /// Commands rejected.
@@ -97,6 +99,7 @@ impl Recording {
             acc: vec![
                 RobotAccumulator {
                     min_contact_gap: f64::INFINITY,
+                    min_person_contact_gap: f64::INFINITY,
                     progress_distance: f64::INFINITY,
                     ..Default::default()
                 };
@@ -239,18 +242,30 @@ impl Recording {
         });
     }
 
-    /// Counts and writes the contacts of a step that involve a robot.
+    /// Counts and writes the contacts of a step that involve a robot: a
+    /// robot's with a person apart from the others.
     pub fn contacts(&mut self, at: Stamp, contacts: &[Contact]) {
         let n = self.acc.len();
         for c in contacts {
             if !matches!(c.a, Owner::Robot(_)) && !matches!(c.b, Owner::Robot(_)) {
                 continue;
             }
-            self.counts.collisions_total += 1;
+            let person = matches!(c.a, Owner::Person(_)) || matches!(c.b, Owner::Person(_));
+            if person {
+                self.counts.person_collisions_total += 1;
+            } else {
+                self.counts.collisions_total += 1;
+            }
             for o in [c.a, c.b] {
                 if let Owner::Robot(i) = o {
-                    self.acc[i].collisions += 1;
-                    self.acc[i].min_contact_gap = self.acc[i].min_contact_gap.min(c.gap);
+                    let a = &mut self.acc[i];
+                    if person {
+                        a.person_collisions += 1;
+                        a.min_person_contact_gap = a.min_person_contact_gap.min(c.gap);
+                    } else {
+                        a.collisions += 1;
+                        a.min_contact_gap = a.min_contact_gap.min(c.gap);
+                    }
                 }
             }
             let name = |o: Owner| match o {
@@ -448,10 +463,12 @@ impl Recording {
             row.reached_goal = u32::from(acc.reached_goal);
             row.agent_pid = acc.agent_pid.unwrap_or(0);
             row.deadline_misses = acc.deadline_misses;
-            row.collisions = acc.collisions;
+            // The live view counts every contact, with people too.
+            row.collisions = acc.collisions + acc.person_collisions;
             row.commands_rejected = acc.rejected;
         }
-        header.collisions_total = self.counts.collisions_total;
+        header.collisions_total =
+            self.counts.collisions_total + self.counts.person_collisions_total;
         header.agents_lost = self.counts.agents_lost;
         let _ = self.live.publish(link, &header, now);
     }
@@ -507,6 +524,8 @@ impl Summary<'_> {
                     .map(|[response, cpu]| (response.percentiles(), cpu.percentiles()));
                 let [latency, wake, compute] = t.histograms();
                 let min_clearance = m.min_clearance.min(a.min_contact_gap);
+                let people = tracker.interaction().has_people();
+                let person_min = x.person_min_gap.min(a.min_person_contact_gap);
                 let spl = m.spl(a.reached_goal);
                 let stuck_time = a.stuck_time + a.stuck_since.map_or(0.0, |s| self.sim_time - s);
                 (
@@ -545,10 +564,29 @@ impl Summary<'_> {
                         outcome: None,
                         outcome_time: None,
                         collided_with: None,
+                        person_collisions: people.then_some(a.person_collisions),
+                        person_min_clearance: people
+                            .then_some(person_min.is_finite().then_some(person_min)),
+                        person_ttc_min: people
+                            .then_some(x.person_ttc_min.is_finite().then_some(x.person_ttc_min)),
+                        person_time_intimate: people.then_some(x.person_time_intimate),
+                        person_time_personal: people.then_some(x.person_time_personal),
+                        person_time_social: people.then_some(x.person_time_social),
+                        discomfort_time: people.then_some(x.discomfort_time),
                     },
                 )
             })
             .collect::<std::collections::BTreeMap<String, RobotMetrics>>();
+        let people = tracker.interaction().has_people();
+        let person_min_clearance = people.then(|| {
+            let m = robots
+                .values()
+                .filter_map(|r| r.person_min_clearance.flatten())
+                .fold(f64::INFINITY, f64::min);
+            m.is_finite().then_some(m)
+        });
+        let discomfort_time =
+            people.then(|| robots.values().filter_map(|r| r.discomfort_time).sum());
         let reached = acc.iter().filter(|a| a.reached_goal).count();
         let times: Option<Vec<f64>> = acc.iter().map(|a| a.time_to_goal).collect();
         let times = times.filter(|t| !t.is_empty());
@@ -592,6 +630,9 @@ impl Summary<'_> {
             ),
             deadlocks: self.deadlocks,
             ended_stuck: self.ended_stuck,
+            person_collisions_total: people.then_some(counts.person_collisions_total),
+            person_min_clearance,
+            discomfort_time,
             ..RunMetrics::default()
         }
     }

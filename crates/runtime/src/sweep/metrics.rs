@@ -8,8 +8,10 @@ use std::path::Path;
 pub struct SweepRow {
     /// Fraction of robots that reached their goals.
     pub success_rate: f64,
-    /// Contacts started, all robots.
+    /// Contacts started, all robots (with people not among them).
     pub collisions_total: f64,
+    /// Contacts started between a robot and a person.
+    pub person_collisions_total: f64,
     /// Max time_to_goal if every robot arrived, else the run's duration.
     pub makespan: f64,
     /// Mean over robots of path_length / straight start-goal distance.
@@ -68,9 +70,12 @@ pub type Column = (&'static str, fn(&SweepRow) -> Option<f64>);
 pub const METRICS: [Column; 24] = [
     ("success_rate", |m| Some(m.success_rate)),
     ("collisions_total", |m| Some(m.collisions_total)),
-    // 1 if the run had any collision: its mean is the collision rate.
+    // 1 if the run had any collision, with a person too: its mean is the
+    // collision rate.
     ("collided", |m| {
-        Some(f64::from(u8::from(m.collisions_total > 0.0)))
+        Some(f64::from(u8::from(
+            m.collisions_total + m.person_collisions_total > 0.0,
+        )))
     }),
     ("makespan", |m| Some(m.makespan)),
     ("path_length_ratio", |m| m.path_ratio),
@@ -163,6 +168,7 @@ pub fn read_run(dir: &Path) -> Result<SweepRow, String> {
         robot_means,
         success_rate: m.success_rate,
         collisions_total: m.collisions_total as f64,
+        person_collisions_total: m.person_collisions_total.unwrap_or(0) as f64,
         makespan,
         path_ratio: mean(&ratios),
         min_clearance: clearance,
