@@ -320,3 +320,22 @@ def test_a_python_planner_drives_a_car_by_its_speed_and_steering(tmp_path):
     rows = (result.dir / "trajectory.csv").read_text().splitlines()
     assert rows[0].endswith(",theta")
     assert max(float(r.split(",")[-1]) for r in rows[1:]) > np.pi / 2
+
+
+def test_a_python_planner_sees_people_as_bodies_of_kind_person(repo, tmp_path):
+    kinds = set()
+
+    class Recording(Toward):
+        def plan(self, obs):
+            kinds.update(mrsim.KINDS[k] for k in obs.others_kind)
+            return super().plan(obs)
+
+    result = mrsim.run(
+        repo / "scenarios" / "people" / "crossing.toml",
+        planners={"toward": Recording},
+        set=["robot.r0.planner=toward", "world.duration=5"],
+        out=tmp_path / "run",
+    )
+    assert (result.dir / "trajectory.csv").is_file()
+    # r0 senses the other robots and the people walking the hall.
+    assert kinds == {"robot", "person"}
