@@ -4,6 +4,7 @@
 
 mod ackermann;
 mod dynamics;
+mod behaviours;
 mod obstacles;
 mod people;
 mod shapes;
