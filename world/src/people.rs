@@ -293,7 +293,11 @@ impl Crowd {
     /// Person `k`'s plan for this tick under its behaviour, with what it
     /// faces if not where it walks; or `Err(point)`: it stands facing
     /// `point`. Counts the behaviour's time.
-    fn plan(&mut self, k: usize, bodies: &[BodyState]) -> Result<(Plan, Option<[f64; 2]>), [f64; 2]> {
+    fn plan(
+        &mut self,
+        k: usize,
+        bodies: &[BodyState],
+    ) -> Result<(Plan, Option<[f64; 2]>), [f64; 2]> {
         let s = &self.specs[k];
         let regular = Plan {
             goal: v(self.goal(k)),

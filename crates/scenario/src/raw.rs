@@ -350,7 +350,10 @@ impl<'de> Deserialize<'de> for RawBehavior {
             fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<RawBehavior, E> {
                 Ok(RawBehavior::Name(v.to_string()))
             }
-            fn visit_map<A: serde::de::MapAccess<'de>>(self, m: A) -> Result<RawBehavior, A::Error> {
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                m: A,
+            ) -> Result<RawBehavior, A::Error> {
                 RawBehaviorTable::deserialize(serde::de::value::MapAccessDeserializer::new(m))
                     .map(RawBehavior::Table)
             }

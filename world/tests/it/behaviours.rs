@@ -77,8 +77,14 @@ fn a_scared_person_keeps_farther_from_a_robot_than_a_regular_one() {
     for motion in [SF, ORCA] {
         let regular = closest(&pass_by(motion));
         let scared = closest(&pass_by(&format!("behavior = \"scared\"\n{motion}")));
-        println!("{}: regular {regular:.3} m, scared {scared:.3} m", motion.trim());
-        assert!(scared > regular + 0.5, "{motion}: regular {regular}, scared {scared}");
+        println!(
+            "{}: regular {regular:.3} m, scared {scared:.3} m",
+            motion.trim()
+        );
+        assert!(
+            scared > regular + 0.5,
+            "{motion}: regular {regular}, scared {scared}"
+        );
     }
 }
 
@@ -98,7 +104,11 @@ fn a_threatening_person_gets_in_front_of_a_moving_robot() {
         let threatening = drive(&format!("behavior = \"threatening\"\n{motion}"));
         let blocking = threatening.iter().filter(|t| in_the_way(t)).count();
         println!("{}: blocking {blocking} ticks", motion.trim());
-        assert_eq!(regular.iter().filter(|t| in_the_way(t)).count(), 0, "{motion}");
+        assert_eq!(
+            regular.iter().filter(|t| in_the_way(t)).count(),
+            0,
+            "{motion}"
+        );
         // At least 3 s of the 12 s in the robot's way.
         assert!(blocking >= 30, "{motion}: {blocking} ticks in the way");
     }
@@ -124,7 +134,10 @@ fn a_curious_person_walks_up_to_a_robot_stops_at_its_distance_then_walks_on() {
         // It stood 1.5 m from the robot (HuNavSim's stop distance, less
         // at most the last tick's step) looking at it.
         let standing: Vec<&Tick> = curious.iter().filter(|t| t.vel == [0.0, 0.0]).collect();
-        let first = curious.iter().position(|t| t.vel == [0.0, 0.0]).unwrap_or(0);
+        let first = curious
+            .iter()
+            .position(|t| t.vel == [0.0, 0.0])
+            .unwrap_or(0);
         println!(
             "{}: regular {near_r:.3} m; curious stood {} ticks from {:.1} s, {:.3} m from the robot",
             motion.trim(),
@@ -161,16 +174,26 @@ fn a_surprised_person_stops_and_faces_the_robot_while_it_is_near() {
         let stopped: Vec<&Tick> = track.iter().filter(|t| t.vel == [0.0, 0.0]).collect();
         println!("{}: stopped {} ticks", motion.trim(), stopped.len());
         // 30 s of 0.1 s ticks, give or take the tick it starts on.
-        assert!((299..=301).contains(&stopped.len()), "{motion}: {}", stopped.len());
+        assert!(
+            (299..=301).contains(&stopped.len()),
+            "{motion}: {}",
+            stopped.len()
+        );
         for t in &stopped {
             let d = dist(t.at, t.robot);
-            assert!(d <= 4.0 && d > 3.8, "{motion}: stopped {d} m from the robot");
+            assert!(
+                d <= 4.0 && d > 3.8,
+                "{motion}: stopped {d} m from the robot"
+            );
             let to_robot = (t.robot[1] - t.at[1]).atan2(t.robot[0] - t.at[0]);
             assert!((t.heading - to_robot).abs() < 1e-9, "{t:?}");
         }
         // A regular person does not stop.
         let regular = walk([0.0, 0.0], [0.0, 0.0], [-8.0, 0.5], [8.0, 0.5], motion, 100);
-        assert!(regular.iter().skip(1).all(|t| t.vel != [0.0, 0.0]), "{motion}");
+        assert!(
+            regular.iter().skip(1).all(|t| t.vel != [0.0, 0.0]),
+            "{motion}"
+        );
     }
 }
 
@@ -202,7 +225,11 @@ fn an_impassive_person_does_not_make_way_where_a_regular_one_does() {
         assert!(di < dr / 2.0, "{motion}: regular {dr}, impassive {di}");
         // It does not walk into the robot either (contact at 0.6 m, less
         // one tick's step into it).
-        assert!(closest(&impassive) > 0.5, "{motion}: {}", closest(&impassive));
+        assert!(
+            closest(&impassive) > 0.5,
+            "{motion}: {}",
+            closest(&impassive)
+        );
     }
 }
 

@@ -3,8 +3,8 @@
 //! dynamics::` runs one).
 
 mod ackermann;
-mod dynamics;
 mod behaviours;
+mod dynamics;
 mod obstacles;
 mod people;
 mod shapes;

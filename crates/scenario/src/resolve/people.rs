@@ -281,7 +281,8 @@ fn behavior(v: &S<RawBehavior>, preferred_speed: f64, what: &str) -> Result<Beha
             ));
         }
     }
-    let f = |v: &Option<S<f64>>, key: &str, rule: Rule, default: f64| opt(v, key, rule, what, default);
+    let f =
+        |v: &Option<S<f64>>, key: &str, rule: Rule, default: f64| opt(v, key, rule, what, default);
     // HuNavSim's detection distances: the trees' `IsRobotVisible` (curious
     // 10, threatening 4) or `behavior.dist` (surprised 4, scared 3).
     let reaction = |detect: f64, duration: f64| -> Result<Reaction, Fail> {
@@ -298,7 +299,12 @@ fn behavior(v: &S<RawBehavior>, preferred_speed: f64, what: &str) -> Result<Beha
         "scared" => Behavior::Scared {
             reaction: reaction(3.0, 40.0)?,
             vel: f(&t.vel, "vel", Rule::Pos, 0.6)?,
-            other_force_factor: f(&t.other_force_factor, "other_force_factor", Rule::NonNeg, 20.0)?,
+            other_force_factor: f(
+                &t.other_force_factor,
+                "other_force_factor",
+                Rule::NonNeg,
+                20.0,
+            )?,
         },
         "curious" => Behavior::Curious {
             reaction: reaction(10.0, 40.0)?,

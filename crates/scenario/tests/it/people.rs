@@ -292,7 +292,9 @@ fn a_behaviour_by_name_takes_hunavsims_defaults_and_a_table_its_own_values() {
         }
     );
     assert_eq!(
-        named("{ kind = \"scared\", detect_dist = 5.0, duration = 10.0, once = false, vel = 0.4, other_force_factor = 12.0 }"),
+        named(
+            "{ kind = \"scared\", detect_dist = 5.0, duration = 10.0, once = false, vel = 0.4, other_force_factor = 12.0 }"
+        ),
         Behavior::Scared {
             reaction: Reaction {
                 detect_dist: 5.0,
@@ -316,8 +318,16 @@ fn a_behaviour_by_name_takes_hunavsims_defaults_and_a_table_its_own_values() {
 #[test]
 fn bad_behaviour_keys_are_refused_at_their_line() {
     let cases = [
-        ("behavior = { vel = 1.0 }", "behavior = {", "behavior needs a `kind`"),
-        ("behavior = { kind = \"bored\" }", "\"bored\"", "unknown behavior `bored`"),
+        (
+            "behavior = { vel = 1.0 }",
+            "behavior = {",
+            "behavior needs a `kind`",
+        ),
+        (
+            "behavior = { kind = \"bored\" }",
+            "\"bored\"",
+            "unknown behavior `bored`",
+        ),
         (
             "behavior = { kind = \"surprised\", vel = 1.0 }",
             "vel = 1.0",
@@ -343,7 +353,11 @@ fn bad_behaviour_keys_are_refused_at_their_line() {
             "fear",
             "unknown field `fear`",
         ),
-        ("behavior = 3", "behavior = 3", "a behaviour name or a table"),
+        (
+            "behavior = 3",
+            "behavior = 3",
+            "a behaviour name or a table",
+        ),
     ];
     for (line, needle, words) in cases {
         let src = with(
