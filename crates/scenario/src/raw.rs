@@ -336,7 +336,7 @@ pub(crate) enum RawBehavior {
     /// `behavior = "scared"`.
     Name(String),
     /// `behavior = { kind = "scared", ... }`.
-    Table(RawBehaviorTable),
+    Table(Box<RawBehaviorTable>),
 }
 
 impl<'de> Deserialize<'de> for RawBehavior {
@@ -355,7 +355,7 @@ impl<'de> Deserialize<'de> for RawBehavior {
                 m: A,
             ) -> Result<RawBehavior, A::Error> {
                 RawBehaviorTable::deserialize(serde::de::value::MapAccessDeserializer::new(m))
-                    .map(RawBehavior::Table)
+                    .map(|t| RawBehavior::Table(Box::new(t)))
             }
         }
         d.deserialize_any(V)

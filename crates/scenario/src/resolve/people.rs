@@ -237,7 +237,7 @@ fn behavior(v: &S<RawBehavior>, preferred_speed: f64, what: &str) -> Result<Beha
     let (kind, kind_span, t) = match v.get_ref() {
         RawBehavior::Name(n) => (n.as_str(), v.span(), &empty),
         RawBehavior::Table(t) => match &t.kind {
-            Some(k) => (k.get_ref().as_str(), k.span(), t),
+            Some(k) => (k.get_ref().as_str(), k.span(), &**t),
             None => {
                 return Err(Fail::new(
                     Some(v.span()),
