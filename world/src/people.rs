@@ -30,6 +30,17 @@
 //!   were none (CrowdNav's invisible robot). The walls are RVO2's
 //!   obstacles. The new velocity is the person's velocity over the tick.
 //!
+//! - **Behaviours** (HuNavSim's, the guide's people chapter): a person
+//!   that sees robots reacts to the nearest one within its behaviour's
+//!   `detect_dist` and its field of view, for `duration` seconds of such
+//!   ticks: surprised, it stands facing the robot; scared, it slows and a
+//!   force (under orca, its preferred velocity) pushes it away, the robot
+//!   fully avoided; curious, it walks up to the robot and stands facing it
+//!   within `stop_dist`; threatening, it walks to the point `front_dist`
+//!   ahead of the robot. Impassive, it always takes robots for obstacles:
+//!   under the social force a robot's disc repels as a wall does, under
+//!   orca it is a still obstacle avoided within the tick only.
+//!
 //! People are kinematic: nothing pushes them; a contact of a robot with a
 //! person is the robot's (the world counts it), contacts among people are
 //! nobody's.
