@@ -30,6 +30,17 @@
 //!   were none (CrowdNav's invisible robot). The walls are RVO2's
 //!   obstacles. The new velocity is the person's velocity over the tick.
 //!
+//! - **Behaviours** (HuNavSim's, the guide's people chapter): a person
+//!   that sees robots reacts to the nearest one within its behaviour's
+//!   `detect_dist` and its field of view, for `duration` seconds of such
+//!   ticks: surprised, it stands facing the robot; scared, it slows and a
+//!   force (under orca, its preferred velocity) pushes it away, the robot
+//!   fully avoided; curious, it walks up to the robot and stands facing it
+//!   within `stop_dist`; threatening, it walks to the point `front_dist`
+//!   ahead of the robot. Impassive, it always takes robots for obstacles:
+//!   under the social force a robot's disc repels as a wall does, under
+//!   orca it is a still obstacle avoided within the tick only.
+//!
 //! People are kinematic: nothing pushes them; a contact of a robot with a
 //! person is the robot's (the world counts it), contacts among people are
 //! nobody's.
@@ -37,7 +48,7 @@
 use mrsim_planners::Vec2;
 use mrsim_planners::orca::{Neighbor, Walker, WalkerParams};
 use mrsim_proto::{BodyState, body_kind};
-use mrsim_scenario::{PersonMotion, PersonSpec, Scenario, SocialForceParams};
+use mrsim_scenario::{Behavior, PersonMotion, PersonSpec, Scenario, SocialForceParams};
 use mrsim_spatial::NeighbourGrid;
 
 /// The moving state of one person.
@@ -47,9 +58,48 @@ pub struct Person {
     pub position: [f64; 2],
     /// Velocity over the current tick.
     pub velocity: [f64; 2],
+    /// Facing, rad: along its velocity while it walks, else where it
+    /// last walked or what it turned to.
+    pub heading: f64,
     /// The index of the point walked to.
     next: usize,
+    /// Seconds its behaviour has acted (HuNavSim's timer).
+    reacted: f64,
 }
+
+/// How a person treats robots this tick.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Robots {
+    /// As people (regular).
+    People,
+    /// As obstacles (impassive).
+    Obstacles,
+    /// Not at all (not seen, or replaced by the behaviour's own rule).
+    Unseen,
+    /// Robot `j` fully avoided and repelling with weight `factor`
+    /// (scared).
+    Scary(usize, f64),
+}
+
+/// What person `k` walks to this tick, how fast, and how it treats robots.
+#[derive(Debug, Clone, Copy)]
+struct Plan {
+    goal: Vec2,
+    /// Within this of `goal`, arrived (the social force brakes).
+    arrive: Option<f64>,
+    speed: f64,
+    robots: Robots,
+}
+
+/// HuNavSim's field of view: a robot is seen within this angle of the
+/// heading (`lineOfSight`: pi / 2 + 0.17 rad).
+const FIELD_OF_VIEW: f64 = std::f64::consts::FRAC_PI_2 + 0.17;
+/// HuNavSim's view distance, m (`max_dist_view_`): a curious person walks
+/// at `vel` times the robot's distance over it.
+const VIEW_DIST: f64 = 10.0;
+/// HuNavSim's `forceSigmaObstacle` (lightsfm's 0.2 m), the scared force's
+/// range under ORCA (the social force takes `sigma_obstacle`).
+const SCARY_SIGMA: f64 = 0.2;
 
 /// Every person of a scenario and what moving them needs.
 #[derive(Debug, Clone)]
@@ -121,7 +171,9 @@ impl Crowd {
                 .map(|p| Person {
                     position: p.start,
                     velocity: [0.0, 0.0],
+                    heading: (p.waypoints[0][1] - p.start[1]).atan2(p.waypoints[0][0] - p.start[0]),
                     next: 0,
+                    reacted: 0.0,
                 })
                 .collect(),
             specs: scenario.people.clone(),
@@ -191,9 +243,10 @@ impl Crowd {
         );
         let mut velocities = std::mem::take(&mut self.velocities);
         velocities.clear();
+        let mut facing = Vec::with_capacity(self.people.len());
         for k in 0..self.people.len() {
-            let s = &self.specs[k];
-            let reach = match s.motion {
+            let motion = self.specs[k].motion;
+            let reach = match motion {
                 PersonMotion::Orca { neighbor_dist, .. } => neighbor_dist,
                 PersonMotion::SocialForce(f) => f.neighbor_dist,
             };
@@ -202,33 +255,162 @@ impl Crowd {
                 self.near.clear();
                 self.near.extend(0..bodies.len() as u32);
             }
-            let nv = match s.motion {
-                PersonMotion::Orca { .. } => self.orca(k, bodies),
-                PersonMotion::SocialForce(f) => self.social_force(k, bodies, &f),
+            let (plan, face) = match self.plan(k, bodies) {
+                Ok(plan) => plan,
+                Err(face) => {
+                    // Standing to look (surprised; curious, near).
+                    velocities.push([0.0, 0.0]);
+                    facing.push(Some(face));
+                    continue;
+                }
+            };
+            let nv = match motion {
+                PersonMotion::Orca { .. } => self.orca(k, bodies, &plan),
+                PersonMotion::SocialForce(f) => self.social_force(k, bodies, &f, &plan),
             };
             velocities.push([nv.x, nv.y]);
+            facing.push(face);
         }
-        for (p, nv) in self.people.iter_mut().zip(&velocities) {
+        for ((p, nv), face) in self.people.iter_mut().zip(&velocities).zip(facing) {
             p.velocity = *nv;
+            if let Some(target) = face {
+                p.heading = (target[1] - p.position[1]).atan2(target[0] - p.position[0]);
+            } else if nv[0] != 0.0 || nv[1] != 0.0 {
+                p.heading = nv[1].atan2(nv[0]);
+            }
         }
         self.velocities = velocities;
     }
 
+    /// The nearest robot person `k` perceives for its behaviour (within
+    /// `detect_dist` and its field of view, HuNavSim's `isRobotVisible`),
+    /// by body id.
+    fn perceived(&self, k: usize, bodies: &[BodyState], detect: f64) -> Option<usize> {
+        let p = &self.people[k];
+        let mut best: Option<(f64, usize)> = None;
+        for (j, b) in bodies.iter().enumerate().take(self.robots) {
+            let d = [b.position[0] - p.position[0], b.position[1] - p.position[1]];
+            let dist = d[0].hypot(d[1]);
+            if dist > detect || wrap(d[1].atan2(d[0]) - p.heading).abs() > FIELD_OF_VIEW {
+                continue;
+            }
+            if best.is_none_or(|(bd, _)| dist < bd) {
+                best = Some((dist, j));
+            }
+        }
+        best.map(|(_, j)| j)
+    }
+
+    /// Person `k`'s plan for this tick under its behaviour, with what it
+    /// faces if not where it walks; or `Err(point)`: it stands facing
+    /// `point`. Counts the behaviour's time.
+    fn plan(
+        &mut self,
+        k: usize,
+        bodies: &[BodyState],
+    ) -> Result<(Plan, Option<[f64; 2]>), [f64; 2]> {
+        let s = &self.specs[k];
+        let regular = Plan {
+            goal: v(self.goal(k)),
+            arrive: None,
+            speed: s.preferred_speed,
+            robots: if !s.sees_robots {
+                Robots::Unseen
+            } else if s.behavior == Behavior::Impassive {
+                Robots::Obstacles
+            } else {
+                Robots::People
+            },
+        };
+        let Some(reaction) = s.behavior.reaction() else {
+            return Ok((regular, None));
+        };
+        if !s.sees_robots {
+            return Ok((regular, None));
+        }
+        let Some(j) = self.perceived(k, bodies, reaction.detect_dist) else {
+            return Ok((regular, None));
+        };
+        // HuNavSim's TimeExpiredCondition, ticked while the robot is seen.
+        let p = &mut self.people[k];
+        p.reacted += self.dt;
+        if p.reacted >= reaction.duration {
+            if !reaction.once {
+                p.reacted = 0.0;
+            }
+            return Ok((regular, None));
+        }
+        let r = &bodies[j];
+        let (me, robot) = (v(p.position), v(r.position));
+        let dist = (robot - me).norm();
+        match s.behavior {
+            Behavior::Regular | Behavior::Impassive => Ok((regular, None)),
+            Behavior::Surprised(_) => Err(r.position),
+            Behavior::Scared {
+                vel,
+                other_force_factor,
+                ..
+            } => Ok((
+                Plan {
+                    speed: vel,
+                    robots: Robots::Scary(j, other_force_factor),
+                    ..regular
+                },
+                None,
+            )),
+            Behavior::Curious { vel, stop_dist, .. } => {
+                if dist <= stop_dist {
+                    return Err(r.position);
+                }
+                Ok((
+                    Plan {
+                        goal: robot,
+                        arrive: Some(r.radius),
+                        speed: (vel * dist / VIEW_DIST).min(vel),
+                        robots: Robots::Unseen,
+                    },
+                    None,
+                ))
+            }
+            Behavior::Threatening {
+                vel, front_dist, ..
+            } => {
+                // Ahead of the robot: along its velocity, or its heading
+                // when it stands.
+                let rv = v(r.velocity);
+                let ahead = if rv.norm() > 1e-9 {
+                    rv / rv.norm()
+                } else {
+                    Vec2::new(r.heading.cos(), r.heading.sin())
+                };
+                let face = (dist <= 0.6).then_some(r.position);
+                Ok((
+                    Plan {
+                        goal: robot + ahead * front_dist,
+                        arrive: Some(0.05),
+                        speed: vel,
+                        robots: Robots::Unseen,
+                    },
+                    face,
+                ))
+            }
+        }
+    }
+
     /// Person `k`'s preferred velocity (RVO2's, see the module
     /// documentation).
-    fn preferred(&self, k: usize) -> Vec2 {
-        let s = &self.specs[k];
-        let to_goal = v(self.goal(k)) - v(self.people[k].position);
+    fn preferred(&self, k: usize, plan: &Plan) -> Vec2 {
+        let to_goal = plan.goal - v(self.people[k].position);
         let d = to_goal.norm();
-        if d > s.preferred_speed {
-            to_goal * (s.preferred_speed / d)
+        if d > plan.speed {
+            to_goal * (plan.speed / d)
         } else {
             to_goal
         }
     }
 
     /// Person `k`'s ORCA velocity among the bodies of `self.near`.
-    fn orca(&mut self, k: usize, bodies: &[BodyState]) -> Vec2 {
+    fn orca(&mut self, k: usize, bodies: &[BodyState], plan: &Plan) -> Vec2 {
         let s = &self.specs[k];
         let PersonMotion::Orca {
             neighbor_dist,
@@ -245,21 +427,38 @@ impl Crowd {
         for &j in &self.near {
             let j = j as usize;
             let Some(b) = bodies.get(j) else { continue };
-            if j == me || (j < self.robots && !s.sees_robots) {
+            if j == me {
                 continue;
             }
             // Obstacles do not avoid: all of it is the person's.
-            let share = if b.kind == body_kind::OBSTACLE {
+            let mut share = if b.kind == body_kind::OBSTACLE {
                 1.0
             } else {
                 0.5
             };
+            let (mut velocity, mut time_horizon) = (v(b.velocity), None);
+            if j < self.robots {
+                match plan.robots {
+                    Robots::People => {}
+                    Robots::Unseen => continue,
+                    // An obstacle that stands where it is, kept off only
+                    // within the tick: no way made for it.
+                    Robots::Obstacles => {
+                        share = 1.0;
+                        velocity = Vec2::zeros();
+                        time_horizon = Some(self.dt);
+                    }
+                    // All of the avoidance is the scared person's.
+                    Robots::Scary(..) => share = 1.0,
+                }
+            }
             self.candidates.push(Neighbor {
                 id: b.id,
                 position: v(b.position),
-                velocity: v(b.velocity),
+                velocity,
                 radius: b.radius,
                 share,
+                time_horizon,
             });
         }
         let params = WalkerParams {
@@ -270,12 +469,20 @@ impl Crowd {
             radius_margin,
         };
         let p = &self.people[k];
-        let pref = self.preferred(k);
+        let mut pref = self.preferred(k, plan);
+        if let Robots::Scary(j, factor) = plan.robots {
+            // The goal's direction plus HuNavSim's scary force in units
+            // of it, at the scared speed.
+            let away = v(p.position) - v(bodies[j].position);
+            let d = (away.norm() - s.radius).max(1e-3);
+            let dir = unit(pref) + unit(away) * (factor * SCARY_SIGMA / d);
+            pref = unit(dir) * plan.speed;
+        }
         self.walker.velocity(
             v(p.position),
             v(p.velocity),
             s.radius,
-            s.preferred_speed,
+            plan.speed,
             pref,
             &self.candidates,
             &params,
@@ -286,7 +493,13 @@ impl Crowd {
     /// Person `k`'s velocity at the end of the tick under the social
     /// forces of the bodies of `self.near`, the walls and its group
     /// (see the module documentation).
-    fn social_force(&self, k: usize, bodies: &[BodyState], f: &SocialForceParams) -> Vec2 {
+    fn social_force(
+        &self,
+        k: usize,
+        bodies: &[BodyState],
+        f: &SocialForceParams,
+        plan: &Plan,
+    ) -> Vec2 {
         let s = &self.specs[k];
         let me = self.first + k;
         let p = &self.people[k];
@@ -296,20 +509,23 @@ impl Crowd {
         // the relaxation time; at the last point, reached, braking
         // (libpedsim's agent without a destination).
         let s_last = p.next + 1 == s.waypoints.len() && !s.cyclic;
-        let to_goal = v(self.goal(k)) - position;
-        let arrived = s_last && to_goal.norm() < s.radius;
+        let to_goal = plan.goal - position;
+        let arrived = match plan.arrive {
+            Some(r) => to_goal.norm() <= r,
+            None => s_last && to_goal.norm() < s.radius,
+        };
         let e = if arrived {
             Vec2::zeros()
         } else {
             unit(to_goal)
         };
-        let desired = (e * s.preferred_speed - velocity) / f.relaxation_time;
+        let desired = (e * plan.speed - velocity) / f.relaxation_time;
         // Social force (Moussaid et al. 2009, as libpedsim's `socialForce`).
         let mut social = Vec2::zeros();
         for &j in &self.near {
             let j = j as usize;
             let Some(b) = bodies.get(j) else { continue };
-            if j == me || (j < self.robots && !s.sees_robots) {
+            if j == me || (j < self.robots && plan.robots != Robots::People) {
                 continue;
             }
             let mut diff = v(b.position) - position;
@@ -332,20 +548,42 @@ impl Crowd {
                 obstacle = d;
             }
         }
+        if plan.robots == Robots::Obstacles {
+            // Impassive: a robot's disc is an obstacle like a wall.
+            for &j in &self.near {
+                let j = j as usize;
+                let Some(b) = bodies.get(j).filter(|_| j < self.robots) else {
+                    continue;
+                };
+                let off = position - v(b.position);
+                let surface = v(b.position) + unit(off) * b.radius;
+                let d = position - surface;
+                if d.norm_squared() < nearest {
+                    nearest = d.norm_squared();
+                    obstacle = d;
+                }
+            }
+        }
         if nearest.is_finite() {
             let amount = (-(nearest.sqrt() - s.radius) / f.sigma_obstacle).exp();
             obstacle = unit(obstacle) * amount;
         }
         let group = self.group_force(k, e, f);
-        let a = desired * f.force_desired
+        let mut a = desired * f.force_desired
             + social * f.force_social
             + obstacle * f.force_obstacle
             + group;
+        if let Robots::Scary(j, factor) = plan.robots {
+            // HuNavSim's `avoidRobot`: factor sigma / (|d| - r) away.
+            let away = position - v(bodies[j].position);
+            let d = (away.norm() - s.radius).max(1e-3);
+            a += unit(away) * (factor * f.sigma_obstacle / d);
+        }
         // libpedsim's `move`: v += h a, capped at the desired speed.
         let nv = velocity + a * self.dt;
         let speed = nv.norm();
-        if speed > s.preferred_speed {
-            nv * (s.preferred_speed / speed)
+        if speed > plan.speed {
+            nv * (plan.speed / speed)
         } else {
             nv
         }

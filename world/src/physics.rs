@@ -890,6 +890,7 @@ impl World {
         for (s, p) in self.states[first..].iter_mut().zip(&self.crowd.people) {
             s.position = p.position;
             s.velocity = p.velocity;
+            s.heading = p.heading;
         }
     }
 }

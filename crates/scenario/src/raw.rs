@@ -261,7 +261,7 @@ pub(crate) struct RawPerson {
     pub radius: Option<S<f64>>,
     pub preferred_speed: Option<S<f64>>,
     pub sees_robots: Option<S<bool>>,
-    pub behavior: Option<S<String>>,
+    pub behavior: Option<S<RawBehavior>>,
     pub group: Option<S<String>>,
     pub motion: Option<S<RawPersonMotion>>,
 }
@@ -280,7 +280,7 @@ pub(crate) struct RawCrowd {
     pub radius: Option<S<f64>>,
     pub preferred_speed: Option<S<f64>>,
     pub sees_robots: Option<S<bool>>,
-    pub behavior: Option<S<String>>,
+    pub behavior: Option<S<RawBehavior>>,
     pub group: Option<S<String>>,
     pub motion: Option<S<RawPersonMotion>>,
 }
@@ -328,4 +328,51 @@ pub(crate) struct RawGenerate {
     pub robot_radius: Option<S<f64>>,
     pub name_prefix: Option<S<String>>,
     pub jitter: Option<S<f64>>,
+}
+
+/// A person's `behavior`: a name, or a table of `kind` and its keys.
+#[derive(Debug, Clone)]
+pub(crate) enum RawBehavior {
+    /// `behavior = "scared"`.
+    Name(String),
+    /// `behavior = { kind = "scared", ... }`.
+    Table(Box<RawBehaviorTable>),
+}
+
+impl<'de> Deserialize<'de> for RawBehavior {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = RawBehavior;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a behaviour name or a table { kind = ..., ... }")
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<RawBehavior, E> {
+                Ok(RawBehavior::Name(v.to_string()))
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                m: A,
+            ) -> Result<RawBehavior, A::Error> {
+                RawBehaviorTable::deserialize(serde::de::value::MapAccessDeserializer::new(m))
+                    .map(|t| RawBehavior::Table(Box::new(t)))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// `behavior = { kind = ..., ... }`: the union of every behaviour's keys;
+/// which apply is checked per behaviour.
+#[derive(Debug, Default, Clone, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub(crate) struct RawBehaviorTable {
+    pub kind: Option<S<String>>,
+    pub detect_dist: Option<S<f64>>,
+    pub duration: Option<S<f64>>,
+    pub once: Option<S<bool>>,
+    pub vel: Option<S<f64>>,
+    pub other_force_factor: Option<S<f64>>,
+    pub stop_dist: Option<S<f64>>,
+    pub front_dist: Option<S<f64>>,
 }

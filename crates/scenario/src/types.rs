@@ -660,13 +660,69 @@ impl Default for PersonMotion {
     }
 }
 
-/// How a person reacts to robots (HuNavSim's behaviours).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
-#[serde(rename_all = "lowercase")]
+/// How a person reacts to a robot it perceives: HuNavSim's six behaviours
+/// (Pérez-Higueras et al., RA-L 2023; `hunav_agent_manager`'s
+/// `agent_manager.cpp`, `bt_functions.cpp` and behaviour trees, with
+/// `hunav_loader.cpp`'s defaults). Every reacting behaviour (not regular,
+/// not impassive) acts while the nearest robot is within `detect_dist` and
+/// in the person's field of view, for `duration` seconds of such ticks;
+/// then the person walks as a regular one (again after the next
+/// `duration` unless `once`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[serde(tag = "kind", rename_all = "lowercase")]
 pub enum Behavior {
     /// Walks to its goal, avoiding robots as it avoids people.
     #[default]
     Regular,
+    /// Takes robots for obstacles, not for people: it does not make way
+    /// for them, only keeps off their discs.
+    Impassive,
+    /// Stops and turns to face the robot.
+    Surprised(Reaction),
+    /// Slows to `vel` and is pushed away from the robot by an extra force
+    /// of weight `other_force_factor`.
+    Scared {
+        /// When and how long it reacts.
+        reaction: Reaction,
+        /// Its speed while scared, m/s (0.6).
+        vel: f64,
+        /// Weight of the robot's repulsion (HuNavSim's
+        /// `other_force_factor`, 20).
+        other_force_factor: f64,
+    },
+    /// Walks up to the robot, slowing as it nears, stops `stop_dist` from
+    /// it and looks at it.
+    Curious {
+        /// When and how long it reacts.
+        reaction: Reaction,
+        /// Its speed at HuNavSim's view distance (10 m), m/s (the
+        /// person's `preferred_speed`).
+        vel: f64,
+        /// Centre distance at which it stops, m (1.5).
+        stop_dist: f64,
+    },
+    /// Walks to the point `front_dist` ahead of the robot, in its way.
+    Threatening {
+        /// When and how long it reacts.
+        reaction: Reaction,
+        /// Its speed while threatening, m/s (2.0).
+        vel: f64,
+        /// How far ahead of the robot it aims, m (1.4).
+        front_dist: f64,
+    },
+}
+
+/// When a behaviour acts: HuNavSim's `IsRobotVisible` distance and its
+/// `TimeExpiredCondition`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Reaction {
+    /// Largest centre distance of a robot that sets it off, m.
+    pub detect_dist: f64,
+    /// Seconds of reacting (counted over the ticks the robot is seen)
+    /// before the person walks on as a regular one.
+    pub duration: f64,
+    /// After `duration`, never again (else the count starts over).
+    pub once: bool,
 }
 
 impl Behavior {
@@ -674,6 +730,22 @@ impl Behavior {
     pub fn name(self) -> &'static str {
         match self {
             Behavior::Regular => "regular",
+            Behavior::Impassive => "impassive",
+            Behavior::Surprised(_) => "surprised",
+            Behavior::Scared { .. } => "scared",
+            Behavior::Curious { .. } => "curious",
+            Behavior::Threatening { .. } => "threatening",
+        }
+    }
+
+    /// When a reacting behaviour acts (none for regular and impassive).
+    pub fn reaction(self) -> Option<Reaction> {
+        match self {
+            Behavior::Regular | Behavior::Impassive => None,
+            Behavior::Surprised(r)
+            | Behavior::Scared { reaction: r, .. }
+            | Behavior::Curious { reaction: r, .. }
+            | Behavior::Threatening { reaction: r, .. } => Some(r),
         }
     }
 }

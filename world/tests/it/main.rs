@@ -3,6 +3,7 @@
 //! dynamics::` runs one).
 
 mod ackermann;
+mod behaviours;
 mod dynamics;
 mod obstacles;
 mod people;

@@ -513,6 +513,8 @@ pub struct Neighbor {
     pub radius: f64,
     /// The walker's share of the avoidance.
     pub share: f64,
+    /// This body's time horizon, if not the walker's `time_horizon`.
+    pub time_horizon: Option<f64>,
 }
 
 /// RVO2's parameters of one walker (`addAgent`'s): the neighbour search,
@@ -627,7 +629,7 @@ impl Walker {
                 velocity,
                 radius + params.radius_margin,
                 &other,
-                inv_tau,
+                o.time_horizon.map_or(inv_tau, |t| 1.0 / t),
                 dt,
                 o.share,
             ));

@@ -4,12 +4,12 @@
 
 use crate::checks::{Rule, check, opt, point, points};
 use crate::error::Fail;
-use crate::raw::{RawPerson, RawPersonMotion, S};
+use crate::raw::{RawBehavior, RawBehaviorTable, RawPerson, RawPersonMotion, S};
 use crate::types::*;
 use std::ops::Range;
 
 const MODELS: &str = "orca | social-force";
-const BEHAVIORS: &str = "regular";
+const BEHAVIORS: &str = "regular | impassive | surprised | scared | curious | threatening";
 
 /// A person's radius when the file gives none (CrowdNav's humans).
 pub(crate) const PERSON_RADIUS: f64 = 0.3;
@@ -210,15 +210,113 @@ fn present(m: &RawPersonMotion) -> Vec<(&'static str, Range<usize>)> {
     .collect()
 }
 
-fn behavior(v: &S<String>, what: &str) -> Result<Behavior, Fail> {
-    match v.get_ref().as_str() {
-        "regular" => Ok(Behavior::Regular),
-        other => Err(Fail::new(
-            Some(v.span()),
-            what,
-            format!("unknown behavior `{other}`; expected {BEHAVIORS}"),
-        )),
+/// The keys a behaviour table has, with their spans.
+fn behavior_keys(t: &RawBehaviorTable) -> Vec<(&'static str, Range<usize>)> {
+    fn s<T>(v: &Option<S<T>>) -> Option<Range<usize>> {
+        v.as_ref().map(|v| v.span())
     }
+    [
+        ("detect_dist", s(&t.detect_dist)),
+        ("duration", s(&t.duration)),
+        ("once", s(&t.once)),
+        ("vel", s(&t.vel)),
+        ("other_force_factor", s(&t.other_force_factor)),
+        ("stop_dist", s(&t.stop_dist)),
+        ("front_dist", s(&t.front_dist)),
+    ]
+    .into_iter()
+    .filter_map(|(k, v)| v.map(|v| (k, v)))
+    .collect()
+}
+
+/// A person's behaviour from `v`, HuNavSim's defaults for the keys left
+/// out (`hunav_loader.cpp`'s default configuration; the curious speed is
+/// the person's `preferred_speed`, its `max_vel`).
+fn behavior(v: &S<RawBehavior>, preferred_speed: f64, what: &str) -> Result<Behavior, Fail> {
+    let empty = RawBehaviorTable::default();
+    let (kind, kind_span, t) = match v.get_ref() {
+        RawBehavior::Name(n) => (n.as_str(), v.span(), &empty),
+        RawBehavior::Table(t) => match &t.kind {
+            Some(k) => (k.get_ref().as_str(), k.span(), &**t),
+            None => {
+                return Err(Fail::new(
+                    Some(v.span()),
+                    what,
+                    format!("behavior needs a `kind`: {BEHAVIORS}"),
+                ));
+            }
+        },
+    };
+    let allowed: &[&str] = match kind {
+        "regular" | "impassive" => &[],
+        "surprised" => &["detect_dist", "duration", "once"],
+        "scared" => &[
+            "detect_dist",
+            "duration",
+            "once",
+            "vel",
+            "other_force_factor",
+        ],
+        "curious" => &["detect_dist", "duration", "once", "vel", "stop_dist"],
+        "threatening" => &["detect_dist", "duration", "once", "vel", "front_dist"],
+        other => {
+            return Err(Fail::new(
+                Some(kind_span),
+                what,
+                format!("unknown behavior `{other}`; expected {BEHAVIORS}"),
+            ));
+        }
+    };
+    for (key, span) in behavior_keys(t) {
+        if !allowed.contains(&key) {
+            let takes = if allowed.is_empty() {
+                "no keys".to_string()
+            } else {
+                allowed.join(", ")
+            };
+            return Err(Fail::new(
+                Some(span),
+                what,
+                format!("`{key}` does not apply to behavior `{kind}` (it takes: {takes})"),
+            ));
+        }
+    }
+    let f =
+        |v: &Option<S<f64>>, key: &str, rule: Rule, default: f64| opt(v, key, rule, what, default);
+    // HuNavSim's detection distances: the trees' `IsRobotVisible` (curious
+    // 10, threatening 4) or `behavior.dist` (surprised 4, scared 3).
+    let reaction = |detect: f64, duration: f64| -> Result<Reaction, Fail> {
+        Ok(Reaction {
+            detect_dist: f(&t.detect_dist, "detect_dist", Rule::NonNeg, detect)?,
+            duration: f(&t.duration, "duration", Rule::NonNeg, duration)?,
+            once: t.once.as_ref().is_none_or(|o| *o.get_ref()),
+        })
+    };
+    Ok(match kind {
+        "regular" => Behavior::Regular,
+        "impassive" => Behavior::Impassive,
+        "surprised" => Behavior::Surprised(reaction(4.0, 30.0)?),
+        "scared" => Behavior::Scared {
+            reaction: reaction(3.0, 40.0)?,
+            vel: f(&t.vel, "vel", Rule::Pos, 0.6)?,
+            other_force_factor: f(
+                &t.other_force_factor,
+                "other_force_factor",
+                Rule::NonNeg,
+                20.0,
+            )?,
+        },
+        "curious" => Behavior::Curious {
+            reaction: reaction(10.0, 40.0)?,
+            vel: f(&t.vel, "vel", Rule::Pos, preferred_speed)?,
+            stop_dist: f(&t.stop_dist, "stop_dist", Rule::NonNeg, 1.5)?,
+        },
+        _ => Behavior::Threatening {
+            reaction: reaction(4.0, 40.0)?,
+            vel: f(&t.vel, "vel", Rule::Pos, 2.0)?,
+            front_dist: f(&t.front_dist, "front_dist", Rule::NonNeg, 1.4)?,
+        },
+    })
 }
 
 /// A person from its table `raw` (spanning `table`), the `index`th
@@ -306,7 +404,7 @@ pub(super) fn resolve_person(
         preferred_speed,
         sees_robots: raw.sees_robots.as_ref().is_none_or(|v| *v.get_ref()),
         behavior: match &raw.behavior {
-            Some(b) => behavior(b, &what)?,
+            Some(b) => behavior(b, preferred_speed, &what)?,
             None => Behavior::Regular,
         },
         group,

@@ -2,7 +2,7 @@
 //! value refused at its line.
 
 use crate::common::*;
-use mrsim_scenario::{Behavior, PersonMotion};
+use mrsim_scenario::{Behavior, PersonMotion, Reaction};
 
 const PERSON: &str = r#"
 [[person]]
@@ -247,4 +247,125 @@ fn bad_crowd_values_are_refused_at_their_line() {
     );
     let src = crowdnav(&CROWD.replace("count = 5", "count = 500"), 1);
     refused_at(&src, "[[crowd]]", "could not place person");
+}
+
+#[test]
+fn a_behaviour_by_name_takes_hunavsims_defaults_and_a_table_its_own_values() {
+    let named = |b: &str| {
+        let src = with(
+            &with_person(PERSON),
+            "goal = [-4.0, -0.3]",
+            &format!("goal = [-4.0, -0.3]\npreferred_speed = 1.2\nbehavior = {b}"),
+        );
+        accept(&src).scenario.people[0].behavior
+    };
+    let r = |detect_dist, duration| Reaction {
+        detect_dist,
+        duration,
+        once: true,
+    };
+    assert_eq!(named("\"regular\""), Behavior::Regular);
+    assert_eq!(named("\"impassive\""), Behavior::Impassive);
+    assert_eq!(named("\"surprised\""), Behavior::Surprised(r(4.0, 30.0)));
+    assert_eq!(
+        named("\"scared\""),
+        Behavior::Scared {
+            reaction: r(3.0, 40.0),
+            vel: 0.6,
+            other_force_factor: 20.0
+        }
+    );
+    assert_eq!(
+        named("\"curious\""),
+        Behavior::Curious {
+            reaction: r(10.0, 40.0),
+            vel: 1.2,
+            stop_dist: 1.5
+        }
+    );
+    assert_eq!(
+        named("\"threatening\""),
+        Behavior::Threatening {
+            reaction: r(4.0, 40.0),
+            vel: 2.0,
+            front_dist: 1.4
+        }
+    );
+    assert_eq!(
+        named(
+            "{ kind = \"scared\", detect_dist = 5.0, duration = 10.0, once = false, vel = 0.4, other_force_factor = 12.0 }"
+        ),
+        Behavior::Scared {
+            reaction: Reaction {
+                detect_dist: 5.0,
+                duration: 10.0,
+                once: false
+            },
+            vel: 0.4,
+            other_force_factor: 12.0
+        }
+    );
+    assert_eq!(
+        named("{ kind = \"threatening\", front_dist = 2.0 }"),
+        Behavior::Threatening {
+            reaction: r(4.0, 40.0),
+            vel: 2.0,
+            front_dist: 2.0
+        }
+    );
+}
+
+#[test]
+fn bad_behaviour_keys_are_refused_at_their_line() {
+    let cases = [
+        (
+            "behavior = { vel = 1.0 }",
+            "behavior = {",
+            "behavior needs a `kind`",
+        ),
+        (
+            "behavior = { kind = \"bored\" }",
+            "\"bored\"",
+            "unknown behavior `bored`",
+        ),
+        (
+            "behavior = { kind = \"surprised\", vel = 1.0 }",
+            "vel = 1.0",
+            "`vel` does not apply to behavior `surprised`",
+        ),
+        (
+            "behavior = { kind = \"regular\", duration = 3.0 }",
+            "duration = 3.0",
+            "it takes: no keys",
+        ),
+        (
+            "behavior = { kind = \"scared\", vel = 0 }",
+            "vel = 0",
+            "vel must be > 0",
+        ),
+        (
+            "behavior = { kind = \"curious\", stop_dist = -1.0 }",
+            "stop_dist = -1.0",
+            "stop_dist must be >= 0",
+        ),
+        (
+            "behavior = { kind = \"scared\", fear = 2.0 }",
+            "fear",
+            "unknown field `fear`",
+        ),
+        (
+            "behavior = 3",
+            "behavior = 3",
+            "a behaviour name or a table",
+        ),
+    ];
+    for (line, needle, words) in cases {
+        let src = with(
+            &with_person(PERSON),
+            "goal = [-4.0, -0.3]",
+            &format!("goal = [-4.0, -0.3]\n{line}"),
+        );
+        let e = refused_at(&src, needle, words);
+        assert!(e.to_string().contains("person"), "{e}");
+    }
 }
