@@ -5,7 +5,9 @@
 //! planner, generated ones included), `world.KEY`, `defaults.KEY...`,
 //! `generate.KEY...`, `robot.NAME.KEY...` (a robot by name, generated ones
 //! included), `robot.*.KEY...` (every robot), `obstacle.NAME.KEY...`,
-//! `obstacle.*.KEY...`, `wall.INDEX.KEY...` (0-based, file order),
+//! `obstacle.*.KEY...`, `person.NAME.KEY...`, `person.*.KEY...` (the
+//! `[[person]]` tables; a crowd's people are set through their crowd),
+//! `wall.INDEX.KEY...` and `crowd.INDEX.KEY...` (0-based, file order),
 //! `map.KEY`, `output.KEY`.
 //!
 //! The VALUE is TOML text (`0.2`, `"orca"`, `[1, 2]`, `{ a = 1 }`); a bare
@@ -54,7 +56,8 @@ impl RobotPatch<'_> {
 }
 
 const TARGETS: &str = "name, description, length_unit, planner, world.KEY, defaults.KEY, \
-     robot.NAME.KEY, robot.*.KEY, obstacle.NAME.KEY, obstacle.*.KEY, wall.INDEX.KEY, generate.KEY, map.KEY, output.KEY";
+     robot.NAME.KEY, robot.*.KEY, obstacle.NAME.KEY, obstacle.*.KEY, person.NAME.KEY, person.*.KEY, wall.INDEX.KEY, \
+     crowd.INDEX.KEY, generate.KEY, map.KEY, output.KEY";
 
 /// Applies every override to `doc`; returns those that (also) select robots,
 /// for the generated robots.
@@ -114,16 +117,25 @@ pub(crate) fn apply<'i>(
                     return Err(fail(format!("no obstacle named `{}`", segs[1])));
                 }
             }
-            ("wall", 3..) => {
-                let i: usize = segs[1]
-                    .parse()
-                    .map_err(|_| fail(format!("`{}` is not a wall index (0, 1, ...)", segs[1])))?;
-                let wall = array_mut(doc, "wall")
+            ("person", 3..) => {
+                let hits = named_elements(doc, "person", segs[1], &segs[2..], &value, &span)
+                    .map_err(&fail)?;
+                if hits == 0 {
+                    return Err(fail(format!("no person named `{}`", segs[1])));
+                }
+            }
+            (array @ ("wall" | "crowd"), 3..) => {
+                let i: usize = segs[1].parse().map_err(|_| {
+                    fail(format!("`{}` is not a {array} index (0, 1, ...)", segs[1]))
+                })?;
+                let item = array_mut(doc, array)
                     .and_then(|a| a.get_mut(i))
-                    .ok_or_else(|| fail(format!("there is no wall {i} (walls count from 0)")))?;
-                match wall.get_mut() {
+                    .ok_or_else(|| {
+                        fail(format!("there is no {array} {i} ({array}s count from 0)"))
+                    })?;
+                match item.get_mut() {
                     DeValue::Table(t) => set_path(t, &segs[2..], value, &span).map_err(&fail)?,
-                    _ => return Err(fail("`wall` is not an array of tables".into())),
+                    _ => return Err(fail(format!("`{array}` is not an array of tables"))),
                 }
             }
             _ => {

@@ -369,3 +369,46 @@ fn bad_behaviour_keys_are_refused_at_their_line() {
         assert!(e.to_string().contains("person"), "{e}");
     }
 }
+
+#[test]
+fn people_and_crowds_are_reachable_with_overrides() {
+    let sets = |pairs: &[(&str, &str)]| -> Vec<(String, String)> {
+        pairs
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect()
+    };
+    let walker = "[[person]]\nname = \"p0\"\nstart = [0.0, 9.0]\ngoal = [0.0, 8.0]\n";
+    let src = format!("{}{walker}", crowdnav(CROWD, 1));
+    let l = mrsim_scenario::parse_with_overrides(
+        &src,
+        "t.toml",
+        &sets(&[
+            ("crowd.0.count", "3"),
+            ("crowd.0.motion", "{ model = \"social-force\" }"),
+            ("person.p0.preferred_speed", "1.4"),
+            ("person.*.radius", "0.25"),
+        ]),
+    )
+    .expect("the overrides apply");
+    let people = &l.scenario.people;
+    assert_eq!(people.len(), 4);
+    let p0 = people.iter().find(|p| p.name == "p0").expect("p0");
+    assert_eq!((p0.preferred_speed, p0.radius), (1.4, 0.25));
+    assert!(
+        people
+            .iter()
+            .filter(|p| p.name != "p0")
+            .all(|p| matches!(p.motion, PersonMotion::SocialForce(_)))
+    );
+    for (key, said) in [
+        ("crowd.1.count", "there is no crowd 1"),
+        ("crowd.x.count", "`x` is not a crowd index"),
+        ("person.nobody.radius", "no person named `nobody`"),
+    ] {
+        let e = mrsim_scenario::parse_with_overrides(&src, "t.toml", &sets(&[(key, "2")]))
+            .expect_err(key)
+            .to_string();
+        assert!(e.contains(said), "{key}: {e}");
+    }
+}
