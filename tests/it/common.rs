@@ -138,9 +138,13 @@ pub fn assert_clean(run_id: &str) {
 /// A unique run id for a test.
 pub fn run_id(tag: &str) -> String {
     static N: AtomicUsize = AtomicUsize::new(0);
+    // A run id is at most 24 characters: `t`, the tag's first 12, and up
+    // to 11 for the process id and the count, whatever the process id is
+    // (the two alone make it unique).
+    let tag: String = tag.chars().take(12).collect();
     format!(
         "t{}-{}-{}",
-        tag,
+        tag.trim_end_matches('-'),
         std::process::id() % 100000,
         N.fetch_add(1, Ordering::SeqCst)
     )

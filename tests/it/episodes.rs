@@ -151,7 +151,7 @@ fn the_summary_names_the_episode_s_outcome() {
     let o = run(
         &file,
         &dir.join("out"),
-        &run_id("episode-summary"),
+        &run_id("ep-summary"),
         &["--transport", "inproc", "--no-report"],
     );
     assert_ok(&o);

@@ -96,7 +96,7 @@ fn the_shipped_crowd_scene_runs_with_its_people_in_the_trajectory() {
     let o = run(
         &root().join("scenarios/people/crossing.toml"),
         &out,
-        &run_id("people-crossing"),
+        &run_id("ppl-crossing"),
         &["--transport", "inproc", "--quiet", "--no-report"],
     );
     assert_ok(&o);
