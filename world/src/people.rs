@@ -41,6 +41,12 @@
 //!   under the social force a robot's disc repels as a wall does, under
 //!   orca it is a still obstacle avoided within the tick only.
 //!
+//! Each person's velocity is a function of the tick's snapshot and its
+//! own plan alone, so the people are split across worker threads (one for
+//! each 512 people, at most one a core) and any split gives the same
+//! velocities, bit for bit; the behaviours' timers are counted before, in
+//! order, on the world's thread.
+//!
 //! People are kinematic: nothing pushes them; a contact of a robot with a
 //! person is the robot's (the world counts it), contacts among people are
 //! nobody's.
@@ -107,15 +113,17 @@ pub struct Crowd {
     specs: Vec<PersonSpec>,
     /// By person index.
     pub people: Vec<Person>,
-    walker: Walker,
+    /// One per worker of [`Crowd::begin_tick`].
+    scratch: Vec<Scratch>,
     dt: f64,
     /// The body id of the first person (robots and obstacles come first).
     first: usize,
     robots: usize,
     grid: NeighbourGrid,
-    near: Vec<u32>,
-    candidates: Vec<Neighbor>,
-    velocities: Vec<[f64; 2]>,
+    /// Each person's plan of the tick (behaviours).
+    plans: Vec<Planned>,
+    /// Each person's new velocity and what it faces if not where it walks.
+    moves: Vec<([f64; 2], Option<[f64; 2]>)>,
     reach: f64,
     /// Every wall segment, the arena's included (the social force's).
     walls: Vec<mrsim_planners::Segment>,
@@ -124,6 +132,26 @@ pub struct Crowd {
     /// Each person's group, by index into `groups`.
     group_of: Vec<Option<usize>>,
 }
+
+/// A person's plan of the tick and what it faces if not where it walks,
+/// or `Err(point)`: it stands facing `point` ([`Crowd::plan`]'s answer).
+type Planned = Result<(Plan, Option<[f64; 2]>), [f64; 2]>;
+
+/// What one worker of [`Crowd::begin_tick`] computes in: the bodies near
+/// the person, its ORCA neighbours and RVO2's walker.
+#[derive(Debug, Clone, Default)]
+struct Scratch {
+    walker: Walker,
+    near: Vec<u32>,
+    candidates: Vec<Neighbor>,
+}
+
+/// Fewest people a worker of [`Crowd::begin_tick`] is given: below it the
+/// crowd is stepped on the world's own thread.
+const PEOPLE_PER_WORKER: usize = 512;
+
+/// Most workers the crowd's step is split across.
+const MAX_WORKERS: usize = 8;
 
 fn v(p: [f64; 2]) -> Vec2 {
     Vec2::new(p[0], p[1])
@@ -177,18 +205,30 @@ impl Crowd {
                 })
                 .collect(),
             specs: scenario.people.clone(),
-            walker: if scenario.people.is_empty() {
-                Walker::default()
-            } else {
-                Walker::new(&walls)
+            scratch: {
+                let workers = std::thread::available_parallelism()
+                    .map_or(1, |n| n.get())
+                    .clamp(1, MAX_WORKERS)
+                    .min(scenario.people.len().div_ceil(PEOPLE_PER_WORKER).max(1));
+                let walker = if scenario.people.is_empty() {
+                    Walker::default()
+                } else {
+                    Walker::new(&walls)
+                };
+                vec![
+                    Scratch {
+                        walker,
+                        ..Scratch::default()
+                    };
+                    workers
+                ]
             },
             dt: scenario.world.dt,
             first: scenario.robots.len() + scenario.obstacles.len(),
             robots: scenario.robots.len(),
             grid: NeighbourGrid::default(),
-            near: Vec::new(),
-            candidates: Vec::new(),
-            velocities: Vec::new(),
+            plans: Vec::new(),
+            moves: Vec::new(),
             reach,
             walls: if scenario.people.is_empty() {
                 Vec::new()
@@ -241,37 +281,36 @@ impl Crowd {
                 .map(|b| [b.position[0], b.position[1], b.radius]),
             self.reach,
         );
-        let mut velocities = std::mem::take(&mut self.velocities);
-        velocities.clear();
-        let mut facing = Vec::with_capacity(self.people.len());
-        for k in 0..self.people.len() {
-            let motion = self.specs[k].motion;
-            let reach = match motion {
-                PersonMotion::Orca { neighbor_dist, .. } => neighbor_dist,
-                PersonMotion::SocialForce(f) => f.neighbor_dist,
-            };
-            let p = &self.people[k];
-            if !(grid && self.grid.near(p.position, reach, &mut self.near)) {
-                self.near.clear();
-                self.near.extend(0..bodies.len() as u32);
-            }
-            let (plan, face) = match self.plan(k, bodies) {
-                Ok(plan) => plan,
-                Err(face) => {
-                    // Standing to look (surprised; curious, near).
-                    velocities.push([0.0, 0.0]);
-                    facing.push(Some(face));
-                    continue;
-                }
-            };
-            let nv = match motion {
-                PersonMotion::Orca { .. } => self.orca(k, bodies, &plan),
-                PersonMotion::SocialForce(f) => self.social_force(k, bodies, &f, &plan),
-            };
-            velocities.push([nv.x, nv.y]);
-            facing.push(face);
+        // Behaviours: each person's plan, its timers counted, in order.
+        let n = self.people.len();
+        let mut plans = std::mem::take(&mut self.plans);
+        plans.clear();
+        for k in 0..n {
+            plans.push(self.plan(k, bodies));
         }
-        for ((p, nv), face) in self.people.iter_mut().zip(&velocities).zip(facing) {
+        // Velocities: each person's from the tick's start alone, so the
+        // people are split across the workers (threads) and every split
+        // gives the same velocities, bit for bit.
+        let mut moves = std::mem::take(&mut self.moves);
+        moves.clear();
+        moves.resize(n, ([0.0, 0.0], None));
+        let mut scratch = std::mem::take(&mut self.scratch);
+        let chunk = n.div_ceil(scratch.len()).max(1);
+        {
+            let this = &*self;
+            let plans = &plans;
+            if scratch.len() == 1 {
+                this.walk(0, plans, bodies, grid, &mut scratch[0], &mut moves);
+            } else {
+                std::thread::scope(|scope| {
+                    for ((i, out), s) in moves.chunks_mut(chunk).enumerate().zip(&mut scratch) {
+                        scope.spawn(move || this.walk(i * chunk, plans, bodies, grid, s, out));
+                    }
+                });
+            }
+        }
+        self.scratch = scratch;
+        for (p, (nv, face)) in self.people.iter_mut().zip(&moves) {
             p.velocity = *nv;
             if let Some(target) = face {
                 p.heading = (target[1] - p.position[1]).atan2(target[0] - p.position[0]);
@@ -279,7 +318,47 @@ impl Crowd {
                 p.heading = nv[1].atan2(nv[0]);
             }
         }
-        self.velocities = velocities;
+        self.plans = plans;
+        self.moves = moves;
+    }
+
+    /// The new velocities of the people from `first` on, one per slot of
+    /// `out`, under their `plans`, in the scratch space `s`.
+    fn walk(
+        &self,
+        first: usize,
+        plans: &[Planned],
+        bodies: &[BodyState],
+        grid: bool,
+        s: &mut Scratch,
+        out: &mut [([f64; 2], Option<[f64; 2]>)],
+    ) {
+        for (i, slot) in out.iter_mut().enumerate() {
+            let k = first + i;
+            let (plan, face) = match plans[k] {
+                Ok(plan) => plan,
+                // Standing to look (surprised; curious, near).
+                Err(face) => {
+                    *slot = ([0.0, 0.0], Some(face));
+                    continue;
+                }
+            };
+            let motion = self.specs[k].motion;
+            let reach = match motion {
+                PersonMotion::Orca { neighbor_dist, .. } => neighbor_dist,
+                PersonMotion::SocialForce(f) => f.neighbor_dist,
+            };
+            let p = &self.people[k];
+            if !(grid && self.grid.near(p.position, reach, &mut s.near)) {
+                s.near.clear();
+                s.near.extend(0..bodies.len() as u32);
+            }
+            let nv = match motion {
+                PersonMotion::Orca { .. } => self.orca(k, bodies, &plan, s),
+                PersonMotion::SocialForce(f) => self.social_force(k, bodies, &f, &plan, &s.near),
+            };
+            *slot = ([nv.x, nv.y], face);
+        }
     }
 
     /// The nearest robot person `k` perceives for its behaviour (within
@@ -304,11 +383,7 @@ impl Crowd {
     /// Person `k`'s plan for this tick under its behaviour, with what it
     /// faces if not where it walks; or `Err(point)`: it stands facing
     /// `point`. Counts the behaviour's time.
-    fn plan(
-        &mut self,
-        k: usize,
-        bodies: &[BodyState],
-    ) -> Result<(Plan, Option<[f64; 2]>), [f64; 2]> {
+    fn plan(&mut self, k: usize, bodies: &[BodyState]) -> Planned {
         let s = &self.specs[k];
         let regular = Plan {
             goal: v(self.goal(k)),
@@ -409,22 +484,27 @@ impl Crowd {
         }
     }
 
-    /// Person `k`'s ORCA velocity among the bodies of `self.near`.
-    fn orca(&mut self, k: usize, bodies: &[BodyState], plan: &Plan) -> Vec2 {
-        let s = &self.specs[k];
+    /// Person `k`'s ORCA velocity among the bodies of `s.near`.
+    fn orca(&self, k: usize, bodies: &[BodyState], plan: &Plan, s: &mut Scratch) -> Vec2 {
+        let Scratch {
+            walker,
+            near,
+            candidates,
+        } = s;
+        let spec = &self.specs[k];
         let PersonMotion::Orca {
             neighbor_dist,
             max_neighbors,
             time_horizon,
             time_horizon_obst,
             radius_margin,
-        } = s.motion
+        } = spec.motion
         else {
             return Vec2::zeros();
         };
         let me = self.first + k;
-        self.candidates.clear();
-        for &j in &self.near {
+        candidates.clear();
+        for &j in near.iter() {
             let j = j as usize;
             let Some(b) = bodies.get(j) else { continue };
             if j == me {
@@ -452,7 +532,7 @@ impl Crowd {
                     Robots::Scary(..) => share = 1.0,
                 }
             }
-            self.candidates.push(Neighbor {
+            candidates.push(Neighbor {
                 id: b.id,
                 position: v(b.position),
                 velocity,
@@ -474,24 +554,24 @@ impl Crowd {
             // The goal's direction plus HuNavSim's scary force in units
             // of it, at the scared speed.
             let away = v(p.position) - v(bodies[j].position);
-            let d = (away.norm() - s.radius).max(1e-3);
+            let d = (away.norm() - spec.radius).max(1e-3);
             let dir = unit(pref) + unit(away) * (factor * SCARY_SIGMA / d);
             pref = unit(dir) * plan.speed;
         }
-        self.walker.velocity(
+        walker.velocity(
             v(p.position),
             v(p.velocity),
-            s.radius,
+            spec.radius,
             plan.speed,
             pref,
-            &self.candidates,
+            candidates,
             &params,
             self.dt,
         )
     }
 
     /// Person `k`'s velocity at the end of the tick under the social
-    /// forces of the bodies of `self.near`, the walls and its group
+    /// forces of the bodies of `near`, the walls and its group
     /// (see the module documentation).
     fn social_force(
         &self,
@@ -499,6 +579,7 @@ impl Crowd {
         bodies: &[BodyState],
         f: &SocialForceParams,
         plan: &Plan,
+        near: &[u32],
     ) -> Vec2 {
         let s = &self.specs[k];
         let me = self.first + k;
@@ -522,7 +603,7 @@ impl Crowd {
         let desired = (e * plan.speed - velocity) / f.relaxation_time;
         // Social force (Moussaid et al. 2009, as libpedsim's `socialForce`).
         let mut social = Vec2::zeros();
-        for &j in &self.near {
+        for &j in near {
             let j = j as usize;
             let Some(b) = bodies.get(j) else { continue };
             if j == me || (j < self.robots && plan.robots != Robots::People) {
@@ -550,7 +631,7 @@ impl Crowd {
         }
         if plan.robots == Robots::Obstacles {
             // Impassive: a robot's disc is an obstacle like a wall.
-            for &j in &self.near {
+            for &j in near {
                 let j = j as usize;
                 let Some(b) = bodies.get(j).filter(|_| j < self.robots) else {
                     continue;
