@@ -29,7 +29,19 @@ from ._mrsim import Sim, VecSim, crowdnav_scene
 from ._render import Canvas
 
 
-class NavEnv(gymnasium.Env):
+class _Drawn:
+    """``render()`` of an env over one :class:`mrsim.Sim` (``self._sim``),
+    drawn on a canvas made at the first call."""
+
+    def render(self):
+        if self.render_mode != "rgb_array":
+            return None
+        if self._canvas is None:
+            self._canvas = Canvas(self._sim, self._render_size)
+        return self._canvas.draw(self._sim)
+
+
+class NavEnv(_Drawn, gymnasium.Env):
     """One learner in a scenario (default: 16 robots on a circle, the other
     15 on ORCA). ``terminated`` at the goal (the world's goal test) or at a
     collision; ``truncated`` at the scenario's duration. Episodes are
@@ -105,13 +117,6 @@ class NavEnv(gymnasium.Env):
             "tick": self._sim.tick,
             "time": self._sim.time,
         }
-
-    def render(self):
-        if self.render_mode != "rgb_array":
-            return None
-        if self._canvas is None:
-            self._canvas = Canvas(self._sim, self._render_size)
-        return self._canvas.draw(self._sim)
 
     @property
     def sim(self):
@@ -329,7 +334,7 @@ class NavVectorEnv(VectorEnv):
         return tuple(frames)
 
 
-class CrowdNavEnv(gymnasium.Env):
+class CrowdNavEnv(_Drawn, gymnasium.Env):
     """CrowdNav's episode (Chen et al., "Crowd-Robot Interaction", ICRA
     2019): scenarios/crowdnav/circle-crossing.toml, five people crossing a
     circle of radius 4 m on ORCA, the learner the robot going from (0, -4)
@@ -455,13 +460,6 @@ class CrowdNavEnv(gymnasium.Env):
             "tick": self._sim.tick,
             "time": self._sim.time,
         }
-
-    def render(self):
-        if self.render_mode != "rgb_array":
-            return None
-        if self._canvas is None:
-            self._canvas = Canvas(self._sim, self._render_size)
-        return self._canvas.draw(self._sim)
 
     @property
     def sim(self):
