@@ -48,23 +48,7 @@ fn resolve_motion(m: &S<RawMotion>, what: &str) -> Result<Motion, Fail> {
             ));
         }
     };
-    for (key, span) in present(raw) {
-        if !allowed.contains(&key) {
-            return Err(Fail::new(
-                Some(span),
-                what,
-                format!(
-                    "`{key}` does not apply to motion model `{}` (it takes: {})",
-                    model.get_ref(),
-                    if allowed.is_empty() {
-                        "nothing".to_string()
-                    } else {
-                        allowed.join(", ")
-                    }
-                ),
-            ));
-        }
-    }
+    only_keys_of(present(raw), allowed, "motion model", model, what)?;
     let need = |key: &str| {
         Fail::new(
             Some(m.span()),
@@ -192,6 +176,34 @@ fn resolve_motion(m: &S<RawMotion>, what: &str) -> Result<Motion, Fail> {
 }
 
 /// The keys a motion table has, with their spans.
+/// Refuses the first of `present` (keys written, with their spans) that
+/// `allowed`, the keys of `model` (a `kind` such as "motion model"), does
+/// not take.
+pub(super) fn only_keys_of(
+    present: Vec<(&'static str, Range<usize>)>,
+    allowed: &[&str],
+    kind: &str,
+    model: &S<String>,
+    what: &str,
+) -> Result<(), Fail> {
+    match present.into_iter().find(|(key, _)| !allowed.contains(key)) {
+        None => Ok(()),
+        Some((key, span)) => Err(Fail::new(
+            Some(span),
+            what,
+            format!(
+                "`{key}` does not apply to {kind} `{}` (it takes: {})",
+                model.get_ref(),
+                if allowed.is_empty() {
+                    "nothing".to_string()
+                } else {
+                    allowed.join(", ")
+                }
+            ),
+        )),
+    }
+}
+
 fn present(m: &RawMotion) -> Vec<(&'static str, Range<usize>)> {
     fn s<T>(v: &Option<S<T>>) -> Option<Range<usize>> {
         v.as_ref().map(|v| v.span())

@@ -55,19 +55,7 @@ fn resolve_motion(m: &S<RawPersonMotion>, what: &str) -> Result<PersonMotion, Fa
             ));
         }
     };
-    for (key, span) in present(raw) {
-        if !allowed.contains(&key) {
-            return Err(Fail::new(
-                Some(span),
-                what,
-                format!(
-                    "`{key}` does not apply to crowd model `{}` (it takes: {})",
-                    model.get_ref(),
-                    allowed.join(", ")
-                ),
-            ));
-        }
-    }
+    super::obstacles::only_keys_of(present(raw), allowed, "crowd model", model, what)?;
     if model.get_ref() == "social-force" {
         let d = SocialForceParams::default();
         let f = |v: &Option<S<f64>>, key: &str, rule: Rule, default: f64| {
