@@ -43,6 +43,28 @@
 //! grown by a second of its speed) nearer than the body is now. The static
 //! obstacles the route was planned around are not counted.
 //!
+//! **Giving way.** Cars whose ways cross (at a junction, a merge) each
+//! decide by one rule applied to what they sense, without communication,
+//! who goes first, so that no two stop across each other's way (the
+//! gridlock of four cars in a junction, each in front of the next). Each
+//! robot sensed is taken to go on along its velocity (standing, along its
+//! heading), speeding up at the car's own acceleration to the car's own
+//! top speed (as one of its fleet would), for up to [`GIVE_WAY_HORIZON`]
+//! s; a moving obstacle keeps its velocity; people and standing obstacles
+//! are left to the keep above. The car finds the first pose of its route
+//! ahead where its footprint would come within the keep of the body's on
+//! that way, and the times both take to get there: it goes first if it is
+//! through (past the pose by both bodies' extents) [`MARGIN_TIME`] before
+//! the other arrives, or simply arrives first by more than that; arriving
+//! within [`MARGIN_TIME`] of each other, the lower id goes first. Else it
+//! stops a quarter of its look-ahead short of that pose, unless it can no
+//! longer stop there braking at `max_accel` (it is committed, and the
+//! other, which sees it nearer, waits). A body going within 45 degrees of
+//! the route's direction there is followed, not given way to. A robot
+//! that has stood [`crate::route::PATIENCE`] s while the car waits for it
+//! is not coming (parked at its goal, say): the car no longer gives way
+//! to it, and the keep above holds it off it where it stands.
+//!
 //! **Why not the robot's planner.** The disc robots' routes show the
 //! planner a point ahead on the route as its goal ([`crate::route`]); a
 //! car's planner (through the tracking controller, or dwa's arcs) steers
@@ -56,8 +78,11 @@
 //! [`crate::route::PATIENCE`] s (something stands in its way), its route
 //! is planned again from where it stands, around the bodies it senses
 //! standing (slower than a tenth of its top speed) within twice its
-//! braking look ahead as well; if there is no such route it waits, and
-//! tries again after as long.
+//! braking look ahead as well, each grown by the keep (so that it passes
+//! a parked car by its route's margin and the keep); if there is no such
+//! route it waits, and tries again after as long. While they stand where
+//! they stood, those bodies count as in the way only if the car strays
+//! within half the keep of them.
 //!
 //! The diagnostics `route_progress` (the route's length driven, m),
 //! `route_replans` and `route_gear` (1 forwards, -1 backwards, 0 stopped
@@ -100,6 +125,96 @@ pub fn lookahead(wheelbase: f64, speed: f64) -> f64 {
     speed.abs().clamp(wheelbase / 4.0, wheelbase)
 }
 
+/// How far ahead in time a car looks for the ways of moving bodies that
+/// cross its route, s.
+pub const GIVE_WAY_HORIZON: f64 = 8.0;
+
+/// Two arrivals at a crossing less than this apart are together, s; a car
+/// goes first only if it is through this long before the other gets there.
+pub const MARGIN_TIME: f64 = 1.0;
+
+/// A body moving within 45 degrees of the route's direction where their
+/// ways meet is followed, not given way to: the cosine.
+const FOLLOWING: f64 = std::f64::consts::FRAC_1_SQRT_2;
+
+/// The spacing of the route's poses and of the body's times searched for
+/// a crossing, m.
+const CROSSING_STEP: f64 = 0.25;
+
+/// The way a sensed body is taken to go when the car looks whether to
+/// give way to it (module documentation, "Giving way").
+struct Way {
+    /// The direction: its velocity's, or, standing, a robot's heading.
+    u: (f64, f64),
+    /// How far it goes within [`GIVE_WAY_HORIZON`].
+    length: f64,
+    /// Its speed along `u`.
+    speed: f64,
+    /// A robot's top speed and acceleration, taken as the car's own; `None`
+    /// for a body that keeps its velocity.
+    drive: Option<(f64, f64)>,
+    /// Is it a robot standing (slower than `slow`)?
+    standing: bool,
+}
+
+impl Way {
+    /// The way of `o`: a robot speeding up from its speed along its heading
+    /// (or velocity) to `cap` at `accel`; a moving obstacle at its
+    /// velocity; `None` for people and for obstacles slower than `slow`.
+    fn of(o: &Sensed, slow: f64, cap: f64, accel: f64) -> Option<Self> {
+        let v = o.velocity.norm();
+        match o.kind {
+            BodyKind::Robot => {
+                let u = if v >= slow {
+                    (o.velocity.x / v, o.velocity.y / v)
+                } else {
+                    (o.heading.cos(), o.heading.sin())
+                };
+                Some(Self {
+                    u,
+                    length: cap * GIVE_WAY_HORIZON,
+                    speed: o.velocity.x * u.0 + o.velocity.y * u.1,
+                    drive: Some((cap, accel)),
+                    standing: v < slow,
+                })
+            }
+            BodyKind::Obstacle if v >= slow => Some(Self {
+                u: (o.velocity.x / v, o.velocity.y / v),
+                length: v * GIVE_WAY_HORIZON,
+                speed: v,
+                drive: None,
+                standing: false,
+            }),
+            _ => None,
+        }
+    }
+
+    /// The time it takes to go `a` along its way.
+    fn time_to(&self, a: f64) -> f64 {
+        match self.drive {
+            Some((cap, accel)) => time_to(a, self.speed, cap, accel),
+            None => a / self.speed,
+        }
+    }
+}
+
+/// The time to drive `d` from speed `v0`, accelerating at `accel` up to
+/// `cap`.
+fn time_to(d: f64, v0: f64, cap: f64, accel: f64) -> f64 {
+    let d = d.max(0.0);
+    let v0 = v0.clamp(0.0, cap);
+    if accel <= 0.0 || v0 >= cap {
+        return if v0 > 0.0 { d / v0 } else { f64::INFINITY };
+    }
+    let t_acc = (cap - v0) / accel;
+    let d_acc = (v0 + cap) / 2.0 * t_acc;
+    if d <= d_acc {
+        ((v0 * v0 + 2.0 * accel * d).sqrt() - v0) / accel
+    } else {
+        t_acc + (d - d_acc) / cap
+    }
+}
+
 /// The least speed the car drives at until it reaches the end of a
 /// segment: a fiftieth of its wheelbase per second.
 pub fn creep(wheelbase: f64) -> f64 {
@@ -125,6 +240,42 @@ pub fn rear_footprint(shape: &Shape, back: f64) -> Shape {
     let moved: Vec<[f64; 2]> = pts.iter().map(|p| [p[0] + back, p[1]]).collect();
     // Moving a convex counter-clockwise polygon keeps it so.
     Polygon::new(&moved).map_or(*shape, Shape::Polygon)
+}
+
+/// `shape` grown by `by` on every side: a disc's radius, a convex
+/// polygon's edges each moved out by `by` (its corners mitred, so the
+/// polygon holds every point within `by` of the shape).
+pub fn grown(shape: &Shape, by: f64) -> Shape {
+    match shape {
+        Shape::Disc { radius } => Shape::disc(radius + by),
+        Shape::Polygon(p) => {
+            let pts = p.points();
+            let n = pts.len();
+            // Each edge's outward normal (the polygon is counter-clockwise).
+            let normal = |i: usize| {
+                let (a, b) = (pts[i], pts[(i + 1) % n]);
+                let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+                let l = dx.hypot(dy).max(1e-12);
+                [dy / l, -dx / l]
+            };
+            let out: Vec<[f64; 2]> = (0..n)
+                .map(|i| {
+                    // The corner `i` between edges `i - 1` and `i`, moved
+                    // along their normals' bisector to meet both moved
+                    // edges.
+                    let (m0, m1) = (normal((i + n - 1) % n), normal(i));
+                    let c = 1.0 + m0[0] * m1[0] + m0[1] * m1[1];
+                    let k = by / (c / 2.0).max(1e-6);
+                    let q = pts[i];
+                    [
+                        q[0] + (m0[0] + m1[0]) * k / 2.0,
+                        q[1] + (m0[1] + m1[1]) * k / 2.0,
+                    ]
+                })
+                .collect();
+            Polygon::new(&out).map_or(*shape, Shape::Polygon)
+        }
+    }
 }
 
 /// The car a robot's route is planned for, its wheelbase and its goal.
@@ -276,6 +427,11 @@ pub struct CarRouted {
     pursuit: Pursuit,
     /// Static obstacles' positions (not counted as in the way).
     statics: Vec<[f64; 2]>,
+    /// The bodies the route was last planned again around (id, where
+    /// each stood), not counted as in the way while they stand there.
+    around: Vec<(u32, [f64; 2])>,
+    /// The body the car last waited for to give way, and since when.
+    waited_for: Option<(u32, f64)>,
     keep: f64,
     lookahead: f64,
     slow: f64,
@@ -300,6 +456,8 @@ impl CarRouted {
         Self {
             inner,
             statics: scene.statics().iter().map(|s| s.1.position).collect(),
+            around: Vec::new(),
+            waited_for: None,
             scene,
             setup,
             pursuit: Pursuit::new(&route.path, lookahead, at_cusp, PATIENCE),
@@ -321,6 +479,14 @@ impl CarRouted {
                 .any(|p| (p[0] - o.position.x).hypot(p[1] - o.position.y) <= o.radius / 2.0)
     }
 
+    /// Is `o` a body the route was last planned again around, standing
+    /// where it stood?
+    fn went_round(&self, o: &Sensed) -> bool {
+        self.around.iter().any(|(id, p)| {
+            *id == o.id && (p[0] - o.position.x).hypot(p[1] - o.position.y) <= self.keep / 2.0
+        })
+    }
+
     /// How far the car may drive along its route before its footprint
     /// comes within the keep of a sensed body nearer than it is now
     /// (module documentation), up to `look`; `look` when nothing is in
@@ -339,7 +505,14 @@ impl CarRouted {
             .map(|o| {
                 let at = Pose::new([o.position.x, o.position.y], o.heading);
                 let now = mrsim_shape::gap(&foot, rear, &o.shape, at);
-                (o, now, self.keep + o.velocity.norm())
+                // A body the route went round, `grown` by the keep: only
+                // straying half the keep towards it counts.
+                let keep = if self.went_round(o) {
+                    self.keep / 2.0
+                } else {
+                    self.keep + o.velocity.norm()
+                };
+                (o, now, keep)
             })
             .collect();
         if near.is_empty() {
@@ -365,6 +538,123 @@ impl CarRouted {
         look
     }
 
+    /// How far the car may drive along its route before it must give way
+    /// to a body whose way crosses it ahead and that gets there first
+    /// (module documentation, "Giving way"), up to `look`; `look` when it
+    /// gives way to none. `speed` is its present speed along its gear,
+    /// `cap` the gear's top speed, `accel` its acceleration.
+    fn give_way(&mut self, obs: &Observation, speed: f64, cap: f64, accel: f64, look: f64) -> f64 {
+        let foot = self.setup.car.shape;
+        let r_me = foot.circumradius();
+        let s0 = self.pursuit.progress();
+        let mut limit = look;
+        let mut waiting = None;
+        for o in obs.others {
+            let Some(way) = Way::of(o, self.slow, cap, accel) else {
+                continue;
+            };
+            if self.known(o) || self.went_round(o) {
+                continue;
+            }
+            // A robot standing this long while the car waits for it is
+            // not coming: `free` keeps the gap to it where it stands.
+            if way.standing
+                && self
+                    .waited_for
+                    .is_some_and(|(id, since)| id == o.id && obs.time - since >= PATIENCE)
+            {
+                continue;
+            }
+            let reach = r_me + o.radius + self.keep;
+            let Some((s_c, a_in, tangent)) = self.crossing(o, &way, reach, s0, look) else {
+                continue;
+            };
+            // Going the same way: following, not crossing (`free` keeps
+            // the gap behind it).
+            if tangent.0 * way.u.0 + tangent.1 * way.u.1 > FOLLOWING {
+                continue;
+            }
+            let t_in = way.time_to(a_in);
+            let ahead = s_c - s0;
+            let t_me = time_to(ahead, speed, cap, accel);
+            // Through and clear of its way before it gets there: go first.
+            let through = ahead + 2.0 * r_me + 2.0 * o.radius + self.keep;
+            if time_to(through, speed, cap, accel) + MARGIN_TIME < t_in {
+                continue;
+            }
+            // Arriving together: the lower id goes first.
+            let first = if (t_me - t_in).abs() <= MARGIN_TIME {
+                obs.me.id < o.id
+            } else {
+                t_me < t_in
+            };
+            if first {
+                continue;
+            }
+            // Too near to stop short of it braking hard: committed, go on.
+            let stop_at = ahead - self.lookahead / 4.0;
+            if speed * speed / (2.0 * obs.me.max_accel) > stop_at.max(0.0) + 1e-9 {
+                continue;
+            }
+            if stop_at < limit {
+                limit = stop_at.max(0.0);
+                waiting = Some(o.id);
+            }
+        }
+        self.waited_for = match (waiting, self.waited_for) {
+            (Some(id), Some((was, since))) if was == id => Some((id, since)),
+            (Some(id), _) => Some((id, obs.time)),
+            (None, _) => None,
+        };
+        limit
+    }
+
+    /// Where body `o`, going its `way`, first comes within the keep of the
+    /// car's footprint on its route ahead, from progress `s0` up to `look`
+    /// on: that pose's progress, how far along its way the body is then,
+    /// and the route's direction there. `reach` bounds the centres'
+    /// distance at which the shapes can be within the keep.
+    fn crossing(
+        &self,
+        o: &Sensed,
+        way: &Way,
+        reach: f64,
+        s0: f64,
+        look: f64,
+    ) -> Option<(f64, f64, (f64, f64))> {
+        let foot = self.setup.car.shape;
+        let u = way.u;
+        let mut next = s0;
+        for p in self.pursuit.poses() {
+            if p.s < next {
+                continue;
+            }
+            if p.s > s0 + look {
+                break;
+            }
+            next = p.s + CROSSING_STEP;
+            let d = (p.position[0] - o.position.x, p.position[1] - o.position.y);
+            let along = d.0 * u.0 + d.1 * u.1;
+            let across = (d.0 * u.1 - d.1 * u.0).abs();
+            if across > reach || along < -reach || along > way.length + reach {
+                continue;
+            }
+            // How far along its way the body's centre is within `reach` of
+            // the pose's.
+            let half = (reach * reach - across * across).max(0.0).sqrt();
+            let mut a = (along - half).max(0.0);
+            let a1 = (along + half).min(way.length);
+            while a <= a1 {
+                let at = Pose::new([o.position.x + u.0 * a, o.position.y + u.1 * a], o.heading);
+                if mrsim_shape::gap(&foot, p.pose(), &o.shape, at) < self.keep {
+                    return Some((p.s, a, (p.heading.cos(), p.heading.sin())));
+                }
+                a += CROSSING_STEP;
+            }
+        }
+        None
+    }
+
     /// Plans again from `rear` around the bodies standing near (module
     /// documentation, "Replanning").
     fn replan(&mut self, obs: &Observation, rear: Pose, within: f64) {
@@ -377,12 +667,27 @@ impl CarRouted {
                 (o.position.x - rear.position[0]).hypot(o.position.y - rear.position[1])
                     <= within + o.radius
             })
-            .map(|o| (o.shape, Pose::new([o.position.x, o.position.y], o.heading)))
+            .map(|o| {
+                (
+                    grown(&o.shape, self.keep),
+                    Pose::new([o.position.x, o.position.y], o.heading),
+                )
+            })
             .collect();
         let map = self.setup.map(&self.scene, &blocked, rear);
         if let Ok(route) = self.setup.route(&map, rear) {
             self.pursuit.replace(&route.path, obs.time);
             self.replans += 1;
+            self.around = obs
+                .others
+                .iter()
+                .filter(|o| {
+                    blocked
+                        .iter()
+                        .any(|(_, p)| p.position == [o.position.x, o.position.y])
+                })
+                .map(|o| (o.id, [o.position.x, o.position.y]))
+                .collect();
         }
     }
 }
@@ -435,7 +740,13 @@ impl Planner for CarRouted {
         } else {
             f64::INFINITY
         };
-        let free = self.free(obs, rear, look, t.to_stop);
+        let free = self.free(obs, rear, look, t.to_stop).min(self.give_way(
+            obs,
+            sign * speed_now,
+            cap,
+            me.max_accel,
+            look.min(t.to_stop),
+        ));
         let clear = if free >= look {
             f64::INFINITY
         } else {
@@ -502,6 +813,44 @@ mod tests {
             let mid = [(a[0] + b[0]) / 2.0 - 0.5, (a[1] + b[1]) / 2.0];
             assert!((mid[0].hypot(mid[1]) - 1.0).abs() < 1e-12, "{mid:?}");
         }
+    }
+
+    #[test]
+    fn a_grown_rectangle_is_the_rectangle_wider_and_longer_by_twice_the_growth() {
+        let r = Shape::Polygon(Polygon::rectangle(4.6, 1.6).expect("a rectangle"));
+        let Shape::Polygon(g) = grown(&r, 0.4) else {
+            panic!("a polygon");
+        };
+        let want = [[-2.7, -1.2], [2.7, -1.2], [2.7, 1.2], [-2.7, 1.2]];
+        for (q, w) in g.points().iter().zip(want) {
+            assert!(
+                (q[0] - w[0]).abs() < 1e-12 && (q[1] - w[1]).abs() < 1e-12,
+                "{q:?}"
+            );
+        }
+        // A triangle's every edge moves out by the growth.
+        let t = Shape::Polygon(
+            Polygon::new(&[[0.0, 0.0], [2.0, 0.0], [0.0, 1.0]]).expect("a triangle"),
+        );
+        let Shape::Polygon(gt) = grown(&t, 0.25) else {
+            panic!("a polygon");
+        };
+        let (a, b) = (gt.points()[1], gt.points()[2]);
+        // The hypotenuse x + 2 y = 2, moved out by 0.25.
+        for q in [a, b] {
+            let d = (q[0] + 2.0 * q[1] - 2.0) / 5f64.sqrt();
+            assert!((d - 0.25).abs() < 1e-12, "{q:?}");
+        }
+        assert_eq!(grown(&Shape::disc(1.0), 0.5), Shape::disc(1.5));
+    }
+
+    #[test]
+    fn a_car_takes_as_long_to_a_crossing_as_its_acceleration_says() {
+        // From rest at 2.5 m/s^2 to 8 m/s: 12.8 m in 3.2 s, then at 8 m/s.
+        assert!((time_to(12.8, 0.0, 8.0, 2.5) - 3.2).abs() < 1e-12);
+        assert!((time_to(20.8, 0.0, 8.0, 2.5) - 4.2).abs() < 1e-12);
+        assert!((time_to(8.0, 8.0, 8.0, 2.5) - 1.0).abs() < 1e-12);
+        assert_eq!(time_to(1.0, 0.0, 8.0, 0.0), f64::INFINITY);
     }
 
     #[test]

@@ -1,7 +1,8 @@
 //! dwa on rectangles and cars end to end, against orca on the same
-//! scenes: the junction of scenarios/cars/junction.toml and the AGVs of
+//! scenes: the junction of scenarios/cars/junction.toml (its cars on their
+//! routes, and left to each planner) and the AGVs of
 //! scenarios/shapes/agv-swap.toml, lockstep in-process. Each test asserts
-//! what the planner achieves there (docs/shapes.md, "dwa with true
+//! what is achieved there (docs/shapes.md, "dwa with true
 //! shapes", gives the numbers and what falls short of every goal).
 
 use crate::common::*;
@@ -33,9 +34,32 @@ fn outcome(dir: &Path) -> (usize, u64, f64) {
     )
 }
 
+/// The junction with its cars left to `planner` (no route).
+fn junction_with(planner: &str) -> PathBuf {
+    run_shipped(
+        "scenarios/cars/junction.toml",
+        &[
+            "--set",
+            &format!("planner={planner}"),
+            "--set",
+            "defaults.route=direct",
+        ],
+    )
+}
+
+#[test]
+fn every_car_on_its_route_crosses_the_junction_giving_way_without_contact() {
+    let dir = run_shipped("scenarios/cars/junction.toml", &[]);
+    let (at_goal, contacts, least) = outcome(&dir);
+    assert_eq!(at_goal, 8);
+    assert_eq!(contacts, 0);
+    // Never within a decimetre of a kerb or another car.
+    assert!(least > 0.1, "least gap {least}");
+}
+
 #[test]
 fn dwa_brings_the_cars_going_straight_through_the_junction_without_contact() {
-    let dir = run_with("scenarios/cars/junction.toml", "dwa");
+    let dir = junction_with("dwa");
     let (at_goal, contacts, least) = outcome(&dir);
     // Three of the four cars going straight on arrive; the four turning
     // right stay near their starts (docs/shapes.md). No contact, and every
@@ -47,7 +71,7 @@ fn dwa_brings_the_cars_going_straight_through_the_junction_without_contact() {
 
 #[test]
 fn orca_drives_the_cars_of_the_junction_without_contact() {
-    let dir = run_with("scenarios/cars/junction.toml", "orca");
+    let dir = junction_with("orca");
     let (at_goal, contacts, least) = outcome(&dir);
     assert!(at_goal >= 2, "{at_goal} of 8 at their goal");
     assert_eq!(contacts, 0);
