@@ -156,9 +156,14 @@ pub fn kind(va: [f64; 2], vb: [f64; 2]) -> &'static str {
 /// Time until two discs touch, both keeping their velocities: 0 if they
 /// overlap, infinity if they never touch.
 pub fn time_to_collision(a: &BodyState, b: &BodyState) -> f64 {
+    time_to_reach(a, b, a.radius + b.radius)
+}
+
+/// When the centres of `a` and `b`, keeping their velocities, come within
+/// `r` of each other: 0 if they are, infinite if they never do.
+fn time_to_reach(a: &BodyState, b: &BodyState, r: f64) -> f64 {
     let d = [b.position[0] - a.position[0], b.position[1] - a.position[1]];
     let v = [b.velocity[0] - a.velocity[0], b.velocity[1] - a.velocity[1]];
-    let r = a.radius + b.radius;
     let c = d[0] * d[0] + d[1] * d[1] - r * r;
     if c <= 0.0 {
         return 0.0;
@@ -209,8 +214,16 @@ pub struct Interaction {
     people: bool,
     /// Every body's shape by id, empty when every body is a disc.
     shapes: Vec<mrsim_shape::Shape>,
+    /// Every body's inscribed radius by id (with shapes only).
+    inradii: Vec<f64>,
     /// This tick's placed shapes, by body id (with shapes only).
     placed: Vec<mrsim_shape::Placement>,
+    /// This tick's pairs of shapes within reach: ids, their circumscribed
+    /// discs' gap and time to collision.
+    shaped_pairs: Vec<(u32, u32, f64, f64)>,
+    /// Per robot, this tick's upper bounds of the smallest gap and time to
+    /// collision, to the others and to people.
+    bounds: Vec<[f64; 4]>,
     open: HashMap<(u32, u32), Open>,
     /// Encounters ended and not yet taken.
     closed: Vec<(u32, u32, Open)>,
@@ -248,7 +261,18 @@ impl Interaction {
             } else {
                 Vec::new()
             },
+            inradii: if scenario.has_shapes() {
+                scenario
+                    .body_shapes()
+                    .iter()
+                    .map(|b| b.inradius())
+                    .collect()
+            } else {
+                Vec::new()
+            },
             placed: Vec::new(),
+            shaped_pairs: Vec::new(),
+            bounds: Vec::new(),
             open: HashMap::new(),
             closed: Vec::new(),
         }
@@ -347,6 +371,21 @@ impl Interaction {
                     .map(|(s, b)| mrsim_shape::Placement::of(b, pose(s))),
             );
         }
+        // The pairs of shapes (not both discs) within reach by their
+        // circumscribed discs, measured in a second pass (below).
+        let mut shaped_pairs = std::mem::take(&mut self.shaped_pairs);
+        shaped_pairs.clear();
+        // Per robot, upper bounds of this tick's smallest gap and time to
+        // collision to robots and obstacles, and to people: a pair's
+        // inscribed discs', where those are within reach (so that the pair
+        // surely counts). A shape holds its inscribed disc, so the shapes'
+        // gap and time are at most the discs'.
+        let mut bounds = std::mem::take(&mut self.bounds);
+        bounds.clear();
+        bounds.resize(
+            if self.shapes.is_empty() { 0 } else { n },
+            [f64::INFINITY; 4],
+        );
         for i in 0..n {
             let s = &states[i];
             let after = i as u32 + 1;
@@ -362,59 +401,41 @@ impl Interaction {
             for &j in &near {
                 let j = j as usize;
                 let q = &states[j];
+                let person = q.kind == body_kind::PERSON;
                 // A robot's gap to a person counts among the people's,
                 // not the others' (j > i: only j can be a person).
-                let (near_gap, near_ttc) = if q.kind == body_kind::PERSON {
+                let (near_gap, near_ttc) = if person {
                     (&mut person_smallest, &mut person_ttc)
                 } else {
                     (&mut smallest, &mut ttc)
                 };
-                let shapes = (self.shapes.get(i), self.shapes.get(j));
-                let shaped = match shapes {
-                    (Some(a), Some(b)) if !(a.is_disc() && b.is_disc()) => Some((a, b)),
-                    _ => None,
+                let shaped = match (self.shapes.get(i), self.shapes.get(j)) {
+                    (Some(a), Some(b)) => !(a.is_disc() && b.is_disc()),
+                    _ => false,
                 };
-                let (g, t) = match shaped {
-                    None => {
-                        let g = gap(s, q);
-                        // Farther than the social distance, or not a number.
-                        if g.partial_cmp(&reach) != Some(std::cmp::Ordering::Less) {
-                            continue;
+                let g = gap(s, q);
+                // Farther than the social distance, or not a number.
+                if g.partial_cmp(&reach) != Some(std::cmp::Ordering::Less) {
+                    continue;
+                }
+                let t = time_to_collision(s, q);
+                if shaped {
+                    shaped_pairs.push((i as u32, j as u32, g, t));
+                    let inner = self.inradii[i] + self.inradii[j];
+                    let outer = s.radius + q.radius;
+                    let g_up = g + outer - inner;
+                    if g_up < reach {
+                        let t_up = time_to_reach(s, q, inner);
+                        let at = if person { 2 } else { 0 };
+                        for k in [i, j] {
+                            if k < n {
+                                bounds[k][at] = bounds[k][at].min(g_up);
+                                bounds[k][at + 1] = bounds[k][at + 1].min(t_up);
+                            }
                         }
-                        (g, time_to_collision(s, q))
                     }
-                    Some((a, b)) => {
-                        // The circumscribed discs' gap and time are lower
-                        // bounds of the shapes': a pair whose bounds change
-                        // no robot's smallest gap or time and meet no
-                        // encounter changes nothing, and its shapes are not
-                        // measured.
-                        let (g0, t0) = (gap(s, q), time_to_collision(s, q));
-                        if g0.partial_cmp(&reach) != Some(std::cmp::Ordering::Less) {
-                            continue;
-                        }
-                        let lowers = |k: usize, x: f64, of: &[f64]| k < n && x < of[k];
-                        let meets = g0 < self.encounter_gap;
-                        let nearer = lowers(i, g0, near_gap) || lowers(j, g0, near_gap);
-                        let sooner = lowers(i, t0, near_ttc) || lowers(j, t0, near_ttc);
-                        if !(meets || nearer || sooner) {
-                            continue;
-                        }
-                        let g = mrsim_shape::placed_gap(&placed[i], &placed[j]);
-                        if g.partial_cmp(&reach) != Some(std::cmp::Ordering::Less) {
-                            continue;
-                        }
-                        // The circumscribed discs touch first: from there,
-                        // the true shapes' time.
-                        let t = if meets || sooner {
-                            let v = [q.velocity[0] - s.velocity[0], q.velocity[1] - s.velocity[1]];
-                            mrsim_shape::time_to_contact(a, pose(s), b, pose(q), v, t0)
-                        } else {
-                            t0
-                        };
-                        (g, t)
-                    }
-                };
+                    continue;
+                }
                 for k in [i, j] {
                     if k < n {
                         near_gap[k] = near_gap[k].min(g);
@@ -426,6 +447,60 @@ impl Interaction {
                 }
             }
         }
+        for &(i, j, g0, t0) in &shaped_pairs {
+            let (i, j) = (i as usize, j as usize);
+            let (s, q) = (&states[i], &states[j]);
+            let person = q.kind == body_kind::PERSON;
+            let (near_gap, near_ttc) = if person {
+                (&mut person_smallest, &mut person_ttc)
+            } else {
+                (&mut smallest, &mut ttc)
+            };
+            let at = if person { 2 } else { 0 };
+            // The circumscribed discs' gap and time are lower bounds of
+            // the shapes': a pair whose bounds can lower no robot's
+            // smallest gap or time (below this tick's so far, and below
+            // the upper bounds) and that meets no encounter changes
+            // nothing, and its shapes are not measured.
+            let lowers =
+                |k: usize, x: f64, of: &[f64], b: usize| k < n && x < of[k] && x < bounds[k][b];
+            let meets = g0 < self.encounter_gap;
+            let nearer = lowers(i, g0, near_gap, at) || lowers(j, g0, near_gap, at);
+            let sooner = lowers(i, t0, near_ttc, at + 1) || lowers(j, t0, near_ttc, at + 1);
+            if !(meets || nearer || sooner) {
+                continue;
+            }
+            let g = mrsim_shape::placed_gap(&placed[i], &placed[j]);
+            if g.partial_cmp(&reach) != Some(std::cmp::Ordering::Less) {
+                continue;
+            }
+            // The circumscribed discs touch first: from there, the true
+            // shapes' time.
+            let t = if meets || sooner {
+                let v = [q.velocity[0] - s.velocity[0], q.velocity[1] - s.velocity[1]];
+                mrsim_shape::time_to_contact(
+                    &self.shapes[i],
+                    pose(s),
+                    &self.shapes[j],
+                    pose(q),
+                    v,
+                    t0,
+                )
+            } else {
+                t0
+            };
+            for k in [i, j] {
+                if k < n {
+                    near_gap[k] = near_gap[k].min(g);
+                    near_ttc[k] = near_ttc[k].min(t);
+                }
+            }
+            if g < self.encounter_gap {
+                self.meet(tick, (i, j), states, g, t);
+            }
+        }
+        self.shaped_pairs = shaped_pairs;
+        self.bounds = bounds;
         if self.people {
             // No person within reach: the nearest one is farther, and only
             // the smallest gap over the run wants it.
