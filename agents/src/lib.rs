@@ -224,6 +224,20 @@ fn fit_kinematics(spec: &RobotSpec, planner: Box<dyn Planner>) -> Box<dyn Planne
     }
 }
 
+/// `planner` as robot `spec` ends its way: a unicycle with a goal heading
+/// (`goal_heading_deg`) turns in place to it at its goal
+/// (`mrsim_planners::unicycle::GoalHeading`), outside its route, so that
+/// it turns at the goal itself; any other robot's planner unchanged (a
+/// car's route ends at the heading; a holonomic robot never turns).
+pub fn fit_goal_heading(spec: &RobotSpec, planner: Box<dyn Planner>) -> Box<dyn Planner> {
+    match (spec.kinematics, spec.goal_heading) {
+        (mrsim_scenario::Kinematics::Unicycle, Some(g)) => Box::new(
+            mrsim_planners::unicycle::GoalHeading::new(planner, g.heading),
+        ),
+        _ => planner,
+    }
+}
+
 /// How far from its centre robot `spec` senses other bodies' centres, less
 /// their radius (its sensing range plus its own radius); `None` when
 /// unlimited.

@@ -357,13 +357,14 @@ impl Seat {
         };
         let planner = crate::build_planner_in(registry, &self.spec).map_err(fail)?;
         let Some(scene) = &self.route else {
-            return Ok(planner);
+            return Ok(crate::fit_goal_heading(&self.spec, planner));
         };
-        crate::route::fit_route(planner, &self.spec, scene).map_err(|e| {
+        let planner = crate::route::fit_route(planner, &self.spec, scene).map_err(|e| {
             fail(mrsim_planners::BuildError::Other(format!(
                 "route from start to goal: {e}"
             )))
-        })
+        })?;
+        Ok(crate::fit_goal_heading(&self.spec, planner))
     }
 
     /// The message telling the world this robot's agent is ready.

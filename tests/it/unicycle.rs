@@ -233,3 +233,24 @@ fn the_lidar_demo_records_scans_that_see_the_arena_walls() {
         assert!(*v == "inf" || (0.0..=8.0).contains(&v.parse::<f64>().unwrap()));
     }
 }
+
+#[test]
+fn unicycles_asked_for_a_goal_heading_turn_in_place_at_their_goals_and_arrive_facing_it() {
+    // Every robot to face 135 degrees: stream a, along +x, turns 135
+    // degrees at its goal, stream b, along +y, 45.
+    for planner in ["orca", "dwa"] {
+        let out = run_with(planner, "unicycle", &["defaults.goal_heading_deg=135"]);
+        assert_eq!(reached(&out).len(), 4, "{planner}: {:?}", reached(&out));
+        let text = std::fs::read_to_string(out.join("trajectory.csv")).expect("trajectory");
+        let mut last = std::collections::BTreeMap::new();
+        for l in text.lines().skip(1) {
+            let f: Vec<&str> = l.split(',').collect();
+            last.insert(f[2].to_string(), f[8].parse::<f64>().expect("theta"));
+        }
+        for (name, th) in last {
+            let off = mrsim_scenario::angle_between(th, 135f64.to_radians()).to_degrees();
+            assert!(off <= 10.0, "{planner}: {name} ends {off:.1} degrees off");
+        }
+        assert_clean_unicycle_run(planner, &out);
+    }
+}

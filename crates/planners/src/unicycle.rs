@@ -161,6 +161,81 @@ impl Planner for LookAhead {
     }
 }
 
+/// A unicycle asked to arrive facing a heading (the scenario's
+/// `goal_heading_deg`): where the robot's centre is within its goal
+/// tolerance of the goal, it stands and turns in place to the heading,
+/// the short way round, at the turn rate from which it stops on the
+/// heading decelerating at its `max_angular_accel` (at most
+/// `max_angular_speed`); elsewhere `inner` plans as ever. The world counts
+/// the robot arrived only once its heading is within the tolerance too.
+/// On a holonomic robot or a car it changes nothing (a holonomic robot
+/// never turns; a car cannot turn in place).
+pub struct GoalHeading {
+    inner: Box<dyn Planner>,
+    heading: f64,
+}
+
+impl GoalHeading {
+    /// Wraps `inner`, to arrive facing `heading` (rad).
+    pub fn new(inner: Box<dyn Planner>, heading: f64) -> Self {
+        Self { inner, heading }
+    }
+
+    /// The turn rate towards the heading `error` (rad, signed) away: the
+    /// rate from which the turn stops there decelerating at `accel`, at
+    /// most `top`.
+    pub fn turn_rate(error: f64, top: f64, accel: f64) -> f64 {
+        error.signum() * (2.0 * accel * error.abs()).sqrt().min(top)
+    }
+}
+
+impl Planner for GoalHeading {
+    fn plan(&mut self, obs: &Observation) -> Command {
+        let Kinematics::Unicycle {
+            max_angular_speed,
+            max_angular_accel,
+        } = obs.me.kinematics
+        else {
+            return self.inner.plan(obs);
+        };
+        if (obs.me.position - obs.goal).norm() > obs.goal_tolerance {
+            return self.inner.plan(obs);
+        }
+        // At the goal: turn in place, the short way round.
+        let error = (self.heading - obs.me.heading + std::f64::consts::PI)
+            .rem_euclid(std::f64::consts::TAU)
+            - std::f64::consts::PI;
+        Command::Unicycle {
+            v: 0.0,
+            omega: Self::turn_rate(error, max_angular_speed, max_angular_accel),
+        }
+    }
+
+    fn diagnostics(&self) -> Vec<Diagnostic> {
+        self.inner.diagnostics()
+    }
+
+    fn diagnostics_into(&self, out: &mut Vec<Diagnostic>) {
+        self.inner.diagnostics_into(out);
+    }
+
+    fn native_unicycle(&self) -> bool {
+        self.inner.native_unicycle()
+    }
+
+    fn native_ackermann(&self) -> bool {
+        self.inner.native_ackermann()
+    }
+
+    fn needs_scan(&self) -> bool {
+        self.inner.needs_scan()
+    }
+
+    fn drives_look_ahead(&mut self, lookahead: f64) {
+        self.inner.drives_look_ahead(lookahead);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -322,5 +397,43 @@ mod tests {
         }
         // A look-ahead as long as the tolerance leaves it unchanged.
         assert_eq!(LookAhead::tolerance_seen(0.1, 0.1), 0.1);
+    }
+
+    #[test]
+    fn a_unicycle_at_its_goal_turns_in_place_the_short_way_to_its_goal_heading() {
+        let answer = Command::Unicycle { v: 0.3, omega: 0.0 };
+        let (la, _) = probe(answer, false);
+        // Facing +x at its goal, asked to face -y (-90 degrees): turns
+        // clockwise, standing, at sqrt(2 accel error) capped at 2 rad/s.
+        let mut gh = GoalHeading::new(Box::new(la), -FRAC_PI_2);
+        let mut obs = observation(unicycle_me(0.0, 0.0, 0.0), Vec2::new(1.0, 2.1), &[]);
+        obs.goal_tolerance = 0.2;
+        assert_eq!(
+            gh.plan(&obs),
+            Command::Unicycle {
+                v: 0.0,
+                omega: -2.0
+            }
+        );
+        // Nearly there: slower, so that it stops on the heading.
+        obs.me.heading = -FRAC_PI_2 + 0.02;
+        let Command::Unicycle { v, omega } = gh.plan(&obs) else {
+            panic!("a unicycle command");
+        };
+        assert_eq!(v, 0.0);
+        assert!(
+            (omega + (2.0f64 * 4.0 * 0.02).sqrt()).abs() < 1e-12,
+            "{omega}"
+        );
+        // Away from its goal the planner drives it.
+        obs.goal = Vec2::new(5.0, 2.0);
+        assert_ne!(
+            gh.plan(&obs),
+            Command::Unicycle {
+                v: 0.0,
+                omega: -2.0
+            }
+        );
+        assert!(matches!(gh.plan(&obs), Command::Unicycle { v, .. } if v != 0.0));
     }
 }

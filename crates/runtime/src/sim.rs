@@ -203,6 +203,7 @@ impl Sim {
                     "route from start to goal: {e}"
                 )))
             })?;
+            let planner = mrsim_agents::fit_goal_heading(spec, planner);
             self.builtins.push(Builtin {
                 index: i,
                 planner,
