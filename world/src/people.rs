@@ -769,7 +769,13 @@ pub fn moussaid(diff: Vec2, vel_diff: Vec2) -> Vec2 {
         return Vec2::zeros();
     }
     let t = interaction / length;
-    let theta = wrap(wrap(direction.y.atan2(direction.x)) - wrap(t.y.atan2(t.x)));
+    // The angle from t to the direction, in (-pi, pi]: libpedsim takes it
+    // as the difference of the two vectors' angles, wrapped; one atan2 of
+    // their cross and dot products is the same angle.
+    let theta = match (t.x * direction.y - t.y * direction.x).atan2(t.dot(&direction)) {
+        a if a == -std::f64::consts::PI => std::f64::consts::PI,
+        a => a,
+    };
     let b = GAMMA * length;
     let d = diff.norm();
     let velocity_amount = -(-d / b - (N_PRIME * b * theta).powi(2)).exp();

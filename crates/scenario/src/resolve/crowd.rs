@@ -161,24 +161,28 @@ pub(super) fn generate(
     let (r, v) = (template.radius, template.preferred_speed);
     let mut rng = Rng::stream(seed, "crowd", index as u64);
     // Every start and goal so far, with its body's radius.
-    let mut starts: Vec<(P, f64)> = robots
+    let largest = robots
         .iter()
-        .map(|x| (x.start, x.radius))
-        .chain(people.iter().map(|p| (p.start, p.radius)))
-        .collect();
-    let mut goals: Vec<(P, f64)> = robots
-        .iter()
-        .map(|x| (x.goal, x.radius))
-        .chain(
+        .map(|x| x.radius)
+        .chain(people.iter().map(|p| p.radius))
+        .fold(r, f64::max);
+    let cell = r + largest + DISCOMFORT;
+    let mut starts = Placed::new(
+        cell,
+        robots
+            .iter()
+            .map(|x| (x.start, x.radius))
+            .chain(people.iter().map(|p| (p.start, p.radius))),
+    );
+    let mut goals = Placed::new(
+        cell,
+        robots.iter().map(|x| (x.goal, x.radius)).chain(
             people
                 .iter()
                 .filter_map(|p| p.waypoints.last().map(|g| (*g, p.radius))),
-        )
-        .collect();
-    let clear = |p: P, of: &[(P, f64)]| {
-        of.iter()
-            .all(|(q, rq)| (p[0] - q[0]).hypot(p[1] - q[1]) >= r + rq + DISCOMFORT)
-    };
+        ),
+    );
+    let clear = |p: P, of: &Placed| of.clear(p, r);
     let full = |k: usize| {
         Fail::new(
             Some(table.clone()),
@@ -256,7 +260,7 @@ pub(super) fn generate(
                     None => 10.0,
                 };
                 let sign = if rng.unit() > 0.5 { -1.0 } else { 1.0 };
-                let mut draw = |side: f64, of: &[(P, f64)]| {
+                let mut draw = |side: f64, of: &Placed| {
                     for _ in 0..TRIES {
                         let p = [
                             center[0] + rng.unit() * w * 0.5 * side,
@@ -299,13 +303,65 @@ pub(super) fn generate(
             }
         };
         let spec = resolve_person(&person(name, start, route), table.clone(), index)?;
-        starts.push((spec.start, spec.radius));
+        starts.push(spec.start, spec.radius);
         if let Some(g) = spec.waypoints.last() {
-            goals.push((*g, spec.radius));
+            goals.push(*g, spec.radius);
         }
         out.push(spec);
     }
     Ok(out)
+}
+
+/// Points placed so far with their bodies' radii, in square cells of a
+/// side no less than any two bodies' radii and the discomfort distance,
+/// so that whether a new point is clear of every one is told by the
+/// points of its own cell and the eight around it.
+struct Placed {
+    cell: f64,
+    cells: std::collections::HashMap<(i64, i64), Vec<(P, f64)>>,
+}
+
+impl Placed {
+    /// `points` in cells of side `cell` (> 0).
+    fn new(cell: f64, points: impl Iterator<Item = (P, f64)>) -> Self {
+        let mut placed = Self {
+            cell,
+            cells: std::collections::HashMap::new(),
+        };
+        for (p, radius) in points {
+            placed.push(p, radius);
+        }
+        placed
+    }
+
+    /// The cell of `p`.
+    fn key(&self, p: P) -> (i64, i64) {
+        (
+            (p[0] / self.cell).floor() as i64,
+            (p[1] / self.cell).floor() as i64,
+        )
+    }
+
+    /// Adds a body of radius `radius` at `p`.
+    fn push(&mut self, p: P, radius: f64) {
+        let key = self.key(p);
+        self.cells.entry(key).or_default().push((p, radius));
+    }
+
+    /// Is a body of radius `r` at `p` clear of every body placed by its
+    /// radius, the other's and the discomfort distance? (Bodies beyond
+    /// the eight cells around `p`'s are further than a cell, so clear.)
+    fn clear(&self, p: P, r: f64) -> bool {
+        let (cx, cy) = self.key(p);
+        (cx - 1..=cx + 1).all(|x| {
+            (cy - 1..=cy + 1).all(|y| {
+                self.cells.get(&(x, y)).is_none_or(|of| {
+                    of.iter()
+                        .all(|(q, rq)| (p[0] - q[0]).hypot(p[1] - q[1]) >= r + rq + DISCOMFORT)
+                })
+            })
+        })
+    }
 }
 
 /// A generated person's route.
