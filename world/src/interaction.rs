@@ -503,9 +503,10 @@ impl Interaction {
         self.bounds = bounds;
         if self.people {
             // No person within reach: the nearest one is farther, and only
-            // the smallest gap over the run wants it.
+            // the smallest gap over the run wants it, while that is beyond
+            // reach too.
             for (i, g) in person_smallest.iter_mut().enumerate() {
-                if g.is_infinite() && dt > 0.0 {
+                if g.is_infinite() && dt > 0.0 && self.robots[i].person_min_gap >= reach {
                     *g = self.farthest_person(i, states, &placed);
                 }
             }
