@@ -57,9 +57,13 @@
 //! through (past the pose by both bodies' extents) [`MARGIN_TIME`] before
 //! the other arrives, or simply arrives first by more than that; arriving
 //! within [`MARGIN_TIME`] of each other, the lower id goes first. Else it
-//! stops a quarter of its look-ahead short of that pose, unless it can no
-//! longer stop there braking at `max_accel` (it is committed, and the
-//! other, which sees it nearer, waits). A body going within 45 degrees of
+//! stops a quarter of its look-ahead short of that pose (the ways' poses
+//! found within twice the keep, so that a car stopped there leaves the
+//! other's way the keep), unless it can no longer stop there braking at
+//! `max_accel` (it is committed, and the other, which sees it nearer,
+//! waits); and, giving way to any, short of the first way it crosses, so
+//! that waiting for a car in the far lane it does not stand in the near
+//! one. A body going within 45 degrees of
 //! the route's direction there is followed, not given way to. A robot
 //! that has stood [`crate::route::PATIENCE`] s while the car waits for it
 //! is not coming (parked at its goal, say): the car no longer gives way
@@ -549,6 +553,8 @@ impl CarRouted {
         let s0 = self.pursuit.progress();
         let mut limit = look;
         let mut waiting = None;
+        // How far ahead the first way it crosses is.
+        let mut first_way = f64::INFINITY;
         for o in obs.others {
             let Some(way) = Way::of(o, self.slow, cap, accel) else {
                 continue;
@@ -565,7 +571,7 @@ impl CarRouted {
             {
                 continue;
             }
-            let reach = r_me + o.radius + self.keep;
+            let reach = r_me + o.radius + 2.0 * self.keep;
             let Some((s_c, a_in, tangent)) = self.crossing(o, &way, reach, s0, look) else {
                 continue;
             };
@@ -576,6 +582,7 @@ impl CarRouted {
             }
             let t_in = way.time_to(a_in);
             let ahead = s_c - s0;
+            first_way = first_way.min(ahead);
             let t_me = time_to(ahead, speed, cap, accel);
             // Through and clear of its way before it gets there: go first.
             let through = ahead + 2.0 * r_me + 2.0 * o.radius + self.keep;
@@ -592,7 +599,7 @@ impl CarRouted {
                 continue;
             }
             // Too near to stop short of it braking hard: committed, go on.
-            let stop_at = ahead - self.lookahead / 4.0;
+            let stop_at = ahead - CROSSING_STEP - self.lookahead / 4.0;
             if speed * speed / (2.0 * obs.me.max_accel) > stop_at.max(0.0) + 1e-9 {
                 continue;
             }
@@ -600,6 +607,16 @@ impl CarRouted {
                 limit = stop_at.max(0.0);
                 waiting = Some(o.id);
             }
+        }
+        // Giving way, it stops short of the first way it crosses, not in
+        // it (it would block the car that goes first there), if it still
+        // can.
+        let before = first_way - CROSSING_STEP - self.lookahead / 4.0;
+        if waiting.is_some()
+            && before < limit
+            && speed * speed / (2.0 * obs.me.max_accel) <= before.max(0.0) + 1e-9
+        {
+            limit = before.max(0.0);
         }
         self.waited_for = match (waiting, self.waited_for) {
             (Some(id), Some((was, since))) if was == id => Some((id, since)),
@@ -646,7 +663,7 @@ impl CarRouted {
             let a1 = (along + half).min(way.length);
             while a <= a1 {
                 let at = Pose::new([o.position.x + u.0 * a, o.position.y + u.1 * a], o.heading);
-                if mrsim_shape::gap(&foot, p.pose(), &o.shape, at) < self.keep {
+                if mrsim_shape::gap(&foot, p.pose(), &o.shape, at) < 2.0 * self.keep {
                     return Some((p.s, a, (p.heading.cos(), p.heading.sin())));
                 }
                 a += CROSSING_STEP;
