@@ -239,4 +239,39 @@ mod tests {
         let p = shifted(0.3);
         assert!((p - goal).norm() < 1e-12, "{p:?}");
     }
+
+    #[test]
+    fn a_footprint_meeting_another_in_a_door_keeps_right_only_as_far_as_the_door_leaves_room() {
+        // A door 1.2 wide (jambs at y = +-0.6, x = 0.5) into an open room;
+        // the robot at the origin heading for (2, 0), another body ahead.
+        let walls = [wall(0.5, 0.6, 0.5, 5.0), wall(0.5, -0.6, 0.5, -5.0)];
+        let other = [crate::testkit::robot(
+            1,
+            Vec2::new(1.5, 0.1),
+            Vec2::zeros(),
+            0.54,
+        )];
+        let me = ROBOT.unicycle(Vec2::zeros(), Vec2::zeros(), 0.0, 0.0, 2.0, 4.0);
+        let obs = Observation {
+            walls: &walls,
+            ..observation(me, Vec2::new(2.0, 0.0), &other)
+        };
+        assert!(body_in_the_way(&obs, 0.375, 3.0));
+        let mut grid = WallGrid::default();
+        grid.prepare(&walls, 0.75);
+        // Beside the goal alone there is room for the whole 0.45; the way
+        // there passes the door, which leaves 0.6 - 0.375 = 0.225 at the
+        // jambs (a little more, the samples along the way, about every
+        // 0.375, falling beside them rather than level with them).
+        let p = right_of_goal(&obs, &mut grid, 0.375, 0.45);
+        assert!((p - Vec2::new(2.0, -0.45)).norm() < 1e-9, "{p:?}");
+        let p = right_of_way(&obs, &mut grid, 0.375, 0.45);
+        assert!(p.x == 2.0 && p.y < -0.225 + 1e-9 && p.y > -0.3, "{p:?}");
+        // Nothing ahead: not met.
+        let obs = Observation {
+            walls: &walls,
+            ..observation(me, Vec2::new(2.0, 0.0), &[])
+        };
+        assert!(!body_in_the_way(&obs, 0.375, 3.0));
+    }
 }
