@@ -79,10 +79,14 @@ fn orca_drives_the_cars_of_the_junction_without_contact() {
 }
 
 #[test]
-fn dwa_takes_rectangular_agvs_through_doors_their_discs_do_not_fit() {
+fn dwa_takes_rectangular_agvs_through_doors_their_discs_do_not_fit_without_contact() {
     // With its padded circumscribed disc (0.675 m: 1.35 m across) no AGV
-    // left its room through the 1.2 m doors; with the true footprint all
-    // but one reach the corridor between the rooms (|y| < 0.5).
+    // left its room through the 1.2 m doors; with the true footprint, the
+    // AGVs keeping right when they meet and braking when nothing is
+    // admissible, all eight reach the corridor, four of them arrive and
+    // none touches anything. The other four jam at the door at x = -3
+    // above the corridor, two below it and two in it (docs/shapes.md):
+    // short of the 90 % goal.
     let dir = run_with("scenarios/shapes/agv-swap.toml", "dwa");
     let text = std::fs::read_to_string(dir.join("trajectory.csv")).expect("trajectory.csv");
     let mut in_corridor = std::collections::BTreeSet::new();
@@ -92,15 +96,20 @@ fn dwa_takes_rectangular_agvs_through_doors_their_discs_do_not_fit() {
             in_corridor.insert(f[2].to_string());
         }
     }
-    assert!(in_corridor.len() >= 7, "{in_corridor:?}");
-    let (_, contacts, _) = outcome(&dir);
-    assert!(contacts <= 2, "{contacts} contacts");
+    assert_eq!(in_corridor.len(), 8, "{in_corridor:?}");
+    let (at_goal, contacts, least) = outcome(&dir);
+    assert!(at_goal >= 4, "{at_goal} of 8 at their goal");
+    assert_eq!(contacts, 0);
+    assert!(least >= -0.001, "least gap {least}");
 }
 
 #[test]
-fn orca_brings_every_agv_home() {
+fn orca_brings_every_agv_home_without_grazing_a_wall() {
+    // The acceptance criterion of the scene: every AGV at its goal, no
+    // contact, no footprint more than 1 mm inside anything.
     let dir = run_with("scenarios/shapes/agv-swap.toml", "orca");
-    let (at_goal, _, least) = outcome(&dir);
+    let (at_goal, contacts, least) = outcome(&dir);
     assert_eq!(at_goal, 8);
-    assert!(least > -0.006, "least gap {least}");
+    assert_eq!(contacts, 0);
+    assert!(least >= -0.001, "least gap {least}");
 }

@@ -65,6 +65,28 @@ pub(super) fn in_the_way(
     })
 }
 
+/// Whether another body (true states) lies ahead in the way to
+/// `obs.goal`: its nearest point, its centre less its circumscribed
+/// radius, within twice `half` of the line to the goal (the strip the
+/// robot's padded footprint, `half` to either side of its centre, sweeps,
+/// widened by another as wide), up to the look-ahead.
+pub(super) fn body_in_the_way(obs: &Observation, half: f64, horizon: f64) -> bool {
+    let me = &obs.me;
+    let to_goal = obs.goal - me.position;
+    let d_goal = to_goal.norm();
+    if d_goal <= f64::EPSILON {
+        return false;
+    }
+    let g = to_goal / d_goal;
+    let right = Vec2::new(g.y, -g.x);
+    let far = look(obs, horizon);
+    obs.others.iter().any(|o| {
+        let d = o.position - me.position;
+        let along = d.dot(&g) + o.radius;
+        along > 0.0 && along - 2.0 * o.radius <= far && d.dot(&right).abs() - o.radius < 2.0 * half
+    })
+}
+
 /// `obs.goal` moved `shift` to the right of the way to it, less where the
 /// walls there leave the `padded` disc less room (`grid` holds
 /// `obs.walls`).
@@ -82,12 +104,49 @@ pub(super) fn right_of_goal(
     let right = Vec2::new(to_goal.y, -to_goal.x) / d_goal;
     // Room to the right of the goal: how far the padded disc moves that way
     // before it touches a wall.
+    let room = room_right(obs, grid, obs.goal, right, padded, shift);
+    obs.goal + right * room.max(0.0)
+}
+
+/// How far the disc of radius `padded` at `at` moves along `right` before
+/// it touches one of the walls (`grid` holds `obs.walls`), up to `shift`.
+fn room_right(
+    obs: &Observation,
+    grid: &mut WallGrid,
+    at: Vec2,
+    right: Vec2,
+    padded: f64,
+    shift: f64,
+) -> f64 {
     let reach = Vec2::repeat(shift + padded);
     let mut buf = Vec::new();
-    grid.query(obs.goal - reach, obs.goal + reach, false, &mut buf);
-    let room = buf
-        .iter()
-        .filter_map(|&k| time_to_segment(obs.goal, right, padded, &obs.walls[k as usize]))
+    grid.query(at - reach, at + reach, false, &mut buf);
+    buf.iter()
+        .filter_map(|&k| time_to_segment(at, right, padded, &obs.walls[k as usize]))
+        .fold(shift, f64::min)
+}
+
+/// [`right_of_goal`] for a footprint on true states: the shift is as far
+/// as the walls leave room beside the whole way to the goal (sampled every
+/// `padded`, from the robot's own position on), not only beside the goal,
+/// so that a robot in a door or about to enter one does not swerve into
+/// its jamb.
+pub(super) fn right_of_way(
+    obs: &Observation,
+    grid: &mut WallGrid,
+    padded: f64,
+    shift: f64,
+) -> Vec2 {
+    let to_goal = obs.goal - obs.me.position;
+    let d_goal = to_goal.norm();
+    if d_goal <= f64::EPSILON || shift <= 0.0 || padded <= 0.0 {
+        return obs.goal;
+    }
+    let right = Vec2::new(to_goal.y, -to_goal.x) / d_goal;
+    let n = (d_goal / padded).ceil().max(1.0) as usize;
+    let room = (0..=n)
+        .map(|k| obs.me.position + to_goal * (k as f64 / n as f64))
+        .map(|at| room_right(obs, grid, at, right, padded, shift))
         .fold(shift, f64::min);
     obs.goal + right * room.max(0.0)
 }
@@ -179,5 +238,40 @@ mod tests {
         // No wider than the padded disc: not at all.
         let p = shifted(0.3);
         assert!((p - goal).norm() < 1e-12, "{p:?}");
+    }
+
+    #[test]
+    fn a_footprint_meeting_another_in_a_door_keeps_right_only_as_far_as_the_door_leaves_room() {
+        // A door 1.2 wide (jambs at y = +-0.6, x = 0.5) into an open room;
+        // the robot at the origin heading for (2, 0), another body ahead.
+        let walls = [wall(0.5, 0.6, 0.5, 5.0), wall(0.5, -0.6, 0.5, -5.0)];
+        let other = [crate::testkit::robot(
+            1,
+            Vec2::new(1.5, 0.1),
+            Vec2::zeros(),
+            0.54,
+        )];
+        let me = ROBOT.unicycle(Vec2::zeros(), Vec2::zeros(), 0.0, 0.0, 2.0, 4.0);
+        let obs = Observation {
+            walls: &walls,
+            ..observation(me, Vec2::new(2.0, 0.0), &other)
+        };
+        assert!(body_in_the_way(&obs, 0.375, 3.0));
+        let mut grid = WallGrid::default();
+        grid.prepare(&walls, 0.75);
+        // Beside the goal alone there is room for the whole 0.45; the way
+        // there passes the door, which leaves 0.6 - 0.375 = 0.225 at the
+        // jambs (a little more, the samples along the way, about every
+        // 0.375, falling beside them rather than level with them).
+        let p = right_of_goal(&obs, &mut grid, 0.375, 0.45);
+        assert!((p - Vec2::new(2.0, -0.45)).norm() < 1e-9, "{p:?}");
+        let p = right_of_way(&obs, &mut grid, 0.375, 0.45);
+        assert!(p.x == 2.0 && p.y < -0.225 + 1e-9 && p.y > -0.3, "{p:?}");
+        // Nothing ahead: not met.
+        let obs = Observation {
+            walls: &walls,
+            ..observation(me, Vec2::new(2.0, 0.0), &[])
+        };
+        assert!(!body_in_the_way(&obs, 0.375, 3.0));
     }
 }

@@ -123,6 +123,14 @@
 //! right pass each other left to left, and those going the same way fall
 //! into a lane. Otherwise the goal is aimed at as the route gives it. The
 //! walls only tell returns apart: what the robot avoids is still the scan.
+//! A rectangle or polygon on true states keeps right too (eight AGVs
+//! swapping rooms along one corridor all kept to its middle line, met
+//! head-on and stood): when another body is ahead in the strip its padded
+//! footprint sweeps towards the goal (its half width and padding to
+//! either side, widened by as much again), it aims one and a half half
+//! widths to the right of the goal, as far as the walls leave its padded
+//! half width room beside the whole way there (an AGV in a door does not
+//! swerve into its jamb).
 //!
 //! **Ties** (unicycle): samples scored within 1e-6 of the objective's range
 //! of the best are a tie, taken by the right-most turn. Two robots meeting
@@ -205,8 +213,11 @@
 //! others standing where they are; a contact counts only when the robot's
 //! own motion brings it nearer. Turning in place is checked too (a
 //! rectangle's corners swing), and a back-off that is not clear is tried
-//! straight, then turning in place, then not at all. Discs keep the tests
-//! above exactly. From the scan, a polygon is still its padded
+//! straight, then turning in place, then not at all. With no sample
+//! admissible, a footprint brakes as hard as it can, its turn too (the
+//! disc's least bad sample, the one whose contact comes last, was a turn
+//! at full rate that swung a corner into a robot already within its
+//! padding). Discs keep the tests above exactly. From the scan, a polygon is still its padded
 //! circumscribed disc.
 //!
 //! **On a car** (`kinematics = "ackermann"`; module `ackermann`, which

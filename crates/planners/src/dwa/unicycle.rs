@@ -5,10 +5,10 @@
 use super::brake::Braking;
 use super::contact::{scan_points, time_to_disc, time_to_segment};
 use super::footprint::{Footprint, Motion, Rollout, unicycle_poses};
-use super::meeting::{in_the_way, right_of_goal};
+use super::meeting::{body_in_the_way, in_the_way, right_of_goal, right_of_way};
 use super::planner::{Dwa, Obstacles};
 use super::walls::WallGrid;
-use crate::{Command, Observation, Segment, Sensed, Vec2};
+use crate::{Command, Observation, Segment, Sensed, Shape, Vec2};
 use std::f64::consts::PI;
 
 /// Pose after driving `v`, `omega` for `t` from `p`, `theta` (the exact
@@ -206,6 +206,15 @@ fn backing_clear(
     }
 }
 
+/// How far the shape reaches to either side of its heading (a
+/// rectangle's half width, a disc's radius).
+fn lateral_extent(shape: &Shape) -> f64 {
+    match shape {
+        Shape::Disc { radius } => *radius,
+        Shape::Polygon(p) => p.points().iter().map(|q| q[1].abs()).fold(0.0, f64::max),
+    }
+}
+
 /// Seconds facing the goal without moving before the robot backs off.
 const STILL_FOR: f64 = 3.0;
 /// Seconds a back-off lasts at most.
@@ -316,6 +325,16 @@ pub(super) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
         }
         (obs.time - dwa.recovery.met <= KEEP_RIGHT_FOR)
             .then(|| right_of_goal(obs, &mut dwa.walls, padded, shift))
+    } else if foot && !at_goal {
+        // A footprint on true states keeps right too: its half width
+        // (padded) is what the walls must leave room for beside the goal.
+        let half = lateral_extent(&me.shape);
+        let shift = (1.5 * half).min(d_goal / 3.0);
+        if body_in_the_way(obs, half + pad, dwa.horizon) {
+            dwa.recovery.met = obs.time;
+        }
+        (obs.time - dwa.recovery.met <= KEEP_RIGHT_FOR)
+            .then(|| right_of_way(obs, &mut dwa.walls, half + pad, shift))
     } else {
         None
     };
@@ -599,7 +618,16 @@ pub(super) fn plan(dwa: &mut Dwa, obs: &Observation, w_max: f64, alpha_max: f64)
         dwa.w_heading + dwa.w_clearance + dwa.w_speed
     };
     let best = rightmost_best(&scored, TIE * scale.max(f64::MIN_POSITIVE));
-    let (v, omega) = best.map_or((least_bad.1, least_bad.2), |(_, v, w)| (v, w));
+    // No admissible sample: a disc takes the one whose contact is
+    // furthest off; a footprint brakes as hard as it can, turning too
+    // (the furthest contact of its held motions can be a turn that swings
+    // a corner into what is within its padding already).
+    let fallback = if foot {
+        (v_lo, 0.0f64.clamp(w_lo, w_hi.max(w_lo)))
+    } else {
+        (least_bad.1, least_bad.2)
+    };
+    let (v, omega) = best.map_or(fallback, |(_, v, w)| (v, w));
     Command::Unicycle { v, omega }
 }
 

@@ -28,7 +28,14 @@
 //!    one, off the walls, with half the look-ahead to spare while it
 //!    drives along one (`WallRadius`, after the paper's footprint
 //!    argument; it lets the robot through doors the enlarged disc just
-//!    fills). Other bodies see the enlarged disc. At a non-convex vertex
+//!    fills). A rectangle or polygon so driven also keeps its centre's
+//!    own motion from closing on a wall faster than the gap over its
+//!    braking time (`centre_lines`): a turn moves the look-ahead point
+//!    but not the centre, and the walls' lines alone let the centre back
+//!    (or drive) into a wall while the turn swings the point away, the
+//!    shape's corners grazing it (4.6 mm deep on the AGVs of
+//!    `scenarios/shapes/agv-swap.toml`). Discs are planned as before.
+//!    Other bodies see the enlarged disc. At a non-convex vertex
 //!    RVO2 extends the edge's line past the vertex, as the neighbouring
 //!    edge carries on from there; a map's outline has open chains (a
 //!    polygon of no thickness, there and back), where the robot can see an
@@ -195,6 +202,22 @@ impl Planner for Orca {
             heading: Vec2::new(cos, sin),
         };
         self.push_obstacle_lines(me.position, me.velocity, walls);
+        // A rectangle or polygon driven through its look-ahead point: its
+        // centre's own motion along the heading kept off the walls too
+        // (`centre_lines`).
+        if !me.shape.is_disc() && behind > 0.0 {
+            let real = radius - behind;
+            self.lines.extend(centre_lines(
+                obs.walls,
+                me.position - walls.heading * behind,
+                walls.heading,
+                real,
+                me.max_speed * self.time_horizon_obst,
+                // The gap closed no faster than the robot can brake from
+                // top speed (a tick at least).
+                (me.max_speed / me.max_accel.max(1e-9)).max(obs.dt),
+            ));
+        }
         let num_wall_lines = self.lines.len();
         // Driven through the look-ahead point, only the velocities the
         // point can reach within the tick, hard like the walls (`reach`).
@@ -409,6 +432,48 @@ impl Orca {
             &mut self.lines,
         );
     }
+}
+
+/// The half-planes that keep the real disc (radius `r`, centred at `c`)
+/// of a unicycle driven through its look-ahead point off the walls along
+/// its own motion.
+///
+/// The look-ahead point p moves at u = v h + l omega n, the centre only at
+/// v h: a turn moves p without moving the centre. The walls' lines keep p
+/// off them ([`WallRadius`]) while the turn is held; but a velocity that
+/// backs the centre towards a wall (or drives it there) while the turn
+/// swings p away from it satisfies them, and the centre's disc enters the
+/// wall (a rectangle's corners, on that disc, graze it as they swing
+/// round). So the centre's own approach to each wall within `reach` is
+/// bounded as ORCA bounds the approach to an obstacle, the gap d - r closed
+/// at most at (d - r) / `tau` (none once touching): v (h . n) >= -(d - r) /
+/// tau, n the unit normal from the wall's nearest point to the centre and
+/// v = u . h. Whatever the turn does to the heading, the centre's distance
+/// to the wall then shrinks no faster than that. The bounds on v all
+/// contain v = 0, so they never leave the walls' program infeasible on
+/// their own.
+fn centre_lines(walls: &[Segment], c: Vec2, h: Vec2, r: f64, reach: f64, tau: f64) -> [Line; 2] {
+    let (mut v_lo, mut v_hi) = (f64::NEG_INFINITY, f64::INFINITY);
+    for w in walls {
+        let off = c - w.closest_point(c);
+        let d = off.norm();
+        if d > r + reach || d <= f64::EPSILON {
+            continue;
+        }
+        let k = h.dot(&(off / d));
+        let room = (d - r).max(0.0) / tau;
+        if k > 1e-9 {
+            v_lo = v_lo.max(-room / k);
+        } else if k < -1e-9 {
+            v_hi = v_hi.min(room / -k);
+        }
+    }
+    let big = 1e6;
+    let at_least = |e: Vec2, x: f64| Line {
+        point: e * x,
+        direction: Vec2::new(e.y, -e.x),
+    };
+    [at_least(h, v_lo.max(-big)), at_least(-h, -v_hi.min(big))]
 }
 
 /// `share` of the avoidance taken by this robot; `radius` is its own

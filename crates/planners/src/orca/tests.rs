@@ -930,3 +930,28 @@ fn rvo2_circle_of_250_reaches_every_goal_in_the_published_3811_steps() {
     assert_eq!(reached, Some(3811));
     assert!(min_gap > -0.91, "overlap {min_gap}");
 }
+
+#[test]
+fn a_look_ahead_rectangle_backs_towards_a_wall_no_faster_than_it_can_close_the_gap() {
+    // The centre 0.64 from a wall behind it (x = -0.64), the real disc
+    // 0.54, heading +x: backing closes the 0.1 gap at most at 0.1 / tau;
+    // driving on (away from the wall) is unbounded. Along the wall
+    // (heading +y) neither way closes on it.
+    let wall = [Segment {
+        a: Vec2::new(-0.64, -5.0),
+        b: Vec2::new(-0.64, 5.0),
+    }];
+    let inside = |lines: &[Line], u: Vec2| {
+        lines
+            .iter()
+            .all(|l| det(l.direction, u - l.point) >= -1e-12)
+    };
+    let lines = centre_lines(&wall, Vec2::zeros(), Vec2::x(), 0.54, 10.0, 1.0);
+    assert!(inside(&lines, Vec2::new(-0.1, 0.0)));
+    assert!(!inside(&lines, Vec2::new(-0.11, 0.0)));
+    assert!(inside(&lines, Vec2::new(5.0, 0.0)));
+    // A sideways velocity of the look-ahead point (a turn) is not bounded.
+    assert!(inside(&lines, Vec2::new(0.0, -3.0)));
+    let along = centre_lines(&wall, Vec2::zeros(), Vec2::y(), 0.54, 10.0, 1.0);
+    assert!(inside(&along, Vec2::new(0.0, -5.0)) && inside(&along, Vec2::new(0.0, 5.0)));
+}
