@@ -299,7 +299,9 @@ pub struct CarSetup {
     pub loose: f64,
     /// The search's settings.
     pub search: Search,
-    /// The grid's cell.
+    /// The grid's cell: the map's, or an eighth of the body's inscribed
+    /// radius (the footprint is checked exactly where the grid cannot
+    /// tell; a finer grid costs its square in time at every replanning).
     pub resolution: f64,
 }
 
@@ -340,7 +342,7 @@ impl CarSetup {
                 margin: margin(spec),
                 ..Search::default()
             },
-            resolution: map_resolution.unwrap_or(body.inradius() / 16.0),
+            resolution: map_resolution.unwrap_or(body.inradius() / 8.0),
         })
     }
 
