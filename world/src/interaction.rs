@@ -182,6 +182,17 @@ fn time_to_reach(a: &BodyState, b: &BodyState, r: f64) -> f64 {
     (-dv - disc.sqrt()) / vv
 }
 
+/// Lowers the smallest gaps and times to collision (`near`) of the robots
+/// among `i` and `j` (ids below `n`) to the pair's `g` and `t`.
+fn lower(near: (&mut [f64], &mut [f64]), n: usize, (i, j): (usize, usize), (g, t): (f64, f64)) {
+    for k in [i, j] {
+        if k < n {
+            near.0[k] = near.0[k].min(g);
+            near.1[k] = near.1[k].min(t);
+        }
+    }
+}
+
 /// A body's pose for its shape.
 fn pose(s: &BodyState) -> mrsim_shape::Pose {
     mrsim_shape::Pose::new(s.position, s.heading)
@@ -436,12 +447,7 @@ impl Interaction {
                     }
                     continue;
                 }
-                for k in [i, j] {
-                    if k < n {
-                        near_gap[k] = near_gap[k].min(g);
-                        near_ttc[k] = near_ttc[k].min(t);
-                    }
-                }
+                lower((near_gap, near_ttc), n, (i, j), (g, t));
                 if g < self.encounter_gap {
                     self.meet(tick, (i, j), states, g, t);
                 }
@@ -489,12 +495,7 @@ impl Interaction {
             } else {
                 t0
             };
-            for k in [i, j] {
-                if k < n {
-                    near_gap[k] = near_gap[k].min(g);
-                    near_ttc[k] = near_ttc[k].min(t);
-                }
-            }
+            lower((near_gap, near_ttc), n, (i, j), (g, t));
             if g < self.encounter_gap {
                 self.meet(tick, (i, j), states, g, t);
             }

@@ -42,13 +42,9 @@ pub(super) fn in_the_way(
     horizon: f64,
 ) -> bool {
     let me = &obs.me;
-    let to_goal = obs.goal - me.position;
-    let d_goal = to_goal.norm();
-    if d_goal <= f64::EPSILON {
+    let Some((g, right)) = goal_axes(obs) else {
         return false;
-    }
-    let g = to_goal / d_goal;
-    let right = Vec2::new(g.y, -g.x);
+    };
     let (s, c) = me.heading.sin_cos();
     let to_world = |q: &Vec2| Vec2::new(c * q.x - s * q.y, s * q.x + c * q.y);
     let far = look(obs, horizon);
@@ -65,6 +61,18 @@ pub(super) fn in_the_way(
     })
 }
 
+/// The unit vector from the robot to its goal and the one to its right;
+/// `None` at the goal.
+fn goal_axes(obs: &Observation) -> Option<(Vec2, Vec2)> {
+    let to_goal = obs.goal - obs.me.position;
+    let d_goal = to_goal.norm();
+    if d_goal <= f64::EPSILON {
+        return None;
+    }
+    let g = to_goal / d_goal;
+    Some((g, Vec2::new(g.y, -g.x)))
+}
+
 /// Whether another body (true states) lies ahead in the way to
 /// `obs.goal`: its nearest point, its centre less its circumscribed
 /// radius, within twice `half` of the line to the goal (the strip the
@@ -72,13 +80,9 @@ pub(super) fn in_the_way(
 /// widened by another as wide), up to the look-ahead.
 pub(super) fn body_in_the_way(obs: &Observation, half: f64, horizon: f64) -> bool {
     let me = &obs.me;
-    let to_goal = obs.goal - me.position;
-    let d_goal = to_goal.norm();
-    if d_goal <= f64::EPSILON {
+    let Some((g, right)) = goal_axes(obs) else {
         return false;
-    }
-    let g = to_goal / d_goal;
-    let right = Vec2::new(g.y, -g.x);
+    };
     let far = look(obs, horizon);
     obs.others.iter().any(|o| {
         let d = o.position - me.position;
