@@ -678,7 +678,7 @@ impl CarRouted {
     /// documentation, "Replanning").
     fn replan(&mut self, obs: &Observation, rear: Pose, within: f64) {
         self.last_try = obs.time;
-        let blocked: Vec<(Shape, Pose)> = obs
+        let standing: Vec<&Sensed> = obs
             .others
             .iter()
             .filter(|o| !self.known(o) && o.velocity.norm() < self.slow)
@@ -686,6 +686,9 @@ impl CarRouted {
                 (o.position.x - rear.position[0]).hypot(o.position.y - rear.position[1])
                     <= within + o.radius
             })
+            .collect();
+        let blocked: Vec<(Shape, Pose)> = standing
+            .iter()
             .map(|o| {
                 (
                     grown(&o.shape, self.keep),
@@ -697,14 +700,8 @@ impl CarRouted {
         if let Ok(route) = self.setup.route(&map, rear) {
             self.pursuit.replace(&route.path, obs.time);
             self.replans += 1;
-            self.around = obs
-                .others
+            self.around = standing
                 .iter()
-                .filter(|o| {
-                    blocked
-                        .iter()
-                        .any(|(_, p)| p.position == [o.position.x, o.position.y])
-                })
                 .map(|o| (o.id, [o.position.x, o.position.y]))
                 .collect();
         }

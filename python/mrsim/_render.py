@@ -66,3 +66,15 @@ class Canvas:
             return
         sub = (xx[y0:y1, x0:x1] - cx) ** 2 + (yy[y0:y1, x0:x1] - cy) ** 2 <= rp * rp
         img[y0:y1, x0:x1][sub] = colour
+
+
+class Drawn:
+    """``render()`` of an env over one :class:`mrsim.Sim` (``self._sim``),
+    drawn on a canvas made at the first call."""
+
+    def render(self):
+        if self.render_mode != "rgb_array":
+            return None
+        if self._canvas is None:
+            self._canvas = Canvas(self._sim, self._render_size)
+        return self._canvas.draw(self._sim)

@@ -26,22 +26,10 @@ from gymnasium.vector.utils import batch_space
 
 from . import _common
 from ._mrsim import Sim, VecSim, crowdnav_scene
-from ._render import Canvas
+from ._render import Canvas, Drawn
 
 
-class _Drawn:
-    """``render()`` of an env over one :class:`mrsim.Sim` (``self._sim``),
-    drawn on a canvas made at the first call."""
-
-    def render(self):
-        if self.render_mode != "rgb_array":
-            return None
-        if self._canvas is None:
-            self._canvas = Canvas(self._sim, self._render_size)
-        return self._canvas.draw(self._sim)
-
-
-class NavEnv(_Drawn, gymnasium.Env):
+class NavEnv(Drawn, gymnasium.Env):
     """One learner in a scenario (default: 16 robots on a circle, the other
     15 on ORCA). ``terminated`` at the goal (the world's goal test) or at a
     collision; ``truncated`` at the scenario's duration. Episodes are
@@ -334,7 +322,7 @@ class NavVectorEnv(VectorEnv):
         return tuple(frames)
 
 
-class CrowdNavEnv(_Drawn, gymnasium.Env):
+class CrowdNavEnv(Drawn, gymnasium.Env):
     """CrowdNav's episode (Chen et al., "Crowd-Robot Interaction", ICRA
     2019): scenarios/crowdnav/circle-crossing.toml, five people crossing a
     circle of radius 4 m on ORCA, the learner the robot going from (0, -4)

@@ -10,10 +10,10 @@ from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
 from . import _common
-from ._render import Canvas
+from ._render import Drawn
 
 
-class ParallelNavEnv(ParallelEnv):
+class ParallelNavEnv(Drawn, ParallelEnv):
     """Every robot of ``scenario`` (default: the shipped circle-16, or
     ``set=["generate.count=64"]`` for 64) is an agent named as its robot."""
 
@@ -119,13 +119,6 @@ class ParallelNavEnv(ParallelEnv):
             }
         self.agents = [a for a in self.agents if not (terms[a] or truncs[a])]
         return obs, rewards, terms, truncs, infos
-
-    def render(self):
-        if self.render_mode != "rgb_array":
-            return None
-        if self._canvas is None:
-            self._canvas = Canvas(self._sim, self._render_size)
-        return self._canvas.draw(self._sim)
 
     def close(self):
         pass

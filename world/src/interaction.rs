@@ -243,6 +243,11 @@ pub struct Interaction {
 impl Interaction {
     /// For the robots of `scenario` (the first bodies of every tick).
     pub fn new(scenario: &Scenario) -> Self {
+        let shapes = if scenario.has_shapes() {
+            scenario.body_shapes()
+        } else {
+            Vec::new()
+        };
         Self {
             robots: vec![
                 RobotInteraction {
@@ -267,20 +272,8 @@ impl Interaction {
             person_smallest: Vec::new(),
             person_ttc: Vec::new(),
             people: !scenario.people.is_empty(),
-            shapes: if scenario.has_shapes() {
-                scenario.body_shapes()
-            } else {
-                Vec::new()
-            },
-            inradii: if scenario.has_shapes() {
-                scenario
-                    .body_shapes()
-                    .iter()
-                    .map(|b| b.inradius())
-                    .collect()
-            } else {
-                Vec::new()
-            },
+            inradii: shapes.iter().map(|b| b.inradius()).collect(),
+            shapes,
             placed: Vec::new(),
             shaped_pairs: Vec::new(),
             bounds: Vec::new(),

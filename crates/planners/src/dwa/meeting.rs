@@ -42,7 +42,7 @@ pub(super) fn in_the_way(
     horizon: f64,
 ) -> bool {
     let me = &obs.me;
-    let Some((g, right)) = goal_axes(obs) else {
+    let Some((g, right, _)) = goal_axes(obs) else {
         return false;
     };
     let (s, c) = me.heading.sin_cos();
@@ -61,16 +61,16 @@ pub(super) fn in_the_way(
     })
 }
 
-/// The unit vector from the robot to its goal and the one to its right;
-/// `None` at the goal.
-fn goal_axes(obs: &Observation) -> Option<(Vec2, Vec2)> {
+/// The unit vector from the robot to its goal, the one to its right, and
+/// the distance; `None` at the goal.
+fn goal_axes(obs: &Observation) -> Option<(Vec2, Vec2, f64)> {
     let to_goal = obs.goal - obs.me.position;
     let d_goal = to_goal.norm();
     if d_goal <= f64::EPSILON {
         return None;
     }
     let g = to_goal / d_goal;
-    Some((g, Vec2::new(g.y, -g.x)))
+    Some((g, Vec2::new(g.y, -g.x), d_goal))
 }
 
 /// Whether another body (true states) lies ahead in the way to
@@ -80,7 +80,7 @@ fn goal_axes(obs: &Observation) -> Option<(Vec2, Vec2)> {
 /// widened by another as wide), up to the look-ahead.
 pub(super) fn body_in_the_way(obs: &Observation, half: f64, horizon: f64) -> bool {
     let me = &obs.me;
-    let Some((g, right)) = goal_axes(obs) else {
+    let Some((g, right, _)) = goal_axes(obs) else {
         return false;
     };
     let far = look(obs, horizon);
@@ -100,12 +100,9 @@ pub(super) fn right_of_goal(
     padded: f64,
     shift: f64,
 ) -> Vec2 {
-    let to_goal = obs.goal - obs.me.position;
-    let d_goal = to_goal.norm();
-    if d_goal <= f64::EPSILON || shift <= 0.0 {
+    let Some((_, right, _)) = goal_axes(obs).filter(|_| shift > 0.0) else {
         return obs.goal;
-    }
-    let right = Vec2::new(to_goal.y, -to_goal.x) / d_goal;
+    };
     // Room to the right of the goal: how far the padded disc moves that way
     // before it touches a wall.
     let room = room_right(obs, grid, obs.goal, right, padded, shift);
@@ -141,12 +138,10 @@ pub(super) fn right_of_way(
     padded: f64,
     shift: f64,
 ) -> Vec2 {
-    let to_goal = obs.goal - obs.me.position;
-    let d_goal = to_goal.norm();
-    if d_goal <= f64::EPSILON || shift <= 0.0 || padded <= 0.0 {
+    let Some((_, right, d_goal)) = goal_axes(obs).filter(|_| shift > 0.0 && padded > 0.0) else {
         return obs.goal;
-    }
-    let right = Vec2::new(to_goal.y, -to_goal.x) / d_goal;
+    };
+    let to_goal = obs.goal - obs.me.position;
     let n = (d_goal / padded).ceil().max(1.0) as usize;
     let room = (0..=n)
         .map(|k| obs.me.position + to_goal * (k as f64 / n as f64))
