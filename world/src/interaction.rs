@@ -469,6 +469,23 @@ impl Interaction {
             if !(meets || nearer || sooner) {
                 continue;
             }
+            if meets && !(nearer || sooner) {
+                // Surely within the encounter gap (the inscribed discs'
+                // gap is at least the shapes'), and an encounter already
+                // going on whose least gap and time the circumscribed
+                // discs' cannot lower: it goes on, its least gap and time
+                // as they are, and the shapes are not measured.
+                let inner = self.inradii[i] + self.inradii[j];
+                let surely = g0 + (s.radius + q.radius) - inner < self.encounter_gap;
+                let lowered = self
+                    .open
+                    .get(&(s.id, q.id))
+                    .is_none_or(|o| g0 < o.min_gap || t0 < o.min_ttc);
+                if surely && !lowered {
+                    self.meet(tick, (i, j), states, f64::INFINITY, f64::INFINITY);
+                    continue;
+                }
+            }
             let g = mrsim_shape::placed_gap(&placed[i], &placed[j]);
             if g.partial_cmp(&reach) != Some(std::cmp::Ordering::Less) {
                 continue;
@@ -477,14 +494,7 @@ impl Interaction {
             // shapes' time.
             let t = if meets || sooner {
                 let v = [q.velocity[0] - s.velocity[0], q.velocity[1] - s.velocity[1]];
-                mrsim_shape::time_to_contact(
-                    &self.shapes[i],
-                    pose(s),
-                    &self.shapes[j],
-                    pose(q),
-                    v,
-                    t0,
-                )
+                mrsim_shape::placed_time_to_contact(&placed[i], &placed[j], v, t0)
             } else {
                 t0
             };
@@ -569,7 +579,9 @@ impl Interaction {
             .fold(f64::INFINITY, f64::min)
     }
 
-    /// Bodies `i` < `j` are within the encounter gap at `tick`.
+    /// Bodies `i` < `j` are within the encounter gap at `tick`, with gap
+    /// `g` and time to collision `t` (infinite: an encounter going on,
+    /// its least gap and time not lowered).
     fn meet(&mut self, tick: u64, (i, j): (usize, usize), states: &[BodyState], g: f64, t: f64) {
         let (a, b) = (&states[i], &states[j]);
         let key = (a.id, b.id);

@@ -120,6 +120,8 @@ pub struct Crowd {
     first: usize,
     robots: usize,
     grid: NeighbourGrid,
+    /// The last tick's grid was built.
+    gridded: bool,
     /// Each person's plan of the tick (behaviours).
     plans: Vec<Planned>,
     /// Each person's new velocity and what it faces if not where it walks.
@@ -227,6 +229,7 @@ impl Crowd {
             first: scenario.robots.len() + scenario.obstacles.len(),
             robots: scenario.robots.len(),
             grid: NeighbourGrid::default(),
+            gridded: false,
             plans: Vec::new(),
             moves: Vec::new(),
             reach,
@@ -281,6 +284,7 @@ impl Crowd {
                 .map(|b| [b.position[0], b.position[1], b.radius]),
             self.reach,
         );
+        self.gridded = grid;
         // Behaviours: each person's plan, its timers counted, in order.
         let n = self.people.len();
         let mut plans = std::mem::take(&mut self.plans);
@@ -720,6 +724,44 @@ impl Crowd {
             }
         }
         force
+    }
+
+    /// Marks in `out`, one flag per person, the people who may be within
+    /// `margin` of a robot's disc (`bodies`, the tick's start as given to
+    /// [`Crowd::begin_tick`], robots first): every one that is, and others
+    /// near. Asks the grid of the last [`Crowd::begin_tick`]; without one
+    /// (or with a margin wider than its cells), marks everyone.
+    pub fn near_robots(
+        &self,
+        bodies: &[BodyState],
+        margin: f64,
+        out: &mut Vec<bool>,
+        near: &mut Vec<u32>,
+    ) {
+        out.clear();
+        out.resize(self.people.len(), false);
+        for b in bodies.iter().take(self.robots) {
+            if !(self.gridded && self.grid.near(b.position, margin + b.radius, near)) {
+                out.fill(true);
+                return;
+            }
+            for &j in near.iter() {
+                if let Some(flag) = (j as usize)
+                    .checked_sub(self.first)
+                    .and_then(|k| out.get_mut(k))
+                {
+                    *flag = true;
+                }
+            }
+        }
+    }
+
+    /// The largest speed of any person over the current tick.
+    pub fn top_speed(&self) -> f64 {
+        self.people
+            .iter()
+            .map(|p| p.velocity[0].hypot(p.velocity[1]))
+            .fold(0.0, f64::max)
     }
 
     /// One physics substep of `h`: every person moves at its velocity.

@@ -187,6 +187,14 @@ pub struct World {
     motions: Vec<MotionState>,
     /// The people's rapier bodies, by person index.
     people: Vec<RigidBodyHandle>,
+    /// Which of the people's bodies are enabled in rapier: those who may
+    /// touch a robot this tick ([`World::people_in_reach`]).
+    people_live: Vec<bool>,
+    /// Scratch of [`World::people_in_reach`].
+    people_near: Vec<bool>,
+    near_scratch: Vec<u32>,
+    /// The fastest any robot may go (forwards or backwards).
+    robot_top_speed: f64,
     crowd: Crowd,
     bodies: Vec<Body>,
     /// Each collider's owner, by the collider's arena index (colliders are
@@ -469,7 +477,18 @@ impl World {
             actuators: scenario.robots.iter().map(Actuator::of).collect(),
             obstacles,
             motions,
+            people_live: vec![true; people.len()],
             people,
+            people_near: Vec::new(),
+            near_scratch: Vec::new(),
+            robot_top_speed: scenario
+                .robots
+                .iter()
+                .map(|r| {
+                    let back = r.ackermann.map_or(0.0, |a| a.max_reverse_speed);
+                    r.max_speed.max(back)
+                })
+                .fold(0.0, f64::max),
             crowd: Crowd::new(scenario),
             bodies: Vec::with_capacity(scenario.robots.len() + scenario.obstacles.len()),
             owners,
@@ -607,6 +626,9 @@ impl World {
         }
         // People choose this tick's velocity from the same states.
         self.crowd.begin_tick(&self.states);
+        if !self.crowd.is_empty() {
+            self.people_in_reach();
+        }
         self.physics_ns = 0;
         for j in 0..sub {
             if self.any_pending {
@@ -711,7 +733,8 @@ impl World {
             }
             if !self.crowd.is_empty() {
                 self.crowd.advance(h);
-                for (handle, p) in self.people.iter().zip(&self.crowd.people) {
+                let people = self.people.iter().zip(&self.crowd.people);
+                for ((handle, p), _) in people.zip(&self.people_live).filter(|(_, live)| **live) {
                     if let Some(body) = self.phys.bodies.get_mut(*handle) {
                         body.set_next_kinematic_translation(v2(p.position));
                     }
@@ -724,6 +747,38 @@ impl World {
         }
         self.tick += 1;
         self.refresh_states();
+    }
+
+    /// Enables in rapier the bodies of the people who may touch a robot
+    /// over this tick and disables the others'. A person touches nothing
+    /// else that counts (contacts among people, and of people with walls
+    /// and obstacles, are nobody's, and nothing pushes a person), so a
+    /// person farther from every robot than both can close in a tick has
+    /// no part in the physics: rapier's step then costs the robots'
+    /// surroundings, not the whole crowd. The margin is twice the closing
+    /// distance (the robots' top speed and the people's fastest this
+    /// tick) plus a metre; a body enabled again starts where its person
+    /// is.
+    fn people_in_reach(&mut self) {
+        let dt = self.scenario.world.dt;
+        let closing = (self.robot_top_speed + self.crowd.top_speed()) * dt;
+        let margin = 2.0 * closing + 1000.0 * self.touch_tolerance;
+        let mut near = std::mem::take(&mut self.people_near);
+        self.crowd
+            .near_robots(&self.states, margin, &mut near, &mut self.near_scratch);
+        for (k, (&want, live)) in near.iter().zip(&mut self.people_live).enumerate() {
+            if want == *live {
+                continue;
+            }
+            *live = want;
+            if let Some(body) = self.phys.bodies.get_mut(self.people[k]) {
+                body.set_enabled(want);
+                if want {
+                    body.set_translation(v2(self.crowd.people[k].position), true);
+                }
+            }
+        }
+        self.people_near = near;
     }
 
     /// A collision is a pair whose surfaces have actually closed (gap at

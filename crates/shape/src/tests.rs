@@ -234,3 +234,43 @@ proptest! {
         prop_assert!(gap(&a, pa, &b, moved) <= g + 0.1 + 1e-9);
     }
 }
+
+#[test]
+fn a_turned_rectangle_sliding_onto_another_touches_where_its_gap_closes() {
+    // b, turned 45 degrees and off the axis, slides along -x and then
+    // along a slant onto a: at the time given the gap is closed, just
+    // before it is open, and conservative advancement of the gap agrees.
+    let (a, b) = (rect(2.0, 1.0), rect(1.0, 0.6));
+    let pb = Pose::new([4.0, 0.7], std::f64::consts::FRAC_PI_4);
+    for v in [[-1.0, 0.0], [-0.8, -0.3], [-0.5, 0.05]] {
+        let t = time_to_contact(&a, Pose::default(), &b, pb, v, 0.0);
+        assert!(t.is_finite() && t > 0.0, "{v:?}: {t}");
+        let at = |t: f64| {
+            gap(
+                &a,
+                Pose::default(),
+                &b,
+                Pose::new([4.0 + v[0] * t, 0.7 + v[1] * t], pb.heading),
+            )
+        };
+        assert!(at(t).abs() < 1e-9, "{v:?}: gap {} at {t}", at(t));
+        assert!(at(t - 1e-6) > 0.0);
+        let mut s = 0.0;
+        for _ in 0..200 {
+            s += at(s) / (v[0] * v[0] + v[1] * v[1]).sqrt();
+        }
+        assert!((s - t).abs() < 1e-8, "{v:?}: advanced to {s}, exact {t}");
+    }
+    // Moving away, or passing above: never.
+    let away = time_to_contact(&a, Pose::default(), &b, pb, [1.0, 0.0], 0.0);
+    assert_eq!(away, f64::INFINITY);
+    let above = time_to_contact(
+        &a,
+        Pose::default(),
+        &b,
+        Pose::new([4.0, 1.5], 0.7),
+        [-1.0, 0.0],
+        0.0,
+    );
+    assert_eq!(above, f64::INFINITY);
+}

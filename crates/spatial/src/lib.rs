@@ -17,7 +17,8 @@
 //!   distance).
 //! - [`NeighbourGrid`]: a [`HashedGrid`] with cells as wide as a sensing
 //!   reach plus the largest radius, asked for the discs of the 3 x 3 cells
-//!   around a point, in ascending index order.
+//!   around a point that come within reach of it, in ascending index
+//!   order.
 //!
 //! # How the in-process pool uses it
 //!
@@ -287,7 +288,8 @@ impl NeighbourGrid {
     }
 
     /// Fills `out` with the indices of every disc that may come within
-    /// `reach` of `p` (every one whose surface does, and others nearby),
+    /// `reach` of `p` (every one whose surface does, and others within
+    /// rounding of it),
     /// ascending; false, with `out` empty, if the grid cannot answer
     /// (none built, `reach` wider than it was built for, `p` not finite).
     pub fn near(&self, p: [f64; 2], reach: f64, out: &mut Vec<u32>) -> bool {
@@ -324,10 +326,18 @@ impl NeighbourGrid {
             }
             seen[n] = b;
             let start = self.buckets.start[b] as usize;
-            let (idx, _) = self.buckets.bucket(b);
-            for (k, &j) in idx.iter().enumerate() {
+            let (idx, discs) = self.buckets.bucket(b);
+            for (k, (&j, d)) in idx.iter().zip(discs).enumerate() {
                 let (x, y) = self.cells[start + k];
-                if j >= first && (x - cx).abs() <= 1 && (y - cy).abs() <= 1 {
+                if j < first || (x - cx).abs() > 1 || (y - cy).abs() > 1 {
+                    continue;
+                }
+                // Only discs whose surface may come within reach (with a
+                // margin for rounding, so that none within it is lost):
+                // fewer to sort, and fewer for the caller to rule out.
+                let (dx, dy) = (d[0] - p[0], d[1] - p[1]);
+                let within = (reach + d[2]) * (1.0 + 1e-9) + 1e-9;
+                if dx * dx + dy * dy <= within * within {
                     out.push(j);
                 }
             }
@@ -393,7 +403,7 @@ mod tests {
     }
 
     #[test]
-    fn neighbours_hold_every_disc_within_reach_in_index_order() {
+    fn neighbours_are_the_discs_within_reach_in_index_order() {
         for (n, spread, reach) in [(400, 40.0, 3.0), (50, 2.0, 0.5), (300, 4000.0, 1.0)] {
             let discs = scatter(n, n as u64, spread);
             let mut grid = NeighbourGrid::default();
@@ -406,6 +416,8 @@ mod tests {
                     let dist = (d[0] - me[0]).hypot(d[1] - me[1]) - d[2];
                     if dist <= reach {
                         assert!(out.contains(&(j as u32)), "disc {j} missed");
+                    } else if dist > reach * 1.001 + 1e-6 {
+                        assert!(!out.contains(&(j as u32)), "disc {j} beyond reach");
                     }
                 }
             }
