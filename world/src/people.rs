@@ -55,7 +55,7 @@ use mrsim_planners::Vec2;
 use mrsim_planners::orca::{Neighbor, Walker, WalkerParams};
 use mrsim_proto::{BodyState, body_kind};
 use mrsim_scenario::{Behavior, PersonMotion, PersonSpec, Scenario, SocialForceParams};
-use mrsim_spatial::NeighbourGrid;
+use mrsim_spatial::{Disc, NeighbourGrid, within};
 
 /// The moving state of one person.
 #[derive(Debug, Clone)]
@@ -122,10 +122,13 @@ pub struct Crowd {
     grid: NeighbourGrid,
     /// The last tick's grid was built.
     gridded: bool,
+    /// The people in the order they are walked (cell by cell), each with
+    /// its cell.
+    order: Vec<(u32, Option<(i64, i64)>)>,
     /// Each person's plan of the tick (behaviours).
     plans: Vec<Planned>,
     /// Each person's new velocity and what it faces if not where it walks.
-    moves: Vec<([f64; 2], Option<[f64; 2]>)>,
+    moves: Vec<Move>,
     reach: f64,
     /// Every wall segment, the arena's included (the social force's).
     walls: Vec<mrsim_planners::Segment>,
@@ -146,7 +149,14 @@ struct Scratch {
     walker: Walker,
     near: Vec<u32>,
     candidates: Vec<Neighbor>,
+    /// The bodies around the cell searched last.
+    around: Vec<(u32, Disc)>,
+    /// The velocities chosen, by person index.
+    out: Vec<(u32, Move)>,
 }
+
+/// A person's new velocity and what it faces if not where it walks.
+type Move = ([f64; 2], Option<[f64; 2]>);
 
 /// Fewest people a worker of [`Crowd::begin_tick`] is given: below it the
 /// crowd is stepped on the world's own thread.
@@ -230,6 +240,7 @@ impl Crowd {
             robots: scenario.robots.len(),
             grid: NeighbourGrid::default(),
             gridded: false,
+            order: Vec::new(),
             plans: Vec::new(),
             moves: Vec::new(),
             reach,
@@ -295,6 +306,22 @@ impl Crowd {
         // Velocities: each person's from the tick's start alone, so the
         // people are split across the workers (threads) and every split
         // gives the same velocities, bit for bit.
+        // They are visited cell by cell (the grid's order), so that one
+        // search of a cell's 3 x 3 neighbourhood serves every person in
+        // it; without a grid, in order, each among every body.
+        let mut order = std::mem::take(&mut self.order);
+        order.clear();
+        if grid {
+            let people = self.first as u32..(self.first + n) as u32;
+            order.extend(
+                self.grid
+                    .in_cell_order()
+                    .filter(|(j, _)| people.contains(j))
+                    .map(|(j, c)| (j - people.start, Some(c))),
+            );
+        } else {
+            order.extend((0..n as u32).map(|k| (k, None)));
+        }
         let mut moves = std::mem::take(&mut self.moves);
         moves.clear();
         moves.resize(n, ([0.0, 0.0], None));
@@ -304,15 +331,21 @@ impl Crowd {
             let this = &*self;
             let plans = &plans;
             if scratch.len() == 1 {
-                this.walk(0, plans, bodies, grid, &mut scratch[0], &mut moves);
+                this.walk(&order, plans, bodies, &mut scratch[0]);
             } else {
                 std::thread::scope(|scope| {
-                    for ((i, out), s) in moves.chunks_mut(chunk).enumerate().zip(&mut scratch) {
-                        scope.spawn(move || this.walk(i * chunk, plans, bodies, grid, s, out));
+                    for (part, s) in order.chunks(chunk).zip(&mut scratch) {
+                        scope.spawn(move || this.walk(part, plans, bodies, s));
                     }
                 });
             }
         }
+        for s in &mut scratch {
+            for &(k, m) in &s.out {
+                moves[k as usize] = m;
+            }
+        }
+        self.order = order;
         self.scratch = scratch;
         for (p, (nv, face)) in self.people.iter_mut().zip(&moves) {
             p.velocity = *nv;
@@ -326,24 +359,24 @@ impl Crowd {
         self.moves = moves;
     }
 
-    /// The new velocities of the people from `first` on, one per slot of
-    /// `out`, under their `plans`, in the scratch space `s`.
+    /// The new velocities of the people of `part` (each with its grid cell,
+    /// or `None`: among every body), under their `plans`, into `s.out`.
     fn walk(
         &self,
-        first: usize,
+        part: &[(u32, Option<(i64, i64)>)],
         plans: &[Planned],
         bodies: &[BodyState],
-        grid: bool,
         s: &mut Scratch,
-        out: &mut [([f64; 2], Option<[f64; 2]>)],
     ) {
-        for (i, slot) in out.iter_mut().enumerate() {
-            let k = first + i;
+        s.out.clear();
+        let mut searched = None;
+        for &(k, cell) in part {
+            let k = k as usize;
             let (plan, face) = match plans[k] {
                 Ok(plan) => plan,
                 // Standing to look (surprised; curious, near).
                 Err(face) => {
-                    *slot = ([0.0, 0.0], Some(face));
+                    s.out.push((k as u32, ([0.0, 0.0], Some(face))));
                     continue;
                 }
             };
@@ -353,15 +386,29 @@ impl Crowd {
                 PersonMotion::SocialForce(f) => f.neighbor_dist,
             };
             let p = &self.people[k];
-            if !(grid && self.grid.near(p.position, reach, &mut s.near)) {
-                s.near.clear();
-                s.near.extend(0..bodies.len() as u32);
+            s.near.clear();
+            match cell {
+                // The grid's answer for the person's position: its cell's
+                // neighbourhood, within reach.
+                Some(c) => {
+                    if searched != Some(c) {
+                        self.grid.around_cell(c, &mut s.around);
+                        searched = Some(c);
+                    }
+                    s.near.extend(
+                        s.around
+                            .iter()
+                            .filter(|(_, d)| within(d, p.position, reach))
+                            .map(|(j, _)| *j),
+                    );
+                }
+                None => s.near.extend(0..bodies.len() as u32),
             }
             let nv = match motion {
                 PersonMotion::Orca { .. } => self.orca(k, bodies, &plan, s),
                 PersonMotion::SocialForce(f) => self.social_force(k, bodies, &f, &plan, &s.near),
             };
-            *slot = ([nv.x, nv.y], face);
+            s.out.push((k as u32, ([nv.x, nv.y], face)));
         }
     }
 
@@ -494,6 +541,7 @@ impl Crowd {
             walker,
             near,
             candidates,
+            ..
         } = s;
         let spec = &self.specs[k];
         let PersonMotion::Orca {

@@ -332,12 +332,9 @@ impl NeighbourGrid {
                 if j < first || (x - cx).abs() > 1 || (y - cy).abs() > 1 {
                     continue;
                 }
-                // Only discs whose surface may come within reach (with a
-                // margin for rounding, so that none within it is lost):
-                // fewer to sort, and fewer for the caller to rule out.
-                let (dx, dy) = (d[0] - p[0], d[1] - p[1]);
-                let within = (reach + d[2]) * (1.0 + 1e-9) + 1e-9;
-                if dx * dx + dy * dy <= within * within {
+                // Only discs whose surface may come within reach: fewer to
+                // sort, and fewer for the caller to rule out.
+                if within(d, p, reach) {
                     out.push(j);
                 }
             }
@@ -345,6 +342,63 @@ impl NeighbourGrid {
         out.sort_unstable();
         true
     }
+}
+
+impl NeighbourGrid {
+    /// The discs in the order the grid holds them, bucket by bucket, each
+    /// with its cell: a caller that asks about every disc's neighbours
+    /// visits them in this order, so that the discs of one cell come
+    /// together and one [`Self::around_cell`] serves them all.
+    pub fn in_cell_order(&self) -> impl Iterator<Item = (u32, (i64, i64))> + '_ {
+        self.buckets
+            .order
+            .iter()
+            .copied()
+            .zip(self.cells.iter().copied())
+    }
+
+    /// Fills `out` with the index and disc of every disc in the 3 x 3 cells
+    /// around `cell` (a cell of [`Self::in_cell_order`]), ascending by
+    /// index: what [`Self::near`] chooses from for any point of that cell,
+    /// so that keeping those for which [`within`] holds gives its answer
+    /// for the point. Empty when no grid was built.
+    pub fn around_cell(&self, cell: (i64, i64), out: &mut Vec<(u32, Disc)>) {
+        out.clear();
+        let Some(g) = self.grid else {
+            return;
+        };
+        let (cx, cy) = cell;
+        let mut seen = [usize::MAX; 9];
+        for (n, (dx, dy)) in (-1..=1)
+            .flat_map(|dy| (-1..=1).map(move |dx| (dx, dy)))
+            .enumerate()
+        {
+            let b = g.bucket(cx + dx, cy + dy);
+            if seen[..n].contains(&b) {
+                continue;
+            }
+            seen[n] = b;
+            let start = self.buckets.start[b] as usize;
+            let (idx, discs) = self.buckets.bucket(b);
+            for (k, (&j, d)) in idx.iter().zip(discs).enumerate() {
+                let (x, y) = self.cells[start + k];
+                if (x - cx).abs() <= 1 && (y - cy).abs() <= 1 {
+                    out.push((j, *d));
+                }
+            }
+        }
+        out.sort_unstable_by_key(|&(j, _)| j);
+    }
+}
+
+/// Whether disc `d`'s surface may come within `reach` of `p`: every disc
+/// whose surface does, and others within rounding of it, so that none
+/// within reach is lost to rounding. [`NeighbourGrid::near`] answers the
+/// discs of the 3 x 3 cells for which this holds.
+pub fn within(d: &Disc, p: [f64; 2], reach: f64) -> bool {
+    let (dx, dy) = (d[0] - p[0], d[1] - p[1]);
+    let r = (reach + d[2]) * (1.0 + 1e-9) + 1e-9;
+    dx * dx + dy * dy <= r * r
 }
 
 #[cfg(test)]
@@ -465,6 +519,29 @@ mod tests {
             assert_eq!(exact(&a), exact(&b));
             assert!(b.windows(2).all(|w| w[0] < w[1]), "ascending");
         }
+    }
+
+    #[test]
+    fn a_cells_neighbours_within_reach_of_each_of_its_discs_are_that_discs_neighbours() {
+        let discs = scatter(500, 7, 30.0);
+        let reach = 2.0;
+        let mut grid = NeighbourGrid::default();
+        assert!(grid.build(discs.iter().copied(), reach));
+        let (mut near, mut around) = (Vec::new(), Vec::new());
+        let mut visited = vec![false; discs.len()];
+        for (j, cell) in grid.in_cell_order().collect::<Vec<_>>() {
+            visited[j as usize] = true;
+            let p = [discs[j as usize][0], discs[j as usize][1]];
+            assert!(grid.near(p, reach, &mut near));
+            grid.around_cell(cell, &mut around);
+            let kept: Vec<u32> = around
+                .iter()
+                .filter(|(_, d)| within(d, p, reach))
+                .map(|(k, _)| *k)
+                .collect();
+            assert_eq!(kept, near, "disc {j}");
+        }
+        assert!(visited.iter().all(|&v| v), "every disc once");
     }
 
     #[test]
