@@ -222,3 +222,35 @@ def test_a_scene_of_shapes_draws_rectangles_as_cubes_and_a_polygon_as_a_line_loo
         assert [[p["x"], p["y"]] for p in loop["points"]] == [pytest.approx(p) for p in wedge_points]
         assert loop["pose"]["position"]["y"] == pytest.approx(float(rows[(tick, "wedge")]["y"]))
         assert yaw_of(loop["pose"]["orientation"]) == pytest.approx(0.0, abs=1e-12)
+
+
+def test_people_are_drawn_where_the_trajectory_has_them_in_their_own_colour(
+    repo, tmp_path, foxglove_schemas
+):
+    out = run_scene(repo, tmp_path / "people", "people/crossing.toml", "--set", "world.duration=3")
+    _, messages = check_file(out, foxglove_schemas)
+    scenario = json.loads((out / "scenario.json").read_text())
+    people = {p["name"]: p for p in scenario["people"]}
+    assert len(people) == 8
+    rows = {(r["tick"], r["body"]): r for r in trajectory(out)}
+    dt = scenario["world"]["dt"]
+    scenes = [(m, msg) for _, c, m, msg in messages if c.topic == "/scene"]
+    assert len(scenes) == 1 + len({t for t, _ in rows})
+    sandy = {"r": 0xF4 / 255, "g": 0xA4 / 255, "b": 0x60 / 255}
+    for message, msg in scenes[1:]:
+        tick = str(round(message.log_time / 1e9 / dt))
+        entities = {e["id"]: e for e in msg["entities"]}
+        for name, spec in people.items():
+            row = rows[(tick, name)]
+            assert row["kind"] == "person"
+            # A cylinder of the person's diameter where trajectory.csv has it.
+            (c,) = entities[name]["cylinders"]
+            assert c["size"]["x"] == pytest.approx(2 * spec["radius"])
+            assert c["pose"]["position"]["x"] == pytest.approx(float(row["x"]), abs=1e-9)
+            assert c["pose"]["position"]["y"] == pytest.approx(float(row["y"]), abs=1e-9)
+            for k, v in sandy.items():
+                assert c["color"][k] == pytest.approx(v, abs=1e-6)
+        # The robots are drawn apart, none in the people's colour.
+        for robot in ["r0", "r1", "r2"]:
+            (c,) = entities[robot]["cylinders"]
+            assert any(abs(c["color"][k] - v) > 1e-3 for k, v in sandy.items())
