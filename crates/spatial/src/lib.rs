@@ -313,32 +313,13 @@ impl NeighbourGrid {
         if !(cx.abs() < 1e15 && cy.abs() < 1e15) {
             return false;
         }
-        let (cx, cy) = (cx as i64, cy as i64);
-        let mut seen = [usize::MAX; 9];
-        for (n, (dx, dy)) in (-1..=1)
-            .flat_map(|dy| (-1..=1).map(move |dx| (dx, dy)))
-            .enumerate()
-        {
-            let b = g.bucket(cx + dx, cy + dy);
-            // Two of the nine cells in one bucket: its discs once.
-            if seen[..n].contains(&b) {
-                continue;
+        self.each_around(g, (cx as i64, cy as i64), |j, d| {
+            // Only discs whose surface may come within reach: fewer to
+            // sort, and fewer for the caller to rule out.
+            if j >= first && within(d, p, reach) {
+                out.push(j);
             }
-            seen[n] = b;
-            let start = self.buckets.start[b] as usize;
-            let (idx, discs) = self.buckets.bucket(b);
-            for (k, (&j, d)) in idx.iter().zip(discs).enumerate() {
-                let (x, y) = self.cells[start + k];
-                if j < first || (x - cx).abs() > 1 || (y - cy).abs() > 1 {
-                    continue;
-                }
-                // Only discs whose surface may come within reach: fewer to
-                // sort, and fewer for the caller to rule out.
-                if within(d, p, reach) {
-                    out.push(j);
-                }
-            }
-        }
+        });
         out.sort_unstable();
         true
     }
@@ -367,13 +348,22 @@ impl NeighbourGrid {
         let Some(g) = self.grid else {
             return;
         };
-        let (cx, cy) = cell;
+        self.each_around(g, cell, |j, d| out.push((j, *d)));
+        out.sort_unstable_by_key(|&(j, _)| j);
+    }
+}
+
+impl NeighbourGrid {
+    /// Calls `f` with the index and disc of every disc in the 3 x 3 cells
+    /// around `(cx, cy)` of grid `g`, bucket by bucket.
+    fn each_around(&self, g: HashedGrid, (cx, cy): (i64, i64), mut f: impl FnMut(u32, &Disc)) {
         let mut seen = [usize::MAX; 9];
         for (n, (dx, dy)) in (-1..=1)
             .flat_map(|dy| (-1..=1).map(move |dx| (dx, dy)))
             .enumerate()
         {
             let b = g.bucket(cx + dx, cy + dy);
+            // Two of the nine cells in one bucket: its discs once.
             if seen[..n].contains(&b) {
                 continue;
             }
@@ -383,11 +373,10 @@ impl NeighbourGrid {
             for (k, (&j, d)) in idx.iter().zip(discs).enumerate() {
                 let (x, y) = self.cells[start + k];
                 if (x - cx).abs() <= 1 && (y - cy).abs() <= 1 {
-                    out.push((j, *d));
+                    f(j, d);
                 }
             }
         }
-        out.sort_unstable_by_key(|&(j, _)| j);
     }
 }
 
