@@ -204,3 +204,34 @@ PIXEL = (
     "([x, y]) => Array.from(document.getElementById('map').getContext('2d')"
     ".getImageData(Math.round(x), Math.round(y), 1, 1).data)"
 )
+
+
+def test_the_live_page_draws_the_people_in_their_own_colour(repo, tmp_path, browser):
+    cmd = [
+        mrsim_binary(repo), "run", "scenarios/people/crossing.toml", "--set", "world.mode=realtime",
+        "--set", "world.duration=3", "--transport", "inproc", "--live", "127.0.0.1:0",
+        "--quiet", "--out", str(tmp_path / "run"),
+    ]  # fmt: skip
+    proc, url = start(cmd, repo)
+    try:
+        page = browser.new_page(viewport={"width": 1100, "height": 800})
+        page.goto(url)
+        setup = json.loads(urllib.request.urlopen(url + "setup").read())
+        assert [p["name"] for p in setup["people"]] == [f"p{k}" for k in range(8)]
+        assert setup["personColor"] == "#f4a460"
+        page.wait_for_function("document.body.dataset.ended !== undefined", timeout=90_000)
+        frame = page.evaluate("window.mrsimLive.frame()")
+        bodies = {b[0]: b for b in frame["bodies"]}
+        to_canvas = lambda x, y: page.evaluate("([x, y]) => window.mrsimLive.toCanvas(x, y)", [x, y])  # noqa: E731
+        first = len(setup["robots"]) + len(setup["obstacles"])
+        sandy = [0xF4, 0xA4, 0x60]
+        for k, person in enumerate(setup["people"]):
+            # Each person's body, after the robots and obstacles, in the
+            # people's colour at 0.85 opacity half-way out from its centre.
+            _, x, y, *_ = bodies[first + k]
+            rgba = page.evaluate(PIXEL, to_canvas(x - 0.5 * person["radius"], y))
+            assert all(abs(a - b) <= 3 for a, b in zip(rgba, sandy)) and abs(rgba[3] - 217) <= 3, (person, rgba)
+        page.close()
+        assert proc.wait(timeout=60) == 0
+    finally:
+        proc.kill()

@@ -1,7 +1,8 @@
 """The replay page in a real browser (Debian's Chromium, driven by
 Playwright): it lists the run's encounters (encounters.csv) and highlights
 the one picked, the two bodies ringed and joined where they met; it draws
-bodies that are not discs as their polygons, turned by their headings."""
+bodies that are not discs as their polygons, turned by their headings, and
+people in their own colour."""
 
 import csv
 import json
@@ -150,4 +151,43 @@ def test_the_replay_page_draws_each_rectangle_turned_by_its_heading(repo, tmp_pa
         assert len(drawn) == len(want)
         for d, w in zip(drawn, want):
             assert d == pytest.approx(w, abs=0.01)
+    page.close()
+
+
+def test_the_replay_page_draws_every_person_in_the_people_s_colour_where_the_trajectory_has_them(
+    repo, tmp_path, browser  # noqa: F811
+):
+    out = tmp_path / "people"
+    subprocess.run(
+        [built_mrsim(repo), "run", str(repo / "scenarios/people/crossing.toml"), "--out", str(out), "--quiet",
+         "--set", "world.duration=4"],
+        check=True,
+    )  # fmt: skip
+    scenario = json.loads((out / "scenario.json").read_text())
+    people = {p["name"]: p for p in scenario["people"]}
+    assert len(people) == 8
+    sandy = [0xF4, 0xA4, 0x60]
+    page = browser.new_page(viewport={"width": 1200, "height": 800})
+    for tick in [0, 25]:
+        with open(out / "trajectory.csv") as f:
+            rows = {r["body"]: r for r in csv.DictReader(f) if int(r["tick"]) == tick}
+        page.goto(out.joinpath("replay.html").as_uri() + f"#tick={tick}")
+        page.wait_for_function("window.mrsimReplay && window.mrsimReplay.ready")
+        to_canvas = lambda p: page.evaluate("([x, y]) => window.mrsimReplay.worldToCanvas(x, y)", list(p))  # noqa: E731
+        scale = page.evaluate(
+            "window.mrsimReplay.worldToCanvas(1, 0)[0] - window.mrsimReplay.worldToCanvas(0, 0)[0]"
+        )
+        for name, spec in people.items():
+            row = rows[name]
+            assert row["kind"] == "person"
+            x, y = float(row["x"]), float(row["y"])
+            # Half-way out from the centre, to the left (clear of the name
+            # written above it): the people's colour.
+            cx, cy = to_canvas((x, y))
+            r = spec["radius"] * scale
+            assert pixel(page, cx - 0.5 * r, cy) == sandy, (name, tick)
+        # A robot is not drawn in it.
+        for robot in ["r0", "r1", "r2"]:
+            cx, cy = to_canvas((float(rows[robot]["x"]), float(rows[robot]["y"])))
+            assert pixel(page, cx - 0.3 * 0.25 * scale, cy) != sandy
     page.close()
