@@ -1,8 +1,8 @@
 //! Taking turns at narrow passages: a robot on its route (`route =
 //! "shortest"`, [`crate::route::Routed`]) holds short of a passage too
 //! narrow for two of it side by side (a door) while another robot comes
-//! through it the other way, and backs off when it stands face to face
-//! with another.
+//! through it the other way, and backs off when it stands nose to nose
+//! with another or with a wall.
 //!
 //! **The passages.** When a route is planned (and whenever it is planned
 //! again), its narrow stretches are marked ([`narrow`]): every point of
@@ -49,11 +49,12 @@
 //! not give way by the yielding rule of [`crate::route`].
 //!
 //! **Backing off.** A local planner that turns a rectangle only where its
-//! padded footprint stays clear leaves two robots that meet nose to nose
-//! standing for good (every turn is inadmissible, and it samples no
-//! motion backwards). A robot taking turns that has stood
-//! [`crate::route::BACK_AFTER`] s with another robot ahead within both
-//! their radii and 0.3 m backs straight off at
+//! padded footprint stays clear leaves a robot that meets another nose to
+//! nose, or noses up to a jamb, standing for good (every turn is
+//! inadmissible, and it samples no motion backwards). A robot taking turns
+//! that has stood [`crate::route::BACK_AFTER`] s with another robot ahead
+//! within both their radii and 0.3 m, or with its footprint within 0.15 m
+//! of a wall ahead, backs straight off at
 //! [`crate::route::BACK_SPEED`] for [`crate::route::BACK_FOR`] s, if its
 //! true footprint, moved back along its heading by half a metre, keeps
 //! 3 cm from every wall and 5 cm, grown by how far each goes meanwhile,

@@ -54,7 +54,7 @@
 //! robot side by side (doors) are marked whenever it is planned; a
 //! unicycle whose planner plans its (v, omega) itself (dwa) takes them in
 //! turn with the robots coming the other way, holding short of them, and
-//! backs off from a robot it stands nose to nose with
+//! backs off from a robot or a wall it stands nose to nose with
 //! ([`crate::passage`]).
 
 use crate::passage::{self, Stretch};
@@ -388,15 +388,27 @@ impl Routed {
     }
 
     /// Is the robot face to face with another (their reaches and a little
-    /// apart, the other ahead)?
+    /// apart, the other ahead), or its footprint within 0.15 m of a wall
+    /// ahead?
     fn faces(&self, obs: &Observation, p: P) -> bool {
         let h = [obs.me.heading.cos(), obs.me.heading.sin()];
-        obs.others.iter().any(|o| {
+        let robot = obs.others.iter().any(|o| {
             let d = [o.position.x - p[0], o.position.y - p[1]];
             o.kind == BodyKind::Robot
                 && d[0].hypot(d[1]) < self.extent + o.radius + 0.3
                 && d[0] * h[0] + d[1] * h[1] > 0.0
-        })
+        });
+        let me = self.spec.body_shape();
+        let pose = Pose::new(p, obs.me.heading);
+        robot
+            || obs.walls.iter().any(|w| {
+                let w = [[w.a.x, w.a.y], [w.b.x, w.b.y]];
+                let m = [(w[0][0] + w[1][0]) / 2.0, (w[0][1] + w[1][1]) / 2.0];
+                let ahead = (m[0] - p[0]) * h[0] + (m[1] - p[1]) * h[1] > 0.0;
+                ahead
+                    && mrsim_shape::segment_distance(w, p) < 2.0 * self.extent
+                    && mrsim_shape::gap_to_segment(&me, pose, w) < 0.15
+            })
     }
 
     /// Can the footprint back straight off by `by` clear of the walls and
