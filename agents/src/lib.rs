@@ -29,6 +29,7 @@ pub mod guard;
 mod join;
 pub mod live;
 pub mod observe;
+pub mod passage;
 pub mod route;
 mod seat;
 

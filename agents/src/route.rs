@@ -49,7 +49,15 @@
 //! diagnostic `route_yield` is 1 while the robot gives way (`route_yields`
 //! counts the times). A planner that avoids from its laser scan alone has
 //! no other robot's id or state, so its robot does not give way.
+//!
+//! **Narrow passages.** The route's stretches too narrow for two of the
+//! robot side by side (doors) are marked whenever it is planned; a
+//! unicycle whose planner plans its (v, omega) itself (dwa) takes them in
+//! turn with the robots coming the other way, holding short of them, and
+//! backs off from a robot or a wall it stands nose to nose with
+//! ([`crate::passage`]).
 
+use crate::passage::{self, Stretch};
 use mrsim_planners::{BodyKind, Command, Diagnostic, Observation, Planner, Segment, Sensed, Vec2};
 use mrsim_route::{
     CarRouteError, Clearance, Follower, P, Path, Refuge, RouteError, Scene, Side, to_way,
@@ -68,6 +76,15 @@ pub const YIELD_AFTER: f64 = 3.0;
 /// Seconds a robot stands with another robot in its way before it yields
 /// whatever their ids (the other, which should have yielded, could not).
 pub const YIELD_ESCALATE: f64 = 3.0 * YIELD_AFTER;
+
+/// Seconds a robot stands face to face with another before it backs off.
+pub const BACK_AFTER: f64 = 4.0;
+
+/// How long it backs off, s.
+pub const BACK_FOR: f64 = 2.0;
+
+/// How fast it backs off, m/s.
+pub const BACK_SPEED: f64 = 0.2;
 
 /// Seconds a yielding robot waits at most before it routes again.
 pub const YIELD_WAIT: f64 = 2.0 * PATIENCE;
@@ -304,6 +321,18 @@ pub struct Routed {
     /// No new look for a refuge before this time (after a failed one).
     next_look: f64,
     yields: u32,
+    /// The narrow stretches of its route ([`crate::passage`]).
+    stretches: Vec<Stretch>,
+    /// Its footprint's width and circumscribed radius.
+    width: f64,
+    extent: f64,
+    /// Where it holds short of a narrow stretch, if it does, and for whom.
+    holding: Option<(P, u32)>,
+    /// Whom it has held for while they stood, and since when.
+    waited: Vec<(u32, f64)>,
+    holds: u32,
+    /// It backs off until this time.
+    back_until: f64,
 }
 
 /// A robot giving way: to whom, along which of its own way ahead the other
@@ -318,6 +347,9 @@ impl Routed {
     /// Wraps `inner` for robot `spec` along `path` on `grid`.
     pub fn new(inner: Box<dyn Planner>, spec: &RobotSpec, grid: Clearance, path: Path) -> Self {
         let ahead = ahead(spec);
+        let body = spec.body_shape();
+        let (width, extent) = (2.0 * body.inradius(), body.circumradius());
+        let stretches = passage::narrow(&grid, &path, passage::need(width), 2.0 * extent);
         Self {
             inner,
             spec: spec.clone(),
@@ -334,7 +366,162 @@ impl Routed {
             yielding: None,
             next_look: f64::NEG_INFINITY,
             yields: 0,
+            stretches,
+            width,
+            extent,
+            holding: None,
+            waited: Vec::new(),
+            holds: 0,
+            back_until: f64::NEG_INFINITY,
         }
+    }
+
+    /// Does the robot take turns at narrow stretches and back off when
+    /// face to face ([`crate::passage`])? A unicycle whose route has narrow
+    /// stretches and whose planner plans its (v, omega) itself from the
+    /// others' states.
+    fn turns(&self) -> bool {
+        !self.stretches.is_empty()
+            && self.spec.kinematics == Kinematics::Unicycle
+            && self.inner.plans_unicycle()
+            && !self.inner.needs_scan()
+    }
+
+    /// Is the robot face to face with another (their reaches and a little
+    /// apart, the other ahead), or its footprint within 0.15 m of a wall
+    /// ahead?
+    fn faces(&self, obs: &Observation, p: P) -> bool {
+        let h = [obs.me.heading.cos(), obs.me.heading.sin()];
+        let robot = obs.others.iter().any(|o| {
+            let d = [o.position.x - p[0], o.position.y - p[1]];
+            o.kind == BodyKind::Robot
+                && d[0].hypot(d[1]) < self.extent + o.radius + 0.3
+                && d[0] * h[0] + d[1] * h[1] > 0.0
+        });
+        let me = self.spec.body_shape();
+        let pose = Pose::new(p, obs.me.heading);
+        robot
+            || obs.walls.iter().any(|w| {
+                let w = [[w.a.x, w.a.y], [w.b.x, w.b.y]];
+                let m = [(w[0][0] + w[1][0]) / 2.0, (w[0][1] + w[1][1]) / 2.0];
+                let ahead = (m[0] - p[0]) * h[0] + (m[1] - p[1]) * h[1] > 0.0;
+                ahead
+                    && mrsim_shape::segment_distance(w, p) < 2.0 * self.extent
+                    && mrsim_shape::gap_to_segment(&me, pose, w) < 0.15
+            })
+    }
+
+    /// Can the footprint back straight off by `by` clear of the walls and
+    /// of the others (each grown by how far it goes while the robot backs)?
+    fn room_behind(&self, obs: &Observation, p: P, by: f64) -> bool {
+        let me = self.spec.body_shape();
+        let hd = obs.me.heading;
+        let h = [hd.cos(), hd.sin()];
+        let near = by + 2.0 * self.extent + 1.0;
+        let walls: Vec<[P; 2]> = obs
+            .walls
+            .iter()
+            .map(|w| [[w.a.x, w.a.y], [w.b.x, w.b.y]])
+            .filter(|w| mrsim_shape::segment_distance(*w, p) < near)
+            .collect();
+        let n = (by / 0.1).ceil().max(1.0) as u32;
+        (1..=n).all(|k| {
+            let a = by * f64::from(k) / f64::from(n);
+            let pose = Pose::new([p[0] - h[0] * a, p[1] - h[1] * a], hd);
+            walls
+                .iter()
+                .all(|w| mrsim_shape::gap_to_segment(&me, pose, *w) > 0.03)
+                && obs.others.iter().all(|o| {
+                    let at = Pose::new([o.position.x, o.position.y], o.heading);
+                    mrsim_shape::gap(&me, pose, &o.shape, at) > 0.05 + o.velocity.norm() * BACK_FOR
+                })
+        })
+    }
+
+    /// Follows `path` from now on, its narrow stretches marked.
+    fn follow(&mut self, path: Path, time: f64) {
+        self.stretches = passage::narrow(
+            &self.grid,
+            &path,
+            passage::need(self.width),
+            2.0 * self.extent,
+        );
+        self.follower.replace(path, time);
+    }
+
+    /// The turn-taking rule at narrow stretches ([`crate::passage`]), each
+    /// tick: the point its planner is shown while it holds short of the
+    /// next stretch, if it does.
+    fn turn_rule(&mut self, obs: &Observation) -> Option<P> {
+        if self.inner.needs_scan() || self.yielding.is_some() {
+            self.holding = None;
+            return None;
+        }
+        let s0 = self.follower.progress();
+        let me = &obs.me;
+        let cap = me.max_speed;
+        let st = self.stretches.iter().find(|st| st.to > s0).copied();
+        let p = [me.position.x, me.position.y];
+        let v = me.velocity.norm();
+        let braking = v * v / (2.0 * me.max_accel.max(1e-9));
+        let held_for = st.and_then(|st| {
+            // Beyond the horizon, or committed: it goes on.
+            if st.from - s0 > cap * passage::HORIZON || s0 >= st.from - self.extent - braking {
+                return None;
+            }
+            let rule = passage::Me {
+                id: me.id,
+                position: p,
+                velocity: [me.velocity.x, me.velocity.y],
+                heading: me.heading,
+                cap,
+                accel: me.max_accel,
+                slow: self.slow,
+                width: self.width,
+                extent: self.extent,
+            };
+            let (time, slow, waited) = (obs.time, self.slow, &self.waited);
+            let ignored = |o: &Sensed| {
+                o.velocity.norm() < slow
+                    && waited
+                        .iter()
+                        .any(|&(id, since)| id == o.id && time - since >= PATIENCE)
+            };
+            passage::hold_for(&st, &rule, obs.others, &ignored).map(|id| (st, id))
+        });
+        // Whom it has held for while they stand, since when (forgotten
+        // once they move, or it no longer holds).
+        self.waited.retain(|&(id, _)| {
+            held_for.is_some()
+                && obs
+                    .others
+                    .iter()
+                    .any(|o| o.id == id && o.velocity.norm() < self.slow)
+        });
+        let Some((st, id)) = held_for else {
+            self.holding = None;
+            return None;
+        };
+        if !self.waited.iter().any(|w| w.0 == id)
+            && obs
+                .others
+                .iter()
+                .any(|o| o.id == id && o.velocity.norm() < self.slow)
+        {
+            self.waited.push((id, obs.time));
+        }
+        let s_hold = st.from - passage::hold_back(self.extent);
+        let at = match self.holding {
+            Some((at, _)) if s0 >= s_hold => at,
+            _ if s0 >= s_hold => p,
+            _ => self.follower.at(s_hold),
+        };
+        if self.holding.is_none() {
+            self.holds += 1;
+        }
+        self.holding = Some((at, id));
+        self.follower.wait(obs.time);
+        Some(at)
     }
 
     /// How far from a way another robot must be to leave it free: both
@@ -412,7 +599,7 @@ impl Routed {
         let Some(path) = path else {
             return false;
         };
-        self.follower.replace(path, obs.time);
+        self.follow(path, obs.time);
         self.yielding = Some(Yielding {
             to: other.id,
             way,
@@ -480,7 +667,7 @@ impl Routed {
             .or_else(|_| self.grid.route(p, self.goal, self.radius, self.margin, &[]));
         if let Ok(path) = path {
             let path = in_lane(&self.grid, path, &self.spec);
-            self.follower.replace(path, obs.time);
+            self.follow(path, obs.time);
             self.replans += 1;
         }
     }
@@ -494,11 +681,40 @@ impl Planner for Routed {
         {
             self.stand = (p, obs.time);
         }
-        if self.yielding.is_none() && self.follower.stuck(obs.time) {
-            self.replan(obs, p);
+        if self.turns() {
+            let backing = obs.time < self.back_until;
+            let start = !backing && obs.time - self.stand.1 >= BACK_AFTER && self.faces(obs, p);
+            if (backing && self.room_behind(obs, p, 0.1))
+                || (start && self.room_behind(obs, p, 0.5))
+            {
+                if start {
+                    self.back_until = obs.time + BACK_FOR;
+                    self.stand = (p, obs.time);
+                }
+                return Command::Unicycle {
+                    v: -BACK_SPEED,
+                    omega: 0.0,
+                };
+            }
+            self.back_until = f64::NEG_INFINITY;
         }
-        self.yield_rule(obs, p);
+        let hold = if !self.turns() {
+            None
+        } else {
+            self.turn_rule(obs)
+        };
+        if hold.is_none() {
+            if self.yielding.is_none() && self.follower.stuck(obs.time) {
+                self.replan(obs, p);
+            }
+            self.yield_rule(obs, p);
+        }
         let far = self.follower.waypoint(p, obs.time);
+        if let Some(at) = hold {
+            let mut seen = *obs;
+            seen.goal = Vec2::new(at[0], at[1]);
+            return self.inner.plan(&seen);
+        }
         // Round a corner: the furthest point up to the waypoint, and at
         // least a quarter of the way there, that the disc (grown by half
         // the margin) reaches in a straight line; the waypoint itself if
@@ -537,6 +753,14 @@ impl Planner for Routed {
         d.push(Diagnostic {
             name: "route_yields".into(),
             value: f64::from(self.yields),
+        });
+        d.push(Diagnostic {
+            name: "route_hold".into(),
+            value: if self.holding.is_some() { 1.0 } else { 0.0 },
+        });
+        d.push(Diagnostic {
+            name: "route_holds".into(),
+            value: f64::from(self.holds),
         });
         d
     }

@@ -415,6 +415,14 @@ pub trait Planner: Send {
         }
     }
 
+    /// True for a planner that plans a unicycle's (v, omega) from the
+    /// robot's own state, not through the look-ahead point ([`unicycle`]):
+    /// a [`Planner::native_unicycle`] one, and the look-ahead controller
+    /// around one.
+    fn plans_unicycle(&self) -> bool {
+        self.native_unicycle()
+    }
+
     /// True for a planner that plans a unicycle robot's (v, omega) itself
     /// (as [`dwa`] does): on a unicycle robot it then gets the robot's own
     /// observation and its command is applied unchanged, instead of

@@ -156,6 +156,10 @@ impl Planner for LookAhead {
         true
     }
 
+    fn plans_unicycle(&self) -> bool {
+        self.inner.plans_unicycle()
+    }
+
     fn needs_scan(&self) -> bool {
         self.inner.needs_scan()
     }

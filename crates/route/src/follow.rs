@@ -157,6 +157,12 @@ impl Follower {
         self.progress + self.ahead >= self.path.length()
     }
 
+    /// Counts the robot as making progress at `time` (it stands by choice,
+    /// waiting its turn, and is not stuck).
+    pub fn wait(&mut self, time: f64) {
+        self.mark = (self.progress, time);
+    }
+
     /// Follows `path` from now on (a replan), progress from its start.
     pub fn replace(&mut self, path: Path, time: f64) {
         self.path = path;
