@@ -92,6 +92,7 @@
 //! `route_replans` and `route_gear` (1 forwards, -1 backwards, 0 stopped
 //! at the goal) say how it goes.
 
+use crate::passage::time_to;
 use crate::route::{PATIENCE, RouteScene};
 use mrsim_planners::{
     BodyKind, Command, Diagnostic, Kinematics, Observation, Planner, Polygon, Pose, Sensed, Shape,
@@ -199,23 +200,6 @@ impl Way {
             Some((cap, accel)) => time_to(a, self.speed, cap, accel),
             None => a / self.speed,
         }
-    }
-}
-
-/// The time to drive `d` from speed `v0`, accelerating at `accel` up to
-/// `cap`.
-fn time_to(d: f64, v0: f64, cap: f64, accel: f64) -> f64 {
-    let d = d.max(0.0);
-    let v0 = v0.clamp(0.0, cap);
-    if accel <= 0.0 || v0 >= cap {
-        return if v0 > 0.0 { d / v0 } else { f64::INFINITY };
-    }
-    let t_acc = (cap - v0) / accel;
-    let d_acc = (v0 + cap) / 2.0 * t_acc;
-    if d <= d_acc {
-        ((v0 * v0 + 2.0 * accel * d).sqrt() - v0) / accel
-    } else {
-        t_acc + (d - d_acc) / cap
     }
 }
 

@@ -336,16 +336,21 @@ mod tests {
         ]
     }
 
-    #[test]
-    fn a_door_on_the_route_is_a_narrow_stretch_and_a_wide_corridor_is_not() {
-        let w = walls(1.2, 2.0);
-        let grid = Clearance::build(&Scene {
-            walls: &w,
+    /// The clearance grid of `walls` round the route of the tests.
+    fn clearance(walls: &[[P; 2]]) -> Clearance {
+        Clearance::build(&Scene {
+            walls,
             discs: &[],
             points: &[[0.0, -4.5], [0.0, 4.0]],
             resolution: 0.05,
             pad: 1.0,
-        });
+        })
+    }
+
+    #[test]
+    fn a_door_on_the_route_is_a_narrow_stretch_and_a_wide_corridor_is_not() {
+        let w = walls(1.2, 2.0);
+        let grid = clearance(&w);
         // Up the corridor's middle, through the door, into the room.
         let path = Path::new(vec![[0.0, -4.5], [0.0, 4.0]]);
         let found = narrow(&grid, &path, need(0.6), 0.9);
@@ -360,23 +365,11 @@ mod tests {
         assert!((st.dir[1] - 1.0).abs() < 1e-9, "{st:?}");
         // A door as wide as the need is not narrow.
         let w = walls(1.9, 2.0);
-        let grid = Clearance::build(&Scene {
-            walls: &w,
-            discs: &[],
-            points: &[[0.0, -4.5], [0.0, 4.0]],
-            resolution: 0.05,
-            pad: 1.0,
-        });
+        let grid = clearance(&w);
         assert!(narrow(&grid, &path, need(0.6), 0.9).is_empty());
         // A corridor narrower than the need is narrow along its length.
         let w = walls(1.9, 1.4);
-        let grid = Clearance::build(&Scene {
-            walls: &w,
-            discs: &[],
-            points: &[[0.0, -4.5], [0.0, 4.0]],
-            resolution: 0.05,
-            pad: 1.0,
-        });
+        let grid = clearance(&w);
         let found = narrow(&grid, &path, need(0.6), 0.9);
         assert_eq!(found.len(), 1, "{found:?}");
         assert!(found[0].from < 0.1 && found[0].to > 3.4, "{found:?}");
