@@ -192,6 +192,13 @@ pub fn narrow(grid: &Clearance, path: &Path, need: f64, join: f64) -> Vec<Stretc
         .collect()
 }
 
+/// The narrow stretches of `path` on `grid` for a footprint of width
+/// `width` and circumscribed radius `extent`: narrower than [`need`], runs
+/// nearer than the footprint's length one stretch.
+pub fn marked(grid: &Clearance, path: &Path, width: f64, extent: f64) -> Vec<Stretch> {
+    narrow(grid, path, need(width), 2.0 * extent)
+}
+
 /// The time to drive `d` from speed `v0`, accelerating at `accel` up to
 /// `cap`.
 pub fn time_to(d: f64, v0: f64, cap: f64, accel: f64) -> f64 {

@@ -323,7 +323,8 @@ pub struct Routed {
     yields: u32,
     /// The narrow stretches of its route ([`crate::passage`]).
     stretches: Vec<Stretch>,
-    /// Its footprint's width and circumscribed radius.
+    /// Its footprint, and the footprint's width and circumscribed radius.
+    body: mrsim_shape::Shape,
     width: f64,
     extent: f64,
     /// Where it holds short of a narrow stretch, if it does, and for whom.
@@ -349,7 +350,7 @@ impl Routed {
         let ahead = ahead(spec);
         let body = spec.body_shape();
         let (width, extent) = (2.0 * body.inradius(), body.circumradius());
-        let stretches = passage::narrow(&grid, &path, passage::need(width), 2.0 * extent);
+        let stretches = passage::marked(&grid, &path, width, extent);
         Self {
             inner,
             spec: spec.clone(),
@@ -367,6 +368,7 @@ impl Routed {
             next_look: f64::NEG_INFINITY,
             yields: 0,
             stretches,
+            body,
             width,
             extent,
             holding: None,
@@ -398,7 +400,7 @@ impl Routed {
                 && d[0].hypot(d[1]) < self.extent + o.radius + 0.3
                 && d[0] * h[0] + d[1] * h[1] > 0.0
         });
-        let me = self.spec.body_shape();
+        let me = self.body;
         let pose = Pose::new(p, obs.me.heading);
         robot
             || obs.walls.iter().any(|w| {
@@ -414,7 +416,7 @@ impl Routed {
     /// Can the footprint back straight off by `by` clear of the walls and
     /// of the others (each grown by how far it goes while the robot backs)?
     fn room_behind(&self, obs: &Observation, p: P, by: f64) -> bool {
-        let me = self.spec.body_shape();
+        let me = self.body;
         let hd = obs.me.heading;
         let h = [hd.cos(), hd.sin()];
         let near = by + 2.0 * self.extent + 1.0;
@@ -440,12 +442,7 @@ impl Routed {
 
     /// Follows `path` from now on, its narrow stretches marked.
     fn follow(&mut self, path: Path, time: f64) {
-        self.stretches = passage::narrow(
-            &self.grid,
-            &path,
-            passage::need(self.width),
-            2.0 * self.extent,
-        );
+        self.stretches = passage::marked(&self.grid, &path, self.width, self.extent);
         self.follower.replace(path, time);
     }
 
@@ -453,7 +450,7 @@ impl Routed {
     /// tick: the point its planner is shown while it holds short of the
     /// next stretch, if it does.
     fn turn_rule(&mut self, obs: &Observation) -> Option<P> {
-        if self.inner.needs_scan() || self.yielding.is_some() {
+        if self.yielding.is_some() {
             self.holding = None;
             return None;
         }
@@ -681,7 +678,8 @@ impl Planner for Routed {
         {
             self.stand = (p, obs.time);
         }
-        if self.turns() {
+        let turns = self.turns();
+        if turns {
             let backing = obs.time < self.back_until;
             let start = !backing && obs.time - self.stand.1 >= BACK_AFTER && self.faces(obs, p);
             if (backing && self.room_behind(obs, p, 0.1))
@@ -698,11 +696,7 @@ impl Planner for Routed {
             }
             self.back_until = f64::NEG_INFINITY;
         }
-        let hold = if !self.turns() {
-            None
-        } else {
-            self.turn_rule(obs)
-        };
+        let hold = if turns { self.turn_rule(obs) } else { None };
         if hold.is_none() {
             if self.yielding.is_none() && self.follower.stuck(obs.time) {
                 self.replan(obs, p);

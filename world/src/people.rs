@@ -808,8 +808,9 @@ impl Crowd {
     pub fn top_speed(&self) -> f64 {
         self.people
             .iter()
-            .map(|p| p.velocity[0].hypot(p.velocity[1]))
+            .map(|p| p.velocity[0] * p.velocity[0] + p.velocity[1] * p.velocity[1])
             .fold(0.0, f64::max)
+            .sqrt()
     }
 
     /// One physics substep of `h`: every person moves at its velocity.
