@@ -274,13 +274,70 @@ reservation = {{ runtime_ms = 30.0, period_ms = 100.0 }}
     let dir = fresh_dir("cores-reserved");
     let out = run_quietly(&dir, &text, "reserved", &[]);
     let m = metrics(&out);
+    let timing = std::fs::read_to_string(out.join("timing.csv")).expect("timing.csv");
+    // A reservation guarantees its runtime, not more: a call the kernel
+    // charged beyond its 30 ms (without IRQ time accounting an interrupt's
+    // time is charged to the thread it interrupted, and on a virtual
+    // machine the time its host took the core away can be: on a loaded VM,
+    // one call in a few hundred of these 20 ms burns was charged 32-49 ms)
+    // is throttled as r0's are and is late, and what it overran is taken
+    // from the next period's runtime, so the call after it may be late too.
+    // Every other call is on time, and every miss is one of these.
+    const RUNTIME_NS: u64 = 30_000_000;
     for r in ["r1", "r2", "r3"] {
+        let mut calls: Vec<(u64, String, u64)> = timing
+            .lines()
+            .skip(1)
+            .filter_map(|l| {
+                let f: Vec<&str> = l.split(',').collect();
+                let n = |i: usize| f.get(i).and_then(|v| v.parse::<u64>().ok());
+                (f.get(1) == Some(&r)).then(|| {
+                    (
+                        n(0).expect("tick"),
+                        f.get(3).expect("status").to_string(),
+                        n(4).expect("cpu_ns"),
+                    )
+                })
+            })
+            .collect();
+        calls.sort_by_key(|c| c.0);
+        calls.dedup_by_key(|c| c.0);
+        // What the calls so far overran into the next one's period.
+        let mut owed = 0u64;
+        let (mut excused, mut excused_late) = (0u64, 0u64);
+        for (tick, status, cpu) in &calls {
+            let charged = owed + cpu;
+            owed = charged.saturating_sub(RUNTIME_NS);
+            if charged > RUNTIME_NS {
+                excused += 1;
+                excused_late += u64::from(status != "accepted");
+                continue;
+            }
+            assert_eq!(
+                status, "accepted",
+                "{r}'s call of tick {tick} was charged {charged} ns of its runtime, within \
+                 its reservation, and was not on time: {}",
+                m["robots"][r]
+            );
+        }
         assert_eq!(
             m["robots"][r]["deadline_misses"].as_u64(),
-            Some(0),
-            "{r} within its reservation: {}",
+            Some(excused_late),
+            "{r}'s misses are its calls charged beyond its reservation: {}",
             m["robots"][r]
         );
+        if excused * 3 > calls.len() as u64 {
+            skip(
+                name,
+                "MRSIM_REQUIRE_RT",
+                &format!(
+                    "the machine charged {excused} of {r}'s {} calls of 20 ms more than its \
+                     30 ms reservation: too few within it to judge the reservation",
+                    calls.len()
+                ),
+            );
+            return;
+        }
     }
     // Every call of r0 burns 80 ms of its thread's CPU, so its calls
     // answered over the run count its CPU: at 20 ms per 100 ms period, no
@@ -288,7 +345,6 @@ reservation = {{ runtime_ms = 30.0, period_ms = 100.0 }}
     // the start), where unthrottled (80 ms per 100 ms tick) it would
     // answer nearly every tick.
     let ticks = m["ticks"].as_f64().expect("ticks");
-    let timing = std::fs::read_to_string(out.join("timing.csv")).expect("timing.csv");
     let calls = timing
         .lines()
         .filter(|l| l.split(',').nth(1) == Some("r0"))
