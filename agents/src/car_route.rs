@@ -2,7 +2,8 @@
 //! can drive, planned once by Hybrid A* (`mrsim_route::hybrid`) when its
 //! planner is built, and driven by pure pursuit (`mrsim_route::pursuit`)
 //! forwards and backwards between its changes of gear, slowing and
-//! stopping for the bodies it senses in its way.
+//! stopping for the bodies it senses in its way, or, on the open road, by
+//! its planner when that plans the car's own controls (dwa).
 //!
 //! **What is planned.** The car is a kinematic bicycle whose pose names the
 //! centre of its body, the wheelbase L centred on it. Only its rear axle
@@ -69,14 +70,25 @@
 //! is not coming (parked at its goal, say): the car no longer gives way
 //! to it, and the keep above holds it off it where it stands.
 //!
-//! **Why not the robot's planner.** The disc robots' routes show the
-//! planner a point ahead on the route as its goal ([`crate::route`]); a
-//! car's planner (through the tracking controller, or dwa's arcs) steers
-//! for a point, not along a route, and cuts the route's arcs, does not
-//! stop at its changes of gear and arrives at the goal at whatever heading
-//! it came in, which in a parking bay between two cars is a contact. So a
-//! car with a route follows it itself and only slows and stops for what
-//! it senses in its way; its `planner` is not consulted.
+//! **The open road: the robot's planner.** A planner that plans the car's
+//! (speed, steering) itself with its true footprint
+//! (`Planner::plans_ackermann`: dwa) drives the car where its route is
+//! open road: forwards, the segment's end further than two circumscribed
+//! radii beyond the point shown, and no car given way to. It is shown, as
+//! its goal (at no tolerance), the centre's point of the route
+//! [`road_ahead`] on, and its command is taken but for its speed, capped
+//! to stop at the segment's end; a command backwards is not taken (the
+//! pursuit drives that tick). Bodies beside and on the route are then its
+//! planner's to avoid, not the keep's. Everywhere else (the changes of
+//! gear, the last stretch to the goal and its heading, a car giving way)
+//! the pursuit drives: a planner steers for a point, not along a route,
+//! cuts the route's arcs, does not stop at changes of gear and arrives at
+//! whatever heading it came in, which in a parking bay between two cars is
+//! a contact. A holonomic planner through the tracking controller (orca)
+//! is not consulted: on the junction's variants its discs, grown by the
+//! tracking bound to wider than a lane, stopped for the cars passing in
+//! the other lane and grazed the kerbs (docs/shapes.md). The diagnostic
+//! `route_planner` is 1 on the ticks the planner drove.
 //!
 //! **Replanning.** When the car has made no progress along its route for
 //! [`crate::route::PATIENCE`] s (something stands in its way), its route
@@ -128,6 +140,12 @@ pub fn keep(spec: &RobotSpec) -> f64 {
 /// quarter of the wheelbase and the wheelbase.
 pub fn lookahead(wheelbase: f64, speed: f64) -> f64 {
     speed.abs().clamp(wheelbase / 4.0, wheelbase)
+}
+
+/// How far along its route, on the open road, the point a car's planner
+/// is shown lies: 1.5 s of its speed, at least twice the wheelbase.
+pub fn road_ahead(wheelbase: f64, speed: f64) -> f64 {
+    (1.5 * speed.abs()).max(2.0 * wheelbase)
 }
 
 /// How far ahead in time a car looks for the ways of moving bodies that
@@ -428,6 +446,8 @@ pub struct CarRouted {
     replans: u32,
     last_try: f64,
     gear: f64,
+    /// Did the planner drive the last tick (the open road)?
+    planner_drove: bool,
 }
 
 impl CarRouted {
@@ -457,7 +477,40 @@ impl CarRouted {
             replans: 0,
             last_try: f64::NEG_INFINITY,
             gear: 1.0,
+            planner_drove: false,
         }
+    }
+
+    /// On the open road (forwards, the segment's end beyond two
+    /// circumscribed radii and the point shown), the
+    /// centre's goal shown to the planner: the route's point
+    /// [`road_ahead`] on; else `None` (the pursuit drives).
+    fn open_road(
+        &self,
+        t: &mrsim_route::pursuit::Target,
+        speed: f64,
+    ) -> Option<mrsim_planners::Vec2> {
+        if t.gear != Gear::Forward {
+            return None;
+        }
+        let l = self.setup.wheelbase;
+        let ahead = road_ahead(l, speed);
+        let approach = 2.0 * self.setup.car.shape.circumradius();
+        if t.to_stop <= approach + ahead {
+            return None;
+        }
+        let s0 = self.pursuit.progress();
+        let p = self
+            .pursuit
+            .poses()
+            .iter()
+            .take_while(|p| p.s <= s0 + ahead)
+            .last()?;
+        let (sh, ch) = p.heading.sin_cos();
+        Some(mrsim_planners::Vec2::new(
+            p.position[0] + l / 2.0 * ch,
+            p.position[1] + l / 2.0 * sh,
+        ))
     }
 
     /// Is `o` one of the static obstacles the route went round?
@@ -740,18 +793,39 @@ impl Planner for CarRouted {
         } else {
             f64::INFINITY
         };
-        let free = self.free(obs, rear, look, t.to_stop).min(self.give_way(
-            obs,
-            sign * speed_now,
-            cap,
-            me.max_accel,
-            look.min(t.to_stop),
-        ));
+        let in_way = self.free(obs, rear, look, t.to_stop);
+        let way_limit = look.min(t.to_stop);
+        let give_way = self.give_way(obs, sign * speed_now, cap, me.max_accel, way_limit);
+        let free = in_way.min(give_way);
         let clear = if free >= look {
             f64::INFINITY
         } else {
             (2.0 * brake * free).sqrt()
         };
+        // The open road: the planner drives, to the route's point ahead.
+        let open = if give_way >= way_limit && self.inner.plans_ackermann() {
+            self.open_road(&t, speed_now)
+        } else {
+            None
+        };
+        self.planner_drove = false;
+        if let Some(goal) = open {
+            let mut o = *obs;
+            o.goal = goal;
+            o.goal_tolerance = 0.0;
+            if let Command::Ackermann {
+                speed: v,
+                steering: d,
+            } = self.inner.plan(&o)
+                && v >= 0.0
+            {
+                self.planner_drove = true;
+                return Command::Ackermann {
+                    speed: v.min(stop),
+                    steering: d,
+                };
+            }
+        }
         let speed = cap.min(stop).min(steer.max(creep)).min(clear);
         Command::Ackermann {
             speed: sign * speed,
@@ -772,6 +846,10 @@ impl Planner for CarRouted {
             Diagnostic {
                 name: "route_gear".into(),
                 value: self.gear,
+            },
+            Diagnostic {
+                name: "route_planner".into(),
+                value: f64::from(u8::from(self.planner_drove)),
             },
         ]
     }

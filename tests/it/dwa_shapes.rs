@@ -47,14 +47,47 @@ fn junction_with(planner: &str) -> PathBuf {
     )
 }
 
+/// Per robot, the ticks on which its planner drove it along its route
+/// (the diagnostic `route_planner`).
+fn planner_drove(dir: &Path) -> std::collections::BTreeMap<String, usize> {
+    let diag = std::fs::read_to_string(dir.join("diagnostics.csv")).expect("diagnostics.csv");
+    let mut ticks = std::collections::BTreeMap::new();
+    for l in diag.lines().skip(1) {
+        let f: Vec<&str> = l.split(',').collect();
+        if f.get(3) == Some(&"route_planner") {
+            *ticks.entry(f[2].to_string()).or_insert(0) +=
+                usize::from(f.get(4).and_then(|v| v.parse::<f64>().ok()) == Some(1.0));
+        }
+    }
+    ticks
+}
+
 #[test]
 fn every_car_on_its_route_crosses_the_junction_giving_way_without_contact() {
+    // dwa (the scene's planner) drives each car on the open road of its
+    // route; the route's pursuit the rest, giving way at the crossing.
     let dir = run_shipped("scenarios/cars/junction.toml", &[]);
     let (at_goal, contacts, least) = outcome(&dir);
     assert_eq!(at_goal, 8);
     assert_eq!(contacts, 0);
     // Never touching a kerb or another car.
     assert!(least > 0.0, "least gap {least}");
+    let drove = planner_drove(&dir);
+    assert_eq!(drove.len(), 8, "{drove:?}");
+    assert!(drove.values().all(|&n| n >= 20), "{drove:?}");
+}
+
+#[test]
+fn orca_on_the_cars_routes_is_not_consulted_and_every_car_crosses() {
+    // A holonomic planner through the tracking controller does not drive
+    // a car along its route (docs/shapes.md): the route's pursuit does.
+    let dir = run_with("scenarios/cars/junction.toml", "orca");
+    let (at_goal, contacts, least) = outcome(&dir);
+    assert_eq!(at_goal, 8);
+    assert_eq!(contacts, 0);
+    assert!(least > 0.0, "least gap {least}");
+    let drove = planner_drove(&dir);
+    assert!(drove.values().all(|&n| n == 0), "{drove:?}");
 }
 
 #[test]

@@ -480,6 +480,10 @@ impl Planner for Tracker {
         true
     }
 
+    fn plans_ackermann(&self) -> bool {
+        self.inner.plans_ackermann()
+    }
+
     fn needs_scan(&self) -> bool {
         self.inner.needs_scan()
     }

@@ -432,6 +432,15 @@ pub trait Planner: Send {
         false
     }
 
+    /// True for a planner that plans a car's (speed, steering) itself,
+    /// with the car's own footprint, not through the tracking controller
+    /// ([`ackermann::Tracker`]): a [`Planner::native_ackermann`] one. The
+    /// tracking controller around a planner answers for the planner it
+    /// wraps (false for a holonomic one).
+    fn plans_ackermann(&self) -> bool {
+        self.native_ackermann()
+    }
+
     /// True for a planner that plans a car's (speed, steering) itself: on
     /// a car it then gets the robot's own observation and its command is
     /// applied unchanged, instead of driving through the tracking
