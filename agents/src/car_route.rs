@@ -110,7 +110,8 @@ use mrsim_planners::{
     BodyKind, Command, Diagnostic, Kinematics, Observation, Planner, Polygon, Pose, Sensed, Shape,
 };
 use mrsim_route::{
-    Car, CarMap, CarPath, CarRoute, CarRouteError, Gear, Goal, Pursuit, Scene, Search, outline,
+    Car, CarMap, CarPath, CarPose, CarRoute, CarRouteError, Gear, Goal, Pursuit, Scene, Search,
+    outline,
 };
 use mrsim_scenario::RobotSpec;
 
@@ -406,19 +407,22 @@ impl RouteScene {
     }
 }
 
+/// The centre of a car of `wheelbase` whose rear axle is at `p`.
+fn centre(p: &CarPose, wheelbase: f64) -> [f64; 2] {
+    let (s, c) = p.heading.sin_cos();
+    [
+        p.position[0] + wheelbase / 2.0 * c,
+        p.position[1] + wheelbase / 2.0 * s,
+    ]
+}
+
 /// The centre's positions along a car's rear-axle `path`, at most `step`
 /// apart, for a wheelbase `wheelbase`, and their length.
 pub fn centre_line(path: &CarPath, wheelbase: f64, step: f64) -> (Vec<[f64; 2]>, f64) {
     let pts: Vec<[f64; 2]> = path
         .poses(step)
         .iter()
-        .map(|p| {
-            let (s, c) = p.heading.sin_cos();
-            [
-                p.position[0] + wheelbase / 2.0 * c,
-                p.position[1] + wheelbase / 2.0 * s,
-            ]
-        })
+        .map(|p| centre(p, wheelbase))
         .collect();
     let len = pts
         .windows(2)
@@ -499,18 +503,10 @@ impl CarRouted {
         if t.to_stop <= approach + ahead {
             return None;
         }
-        let s0 = self.pursuit.progress();
-        let p = self
-            .pursuit
-            .poses()
-            .iter()
-            .take_while(|p| p.s <= s0 + ahead)
-            .last()?;
-        let (sh, ch) = p.heading.sin_cos();
-        Some(mrsim_planners::Vec2::new(
-            p.position[0] + l / 2.0 * ch,
-            p.position[1] + l / 2.0 * sh,
-        ))
+        let poses = self.pursuit.poses();
+        let k = poses.partition_point(|p| p.s <= self.pursuit.progress() + ahead);
+        let p = poses.get(k.checked_sub(1)?)?;
+        Some(mrsim_planners::Vec2::from(centre(p, l)))
     }
 
     /// Is `o` one of the static obstacles the route went round?
@@ -793,15 +789,8 @@ impl Planner for CarRouted {
         } else {
             f64::INFINITY
         };
-        let in_way = self.free(obs, rear, look, t.to_stop);
         let way_limit = look.min(t.to_stop);
         let give_way = self.give_way(obs, sign * speed_now, cap, me.max_accel, way_limit);
-        let free = in_way.min(give_way);
-        let clear = if free >= look {
-            f64::INFINITY
-        } else {
-            (2.0 * brake * free).sqrt()
-        };
         // The open road: the planner drives, to the route's point ahead.
         let open = if give_way >= way_limit && self.inner.plans_ackermann() {
             self.open_road(&t, speed_now)
@@ -826,6 +815,13 @@ impl Planner for CarRouted {
                 };
             }
         }
+        // The pursuit drives: slowing for what is in its way, and to give way.
+        let free = self.free(obs, rear, look, t.to_stop).min(give_way);
+        let clear = if free >= look {
+            f64::INFINITY
+        } else {
+            (2.0 * brake * free).sqrt()
+        };
         let speed = cap.min(stop).min(steer.max(creep)).min(clear);
         Command::Ackermann {
             speed: sign * speed,
