@@ -53,7 +53,7 @@
 
 use mrsim_planners::Vec2;
 use mrsim_planners::orca::{Neighbor, Walker, WalkerParams};
-use mrsim_proto::{BodyState, body_kind};
+use mrsim_proto::BodyState;
 use mrsim_scenario::{Behavior, PersonMotion, PersonSpec, Scenario, SocialForceParams};
 use mrsim_spatial::{Disc, NeighbourGrid, within};
 
@@ -125,6 +125,9 @@ pub struct Crowd {
     /// The people in the order they are walked (cell by cell), each with
     /// its cell.
     order: Vec<(u32, Option<(i64, i64)>)>,
+    /// Every body's velocity at the tick's start in the grid's order
+    /// (its slots: [`NeighbourGrid::around_cell`]).
+    slot_velocity: Vec<Vec2>,
     /// Each person's plan of the tick (behaviours).
     plans: Vec<Planned>,
     /// Each person's new velocity and what it faces if not where it walks.
@@ -147,16 +150,23 @@ type Planned = Result<(Plan, Option<[f64; 2]>), [f64; 2]>;
 #[derive(Debug, Clone, Default)]
 struct Scratch {
     walker: Walker,
+    /// The person's neighbours: indices into `around`, ascending (so by
+    /// body id).
     near: Vec<u32>,
     candidates: Vec<Neighbor>,
-    /// The bodies around the cell searched last.
-    around: Vec<(u32, Disc)>,
+    /// The bodies around the cell searched last (or every body), by body
+    /// id: each one's id and disc, and beside it its velocity, so that a
+    /// person's neighbours are read from one run of memory, not picked
+    /// out of the snapshot one by one.
+    around: Vec<(u32, u32, Disc)>,
+    moving: Vec<Vec2>,
     /// The velocities chosen, by person index.
     out: Vec<(u32, Move)>,
 }
 
-/// A person's new velocity and what it faces if not where it walks.
-type Move = ([f64; 2], Option<[f64; 2]>);
+/// A person's new velocity and its new heading (none: it keeps the one
+/// it has).
+type Move = ([f64; 2], Option<f64>);
 
 /// Fewest people a worker of [`Crowd::begin_tick`] is given: below it the
 /// crowd is stepped on the world's own thread.
@@ -241,6 +251,7 @@ impl Crowd {
             grid: NeighbourGrid::default(),
             gridded: false,
             order: Vec::new(),
+            slot_velocity: Vec::new(),
             plans: Vec::new(),
             moves: Vec::new(),
             reach,
@@ -311,7 +322,13 @@ impl Crowd {
         // it; without a grid, in order, each among every body.
         let mut order = std::mem::take(&mut self.order);
         order.clear();
+        self.slot_velocity.clear();
         if grid {
+            self.slot_velocity.extend(
+                self.grid
+                    .in_cell_order()
+                    .map(|(j, _)| v(bodies[j as usize].velocity)),
+            );
             let people = self.first as u32..(self.first + n) as u32;
             order.extend(
                 self.grid
@@ -347,12 +364,10 @@ impl Crowd {
         }
         self.order = order;
         self.scratch = scratch;
-        for (p, (nv, face)) in self.people.iter_mut().zip(&moves) {
+        for (p, (nv, heading)) in self.people.iter_mut().zip(&moves) {
             p.velocity = *nv;
-            if let Some(target) = face {
-                p.heading = (target[1] - p.position[1]).atan2(target[0] - p.position[0]);
-            } else if nv[0] != 0.0 || nv[1] != 0.0 {
-                p.heading = nv[1].atan2(nv[0]);
+            if let Some(h) = heading {
+                p.heading = *h;
             }
         }
         self.plans = plans;
@@ -369,14 +384,15 @@ impl Crowd {
         s: &mut Scratch,
     ) {
         s.out.clear();
-        let mut searched = None;
+        let mut searched: Option<Option<(i64, i64)>> = None;
         for &(k, cell) in part {
             let k = k as usize;
             let (plan, face) = match plans[k] {
                 Ok(plan) => plan,
                 // Standing to look (surprised; curious, near).
                 Err(face) => {
-                    s.out.push((k as u32, ([0.0, 0.0], Some(face))));
+                    let heading = facing(self.people[k].position, face);
+                    s.out.push((k as u32, ([0.0, 0.0], Some(heading))));
                     continue;
                 }
             };
@@ -386,29 +402,51 @@ impl Crowd {
                 PersonMotion::SocialForce(f) => f.neighbor_dist,
             };
             let p = &self.people[k];
+            if searched != Some(cell) {
+                match cell {
+                    // The grid's answer for the person's position: its
+                    // cell's neighbourhood.
+                    Some(c) => {
+                        self.grid.around_cell(c, &mut s.around);
+                        s.moving.clear();
+                        s.moving.extend(
+                            s.around
+                                .iter()
+                                .map(|&(_, slot, _)| self.slot_velocity[slot as usize]),
+                        );
+                    }
+                    // Without a grid, every body.
+                    None => {
+                        s.around.clear();
+                        s.around.extend(bodies.iter().enumerate().map(|(j, b)| {
+                            (j as u32, j as u32, [b.position[0], b.position[1], b.radius])
+                        }));
+                        s.moving.clear();
+                        s.moving.extend(bodies.iter().map(|b| v(b.velocity)));
+                    }
+                }
+                searched = Some(cell);
+            }
             s.near.clear();
             match cell {
-                // The grid's answer for the person's position: its cell's
-                // neighbourhood, within reach.
-                Some(c) => {
-                    if searched != Some(c) {
-                        self.grid.around_cell(c, &mut s.around);
-                        searched = Some(c);
-                    }
-                    s.near.extend(
-                        s.around
-                            .iter()
-                            .filter(|(_, d)| within(d, p.position, reach))
-                            .map(|(j, _)| *j),
-                    );
-                }
-                None => s.near.extend(0..bodies.len() as u32),
+                // Within reach.
+                Some(_) => s.near.extend(
+                    (0..s.around.len() as u32)
+                        .filter(|&i| within(&s.around[i as usize].2, p.position, reach)),
+                ),
+                None => s.near.extend(0..s.around.len() as u32),
             }
             let nv = match motion {
                 PersonMotion::Orca { .. } => self.orca(k, bodies, &plan, s),
-                PersonMotion::SocialForce(f) => self.social_force(k, bodies, &f, &plan, &s.near),
+                PersonMotion::SocialForce(f) => self.social_force(k, bodies, &f, &plan, s),
             };
-            s.out.push((k as u32, ([nv.x, nv.y], face)));
+            // Facing what it looks at, else where it walks.
+            let heading = match face {
+                Some(target) => Some(facing(p.position, target)),
+                None if nv.x != 0.0 || nv.y != 0.0 => Some(nv.y.atan2(nv.x)),
+                None => None,
+            };
+            s.out.push((k as u32, ([nv.x, nv.y], heading)));
         }
     }
 
@@ -541,6 +579,8 @@ impl Crowd {
             walker,
             near,
             candidates,
+            around,
+            moving,
             ..
         } = s;
         let spec = &self.specs[k];
@@ -556,19 +596,20 @@ impl Crowd {
         };
         let me = self.first + k;
         candidates.clear();
-        for &j in near.iter() {
-            let j = j as usize;
-            let Some(b) = bodies.get(j) else { continue };
+        for &i in near.iter() {
+            let (id, _, [x, y, radius]) = around[i as usize];
+            let j = id as usize;
             if j == me {
                 continue;
             }
-            // Obstacles do not avoid: all of it is the person's.
-            let mut share = if b.kind == body_kind::OBSTACLE {
+            // Obstacles (the bodies between the robots and the people) do
+            // not avoid: all of it is the person's.
+            let mut share = if (self.robots..self.first).contains(&j) {
                 1.0
             } else {
                 0.5
             };
-            let (mut velocity, mut time_horizon) = (v(b.velocity), None);
+            let (mut velocity, mut time_horizon) = (moving[i as usize], None);
             if j < self.robots {
                 match plan.robots {
                     Robots::People => {}
@@ -585,10 +626,10 @@ impl Crowd {
                 }
             }
             candidates.push(Neighbor {
-                id: b.id,
-                position: v(b.position),
+                id,
+                position: Vec2::new(x, y),
                 velocity,
-                radius: b.radius,
+                radius,
                 share,
                 time_horizon,
             });
@@ -623,7 +664,7 @@ impl Crowd {
     }
 
     /// Person `k`'s velocity at the end of the tick under the social
-    /// forces of the bodies of `near`, the walls and its group
+    /// forces of the bodies of `s.near`, the walls and its group
     /// (see the module documentation).
     fn social_force(
         &self,
@@ -631,8 +672,14 @@ impl Crowd {
         bodies: &[BodyState],
         f: &SocialForceParams,
         plan: &Plan,
-        near: &[u32],
+        s: &Scratch,
     ) -> Vec2 {
+        let Scratch {
+            near,
+            around,
+            moving,
+            ..
+        } = s;
         let s = &self.specs[k];
         let me = self.first + k;
         let p = &self.people[k];
@@ -655,20 +702,20 @@ impl Crowd {
         let desired = (e * plan.speed - velocity) / f.relaxation_time;
         // Social force (Moussaid et al. 2009, as libpedsim's `socialForce`).
         let mut social = Vec2::zeros();
-        for &j in near {
+        for &i in near.iter() {
+            let (j, _, [x, y, _]) = around[i as usize];
             let j = j as usize;
-            let Some(b) = bodies.get(j) else { continue };
             if j == me || (j < self.robots && plan.robots != Robots::People) {
                 continue;
             }
-            let mut diff = v(b.position) - position;
+            let mut diff = Vec2::new(x, y) - position;
             if diff.norm_squared() >= f.neighbor_dist * f.neighbor_dist {
                 continue;
             }
             if j < self.robots {
                 diff /= f.robot_scale;
             }
-            social += moussaid(diff, velocity - v(b.velocity));
+            social += moussaid(diff, velocity - moving[i as usize]);
         }
         // Obstacle force: the nearest wall only (libpedsim's
         // `obstacleForce`), measured from the person's disc.
@@ -683,8 +730,8 @@ impl Crowd {
         }
         if plan.robots == Robots::Obstacles {
             // Impassive: a robot's disc is an obstacle like a wall.
-            for &j in near {
-                let j = j as usize;
+            for &i in near.iter() {
+                let j = around[i as usize].0 as usize;
                 let Some(b) = bodies.get(j).filter(|_| j < self.robots) else {
                     continue;
                 };
@@ -820,6 +867,11 @@ impl Crowd {
             p.position[1] += p.velocity[1] * h;
         }
     }
+}
+
+/// The heading from `from` to `to`, rad.
+fn facing(from: [f64; 2], to: [f64; 2]) -> f64 {
+    (to[1] - from[1]).atan2(to[0] - from[0])
 }
 
 /// `d / |d|`, or zero for a zero vector (libpedsim's `normalized`).

@@ -313,7 +313,7 @@ impl NeighbourGrid {
         if !(cx.abs() < 1e15 && cy.abs() < 1e15) {
             return false;
         }
-        self.each_around(g, (cx as i64, cy as i64), |j, d| {
+        self.each_around(g, (cx as i64, cy as i64), |j, _, d| {
             // Only discs whose surface may come within reach: fewer to
             // sort, and fewer for the caller to rule out.
             if j >= first && within(d, p, reach) {
@@ -338,25 +338,29 @@ impl NeighbourGrid {
             .zip(self.cells.iter().copied())
     }
 
-    /// Fills `out` with the index and disc of every disc in the 3 x 3 cells
-    /// around `cell` (a cell of [`Self::in_cell_order`]), ascending by
-    /// index: what [`Self::near`] chooses from for any point of that cell,
-    /// so that keeping those for which [`within`] holds gives its answer
-    /// for the point. Empty when no grid was built.
-    pub fn around_cell(&self, cell: (i64, i64), out: &mut Vec<(u32, Disc)>) {
+    /// Fills `out` with the index, slot and disc of every disc in the 3 x 3
+    /// cells around `cell` (a cell of [`Self::in_cell_order`]), ascending
+    /// by index: what [`Self::near`] chooses from for any point of that
+    /// cell, so that keeping those for which [`within`] holds gives its
+    /// answer for the point. A disc's slot is its place in
+    /// [`Self::in_cell_order`], so that what a caller keeps of each disc
+    /// in that order (a velocity, say) is read from the runs of memory of
+    /// the nine cells, not picked out by index. Empty when no grid was
+    /// built.
+    pub fn around_cell(&self, cell: (i64, i64), out: &mut Vec<(u32, u32, Disc)>) {
         out.clear();
         let Some(g) = self.grid else {
             return;
         };
-        self.each_around(g, cell, |j, d| out.push((j, *d)));
-        out.sort_unstable_by_key(|&(j, _)| j);
+        self.each_around(g, cell, |j, slot, d| out.push((j, slot, *d)));
+        out.sort_unstable_by_key(|&(j, _, _)| j);
     }
 }
 
 impl NeighbourGrid {
-    /// Calls `f` with the index and disc of every disc in the 3 x 3 cells
-    /// around `(cx, cy)` of grid `g`, bucket by bucket.
-    fn each_around(&self, g: HashedGrid, (cx, cy): (i64, i64), mut f: impl FnMut(u32, &Disc)) {
+    /// Calls `f` with the index, slot and disc of every disc in the 3 x 3
+    /// cells around `(cx, cy)` of grid `g`, bucket by bucket.
+    fn each_around(&self, g: HashedGrid, (cx, cy): (i64, i64), mut f: impl FnMut(u32, u32, &Disc)) {
         let mut seen = [usize::MAX; 9];
         for (n, (dx, dy)) in (-1..=1)
             .flat_map(|dy| (-1..=1).map(move |dx| (dx, dy)))
@@ -373,7 +377,7 @@ impl NeighbourGrid {
             for (k, (&j, d)) in idx.iter().zip(discs).enumerate() {
                 let (x, y) = self.cells[start + k];
                 if (x - cx).abs() <= 1 && (y - cy).abs() <= 1 {
-                    f(j, d);
+                    f(j, (start + k) as u32, d);
                 }
             }
         }
@@ -518,17 +522,22 @@ mod tests {
         assert!(grid.build(discs.iter().copied(), reach));
         let (mut near, mut around) = (Vec::new(), Vec::new());
         let mut visited = vec![false; discs.len()];
-        for (j, cell) in grid.in_cell_order().collect::<Vec<_>>() {
+        let order: Vec<_> = grid.in_cell_order().collect();
+        for &(j, cell) in &order {
             visited[j as usize] = true;
             let p = [discs[j as usize][0], discs[j as usize][1]];
             assert!(grid.near(p, reach, &mut near));
             grid.around_cell(cell, &mut around);
             let kept: Vec<u32> = around
                 .iter()
-                .filter(|(_, d)| within(d, p, reach))
-                .map(|(k, _)| *k)
+                .filter(|(_, _, d)| within(d, p, reach))
+                .map(|(k, _, _)| *k)
                 .collect();
             assert_eq!(kept, near, "disc {j}");
+            for &(k, slot, d) in &around {
+                assert_eq!(order[slot as usize].0, k, "disc {k}'s slot");
+                assert_eq!(d, discs[k as usize]);
+            }
         }
         assert!(visited.iter().all(|&v| v), "every disc once");
     }
