@@ -143,6 +143,40 @@ fn dwa_takes_rectangular_agvs_through_doors_in_turn_without_contact() {
 }
 
 #[test]
+fn orca_s_first_four_agvs_turn_through_the_doors_without_touching_a_jamb() {
+    // The scene's first four AGVs alone: turning through the doors, a
+    // corner pointing at a jamb lies on the AGV's circumscribed disc,
+    // which ORCA may bring to a gap of zero; without the spare the AGVs
+    // kept on that disc two came within the world's millimetre of a jamb
+    // (two contacts). Every AGV arrives and nothing is touched.
+    let text = std::fs::read_to_string(root().join("scenarios/shapes/agv-swap.toml"))
+        .expect("agv-swap.toml")
+        .replace(
+            "../maps/office.yaml",
+            &root()
+                .join("scenarios/maps/office.yaml")
+                .display()
+                .to_string(),
+        );
+    let fifth = text
+        .match_indices("[[robot]]")
+        .nth(4)
+        .expect("eight AGVs")
+        .0;
+    let dir = fresh_dir("agv-four");
+    let run = run_quietly(
+        &dir,
+        &text[..fifth],
+        "agv-four",
+        &["--transport", "inproc", "--mode", "lockstep"],
+    );
+    let (at_goal, contacts, least) = outcome(&run);
+    assert_eq!(at_goal, 4);
+    assert_eq!(contacts, 0);
+    assert!(least > 0.001, "least gap {least}");
+}
+
+#[test]
 fn orca_brings_every_agv_home_without_grazing_a_wall() {
     // The acceptance criterion of the scene: every AGV at its goal, no
     // contact, no footprint more than 1 mm inside anything.
