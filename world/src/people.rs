@@ -130,7 +130,7 @@ pub struct Crowd {
     slot_velocity: Vec<Vec2>,
     /// Each person's plan of the tick (behaviours).
     plans: Vec<Planned>,
-    /// Each person's new velocity and what it faces if not where it walks.
+    /// Each person's new velocity and heading.
     moves: Vec<Move>,
     reach: f64,
     /// Every wall segment, the arena's included (the social force's).
@@ -155,10 +155,11 @@ struct Scratch {
     near: Vec<u32>,
     candidates: Vec<Neighbor>,
     /// The bodies around the cell searched last (or every body), by body
-    /// id: each one's id and disc, and beside it its velocity, so that a
+    /// id: each one's id, slot in the grid's order and disc, so that a
     /// person's neighbours are read from one run of memory, not picked
     /// out of the snapshot one by one.
     around: Vec<(u32, u32, Disc)>,
+    /// The velocity of each body of `around`, in its order.
     moving: Vec<Vec2>,
     /// The velocities chosen, by person index.
     out: Vec<(u32, Move)>,
