@@ -222,7 +222,7 @@ impl Crowd {
                 .map(|p| Person {
                     position: p.start,
                     velocity: [0.0, 0.0],
-                    heading: (p.waypoints[0][1] - p.start[1]).atan2(p.waypoints[0][0] - p.start[0]),
+                    heading: facing(p.start, p.waypoints[0]),
                     next: 0,
                     reacted: 0.0,
                 })
